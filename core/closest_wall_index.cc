@@ -1,0 +1,122 @@
+#include "core/closest_wall_index.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace floorpose {
+namespace {
+
+double SegmentDistance(const Segment& s, const Eigen::Vector2d& p) {
+  return (ClosestPointOnSegment(s, p) - p).norm();
+}
+
+ClosestWall MakeHit(const FloorPlan& plan, uint32_t i, const Eigen::Vector2d& p) {
+  const Segment& s = plan.segments[i];
+  ClosestWall hit;
+  hit.segment = i;
+  hit.point = ClosestPointOnSegment(s, p);
+  hit.normal = s.Normal();
+  hit.distance = (hit.point - p).norm();
+  return hit;
+}
+
+}  // namespace
+
+ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
+    : plan_(plan), options_(options) {
+  const double cell = options_.cell_m;
+  const double margin = options_.max_distance_m + cell;
+  origin_ = plan_.min - Eigen::Vector2d::Constant(margin);
+  const Eigen::Vector2d extent = plan_.max - plan_.min + Eigen::Vector2d::Constant(2 * margin);
+  nx_ = std::max(1, static_cast<int>(std::ceil(extent.x() / cell)));
+  ny_ = std::max(1, static_cast<int>(std::ceil(extent.y() / cell)));
+  const size_t n = static_cast<size_t>(nx_) * static_cast<size_t>(ny_);
+  const double r = 0.5 * cell * std::sqrt(2.0);
+  // Only segments within this distance of a centre can matter (see the header).
+  const double reach = options_.max_distance_m + 2 * r;
+
+  auto centre = [&](int ix, int iy) {
+    return Eigen::Vector2d(origin_.x() + (ix + 0.5) * cell, origin_.y() + (iy + 0.5) * cell);
+  };
+  // Visits the cells whose centres may lie within `reach` of segment s.
+  auto for_cells_near = [&](const Segment& s, auto&& fn) {
+    const Eigen::Vector2d lo = s.a.cwiseMin(s.b) - Eigen::Vector2d::Constant(reach);
+    const Eigen::Vector2d hi = s.a.cwiseMax(s.b) + Eigen::Vector2d::Constant(reach);
+    const int x0 = std::max(0, static_cast<int>(std::floor((lo.x() - origin_.x()) / cell)));
+    const int y0 = std::max(0, static_cast<int>(std::floor((lo.y() - origin_.y()) / cell)));
+    const int x1 = std::min(nx_ - 1, static_cast<int>(std::floor((hi.x() - origin_.x()) / cell)));
+    const int y1 = std::min(ny_ - 1, static_cast<int>(std::floor((hi.y() - origin_.y()) / cell)));
+    for (int iy = y0; iy <= y1; ++iy)
+      for (int ix = x0; ix <= x1; ++ix) fn(static_cast<size_t>(iy) * nx_ + ix, centre(ix, iy));
+  };
+
+  // Pass 1: d* per cell, clipped at reach.
+  std::vector<float> best(n, std::numeric_limits<float>::infinity());
+  for (const Segment& s : plan_.segments) {
+    for_cells_near(s, [&](size_t i, const Eigen::Vector2d& c) {
+      best[i] = std::min(best[i], static_cast<float>(SegmentDistance(s, c)));
+    });
+  }
+  // Pass 2: count, then fill the candidate lists (CSR).
+  std::vector<uint32_t> count(n + 1, 0);
+  auto is_candidate = [&](size_t i, double d) {
+    return best[i] - r <= options_.max_distance_m && d <= best[i] + 2 * r + 1e-9;
+  };
+  for (const Segment& s : plan_.segments) {
+    for_cells_near(s, [&](size_t i, const Eigen::Vector2d& c) {
+      if (is_candidate(i, SegmentDistance(s, c))) ++count[i + 1];
+    });
+  }
+  cell_begin_.assign(n + 1, 0);
+  for (size_t i = 0; i < n; ++i) cell_begin_[i + 1] = cell_begin_[i] + count[i + 1];
+  candidates_.resize(cell_begin_[n]);
+  std::vector<uint32_t> fill(cell_begin_.begin(), cell_begin_.end() - 1);
+  for (uint32_t k = 0; k < plan_.segments.size(); ++k) {
+    const Segment& s = plan_.segments[k];
+    for_cells_near(s, [&](size_t i, const Eigen::Vector2d& c) {
+      if (is_candidate(i, SegmentDistance(s, c))) candidates_[fill[i]++] = k;
+    });
+  }
+}
+
+std::optional<ClosestWall> ClosestWallIndex::Query(const Eigen::Vector2d& p) const {
+  const double fx = (p.x() - origin_.x()) / options_.cell_m;
+  const double fy = (p.y() - origin_.y()) / options_.cell_m;
+  if (!(fx >= 0 && fy >= 0 && fx < nx_ && fy < ny_)) return std::nullopt;  // also NaN
+  const size_t i = static_cast<size_t>(static_cast<int>(fy)) * nx_ + static_cast<int>(fx);
+  double best = options_.max_distance_m * options_.max_distance_m;
+  int64_t best_k = -1;
+  for (uint32_t j = cell_begin_[i]; j < cell_begin_[i + 1]; ++j) {
+    const Segment& s = plan_.segments[candidates_[j]];
+    const double d2 = (ClosestPointOnSegment(s, p) - p).squaredNorm();
+    if (d2 <= best) {
+      best = d2;
+      best_k = candidates_[j];
+    }
+  }
+  if (best_k < 0) return std::nullopt;
+  return MakeHit(plan_, static_cast<uint32_t>(best_k), p);
+}
+
+size_t ClosestWallIndex::MemoryBytes() const {
+  return cell_begin_.size() * sizeof(uint32_t) + candidates_.size() * sizeof(uint32_t) +
+         plan_.segments.size() * sizeof(Segment);
+}
+
+std::optional<ClosestWall> BruteForceClosestWall(const FloorPlan& plan, const Eigen::Vector2d& p,
+                                                 double max_distance_m) {
+  double best = max_distance_m * max_distance_m;
+  int64_t best_k = -1;
+  for (uint32_t k = 0; k < plan.segments.size(); ++k) {
+    const double d2 = (ClosestPointOnSegment(plan.segments[k], p) - p).squaredNorm();
+    if (d2 <= best) {
+      best = d2;
+      best_k = k;
+    }
+  }
+  if (best_k < 0) return std::nullopt;
+  return MakeHit(plan, static_cast<uint32_t>(best_k), p);
+}
+
+}  // namespace floorpose

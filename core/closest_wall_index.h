@@ -1,0 +1,58 @@
+// "Which wall is closest to this point?" in O(1): a uniform grid over the plan where each
+// cell lists the only segments that can be closest to any point inside it.
+//
+// Exactness: let c be a cell's centre, r its half-diagonal and d* the distance from c to
+// the nearest segment. For any q in the cell, the closest segment s satisfies
+// d(s, c) <= d(s, q) + r <= d*(q) + r <= d* + 2r. So the candidates {s : d(s, c) <= d* + 2r}
+// always contain the answer. Cells farther than `max_distance_m` from every wall store
+// nothing: queries there answer "no wall in range", which is all registration needs.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "core/floor_plan.h"
+
+namespace floorpose {
+
+struct ClosestWall {
+  uint32_t segment = 0;
+  Eigen::Vector2d point;   // closest point on the segment
+  Eigen::Vector2d normal;  // unit normal of the segment
+  double distance = 0.0;
+};
+
+class ClosestWallIndex {
+ public:
+  struct Options {
+    double cell_m = 0.25;          // grid resolution
+    double max_distance_m = 3.0;   // beyond this, queries return nothing
+  };
+
+  ClosestWallIndex(const FloorPlan& plan, Options options);
+  explicit ClosestWallIndex(const FloorPlan& plan) : ClosestWallIndex(plan, Options{}) {}
+
+  // The closest wall within max_distance_m, or nothing.
+  std::optional<ClosestWall> Query(const Eigen::Vector2d& p) const;
+
+  const FloorPlan& plan() const { return plan_; }
+  size_t MemoryBytes() const;
+  size_t cells() const { return cell_begin_.size() - 1; }
+
+ private:
+  FloorPlan plan_;
+  Options options_;
+  Eigen::Vector2d origin_;
+  int nx_ = 0, ny_ = 0;
+  std::vector<uint32_t> cell_begin_;  // CSR layout: candidates of cell i are
+  std::vector<uint32_t> candidates_;  // candidates_[cell_begin_[i] .. cell_begin_[i+1])
+};
+
+// The same answer by trying every segment: the oracle for tests and the baseline for
+// benchmarks.
+std::optional<ClosestWall> BruteForceClosestWall(const FloorPlan& plan, const Eigen::Vector2d& p,
+                                                 double max_distance_m);
+
+}  // namespace floorpose

@@ -1,0 +1,131 @@
+#include "core/floor_plan.h"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <set>
+#include <tuple>
+
+namespace floorpose {
+
+Eigen::Vector2d ClosestPointOnSegment(const Segment& s, const Eigen::Vector2d& p) {
+  const Eigen::Vector2d d = s.b - s.a;
+  const double len2 = d.squaredNorm();
+  if (len2 <= 0.0) return s.a;
+  const double u = std::clamp((p - s.a).dot(d) / len2, 0.0, 1.0);
+  return s.a + u * d;
+}
+
+FloorPlanParse MakeFloorPlan(std::string id, std::vector<Segment> raw) {
+  FloorPlanParse out;
+  out.plan.id = std::move(id);
+  // Duplicates are found on endpoints rounded to 1 mm, in either direction.
+  std::set<std::tuple<long long, long long, long long, long long>> seen;
+  auto mm = [](double v) { return std::llround(v * 1000.0); };
+  for (Segment s : raw) {
+    if (!s.a.allFinite() || !s.b.allFinite() || s.Length() < 1e-3) {
+      ++out.dropped_segments;
+      continue;
+    }
+    auto key = std::make_tuple(mm(s.a.x()), mm(s.a.y()), mm(s.b.x()), mm(s.b.y()));
+    auto rev = std::make_tuple(mm(s.b.x()), mm(s.b.y()), mm(s.a.x()), mm(s.a.y()));
+    if (seen.count(key) || seen.count(rev)) {
+      ++out.dropped_segments;
+      continue;
+    }
+    seen.insert(key);
+    out.plan.segments.push_back(s);
+  }
+  if (out.plan.segments.empty()) {
+    out.error = "floor plan has no usable wall segments";
+    return out;
+  }
+  Eigen::Vector2d lo = out.plan.segments[0].a, hi = lo;
+  for (const Segment& s : out.plan.segments) {
+    lo = lo.cwiseMin(s.a).cwiseMin(s.b);
+    hi = hi.cwiseMax(s.a).cwiseMax(s.b);
+  }
+  out.plan.min = lo;
+  out.plan.max = hi;
+  return out;
+}
+
+namespace {
+
+// A forgiving tokenizer: whitespace-separated numbers, with line numbers for errors.
+class Tokens {
+ public:
+  explicit Tokens(std::string_view text) : text_(text) {}
+  bool Next(double* value, std::string* error) {
+    while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) {
+      if (text_[pos_] == '\n') ++line_;
+      ++pos_;
+    }
+    if (pos_ >= text_.size()) {
+      *error = "unexpected end of file at line " + std::to_string(line_);
+      return false;
+    }
+    size_t end = pos_;
+    while (end < text_.size() && !std::isspace(static_cast<unsigned char>(text_[end]))) ++end;
+    const std::string_view token = text_.substr(pos_, end - pos_);
+    const char* first = token.data();
+    // from_chars rejects a leading '+'; accept it.
+    if (!token.empty() && token[0] == '+') ++first;
+    auto [ptr, ec] = std::from_chars(first, token.data() + token.size(), *value);
+    if (ec != std::errc() || ptr != token.data() + token.size() || !std::isfinite(*value)) {
+      *error = "line " + std::to_string(line_) + ": not a finite number: '" +
+               std::string(token.substr(0, 40)) + "'";
+      return false;
+    }
+    pos_ = end;
+    return true;
+  }
+  bool AtEnd() {
+    while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) ++pos_;
+    return pos_ >= text_.size();
+  }
+
+ private:
+  std::string_view text_;
+  size_t pos_ = 0;
+  size_t line_ = 1;
+};
+
+}  // namespace
+
+FloorPlanParse ParseTextFloorPlan(std::string_view text, std::string id) {
+  FloorPlanParse out;
+  Tokens tokens(text);
+  double count_value = 0;
+  if (!tokens.Next(&count_value, &out.error)) {
+    out.error = "text floor plan: segment count missing: " + out.error;
+    return out;
+  }
+  constexpr double kMaxSegments = 1e7;
+  if (count_value < 1 || count_value > kMaxSegments || count_value != std::floor(count_value)) {
+    out.error = "text floor plan: bad segment count " + std::to_string(count_value);
+    return out;
+  }
+  const size_t count = static_cast<size_t>(count_value);
+  std::vector<Segment> raw;
+  raw.reserve(std::min<size_t>(count, 1 << 16));
+  for (size_t i = 0; i < count; ++i) {
+    double v[4];
+    for (double& x : v) {
+      if (!tokens.Next(&x, &out.error)) {
+        out.error = "text floor plan: segment " + std::to_string(i + 1) + " of " +
+                    std::to_string(count) + ": " + out.error;
+        return out;
+      }
+    }
+    raw.push_back({{v[0], v[1]}, {v[2], v[3]}});
+  }
+  if (!tokens.AtEnd()) {
+    out.error = "text floor plan: more data after the " + std::to_string(count) + " segments";
+    return out;
+  }
+  return MakeFloorPlan(std::move(id), std::move(raw));
+}
+
+}  // namespace floorpose

@@ -1,0 +1,45 @@
+// A floor plan: wall faces as 2D line segments in the plan frame, metres.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace floorpose {
+
+struct Segment {
+  Eigen::Vector2d a, b;
+  double Length() const { return (b - a).norm(); }
+  // Unit normal (left of a->b); walls are two-sided, so the sign carries no meaning.
+  Eigen::Vector2d Normal() const {
+    const Eigen::Vector2d d = (b - a).normalized();
+    return {-d.y(), d.x()};
+  }
+};
+
+// Closest point on a segment to p.
+Eigen::Vector2d ClosestPointOnSegment(const Segment& s, const Eigen::Vector2d& p);
+
+struct FloorPlan {
+  std::string id;
+  std::vector<Segment> segments;
+  Eigen::Vector2d min = Eigen::Vector2d::Zero(), max = Eigen::Vector2d::Zero();
+};
+
+// Result of parsing: either a plan or a message saying what is wrong and where.
+struct FloorPlanParse {
+  FloorPlan plan;
+  std::string error;  // empty on success
+  size_t dropped_segments = 0;  // zero-length or duplicate
+  bool ok() const { return error.empty(); }
+};
+
+// Cleans a list of raw segments: drops non-finite, zero-length (< 1 mm) and duplicate
+// segments, computes the bounds. Fails on an empty result.
+FloorPlanParse MakeFloorPlan(std::string id, std::vector<Segment> raw);
+
+// The thesis' text format: the segment count, then `x1 y1 x2 y2` per line (section 6.4.2).
+FloorPlanParse ParseTextFloorPlan(std::string_view text, std::string id);
+
+}  // namespace floorpose

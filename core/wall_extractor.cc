@@ -1,0 +1,62 @@
+#include "core/wall_extractor.h"
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+
+#include "core/random.h"
+
+namespace floorpose {
+
+std::vector<WallPoint> ExtractWallPoints(const SlamMesh& mesh, uint64_t mesh_id,
+                                         const WallExtractionOptions& options,
+                                         WallExtractionReport* report) {
+  WallExtractionReport local;
+  WallExtractionReport& r = report ? *report : local;
+  r = {};
+  std::vector<WallPoint> out;
+  if (!mesh.vertices || !mesh.triangles) return out;
+  const auto& V = *mesh.vertices;
+  const auto& F = *mesh.triangles;
+  SplitMix64 rng(options.seed * 0x9e3779b97f4a7c15ULL ^ mesh_id);
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  const double max_edge2 = options.max_edge_m * options.max_edge_m;
+
+  for (size_t t = 0; t + 2 < F.size(); t += 3) {
+    ++r.triangles;
+    if (F[t] >= V.size() || F[t + 1] >= V.size() || F[t + 2] >= V.size()) {
+      ++r.bad_indices;
+      continue;
+    }
+    const Eigen::Vector3d v0 = V[F[t]].cast<double>();
+    const Eigen::Vector3d v1 = V[F[t + 1]].cast<double>();
+    const Eigen::Vector3d v2 = V[F[t + 2]].cast<double>();
+    // Algorithm 4.1 line 6.
+    const Eigen::Vector3d cross = (v0 - v1).cross(v1 - v2);
+    const double norm = cross.norm();
+    if (!std::isfinite(norm) || norm < 1e-12 || (v0 - v1).squaredNorm() > max_edge2 ||
+        (v1 - v2).squaredNorm() > max_edge2 || (v2 - v0).squaredNorm() > max_edge2) {
+      ++r.degenerate_triangles;
+      continue;
+    }
+    const Eigen::Vector3d normal = cross / norm;
+    if (std::abs(normal.dot(up)) >= options.max_normal_up) continue;  // line 7
+    ++r.vertical_triangles;
+    const double area = 0.5 * norm;  // line 8
+    r.wall_area_m2 += area;
+    const double expected = area * options.density_per_m2;  // line 9
+    size_t count = static_cast<size_t>(expected);
+    if (rng.Uniform() < expected - static_cast<double>(count)) ++count;
+    const Eigen::Vector2f n2 = normal.head<2>().normalized().cast<float>();
+    for (size_t j = 0; j < count; ++j) {
+      // Uniform barycentric sample (Osada et al. 2002).
+      const double s = std::sqrt(rng.Uniform());
+      const double u = rng.Uniform();
+      const Eigen::Vector3d p = (1.0 - s) * v0 + s * (1.0 - u) * v1 + s * u * v2;
+      out.push_back({p.head<2>().cast<float>(), n2});  // drop z (section 4.1.1)
+    }
+  }
+  return out;
+}
+
+}  // namespace floorpose

@@ -1,0 +1,108 @@
+#include "core/wall_store.h"
+
+#include <algorithm>
+#include <cmath>
+#include <tuple>
+#include <utility>
+
+namespace floorpose {
+
+WallStore::VoxelKey WallStore::KeyOf(const Eigen::Vector2f& p) const {
+  const auto ix = static_cast<int32_t>(std::floor(p.x() / voxel_m_));
+  const auto iy = static_cast<int32_t>(std::floor(p.y() / voxel_m_));
+  return (static_cast<uint64_t>(static_cast<uint32_t>(ix)) << 32) | static_cast<uint32_t>(iy);
+}
+
+void WallStore::IndexMesh(uint64_t mesh_id, const std::vector<WallPoint>& points) {
+  for (uint32_t i = 0; i < points.size(); ++i) voxels_[KeyOf(points[i].p)].push_back({mesh_id, i});
+}
+
+void WallStore::UnindexMesh(uint64_t mesh_id, const std::vector<WallPoint>& points) {
+  for (const WallPoint& wp : points) {
+    auto it = voxels_.find(KeyOf(wp.p));
+    if (it == voxels_.end()) continue;
+    auto& refs = it->second;
+    refs.erase(std::remove_if(refs.begin(), refs.end(),
+                              [&](const Ref& r) { return r.mesh_id == mesh_id; }),
+               refs.end());
+    if (refs.empty()) voxels_.erase(it);
+  }
+}
+
+size_t WallStore::Upsert(uint64_t mesh_id, std::vector<WallPoint> points) {
+  // Non-finite points never enter the store.
+  points.erase(std::remove_if(points.begin(), points.end(),
+                              [](const WallPoint& w) { return !w.p.allFinite() || !w.n.allFinite(); }),
+               points.end());
+  auto it = meshes_.find(mesh_id);
+  if (it != meshes_.end()) {
+    UnindexMesh(mesh_id, it->second);
+    points_ -= it->second.size();
+    it->second = std::move(points);
+  } else {
+    it = meshes_.emplace(mesh_id, std::move(points)).first;
+  }
+  IndexMesh(mesh_id, it->second);
+  points_ += it->second.size();
+  new_points_ += it->second.size();
+  return points_;
+}
+
+bool WallStore::Remove(uint64_t mesh_id) {
+  auto it = meshes_.find(mesh_id);
+  if (it == meshes_.end()) return false;
+  UnindexMesh(mesh_id, it->second);
+  points_ -= it->second.size();
+  meshes_.erase(it);
+  return true;
+}
+
+void WallStore::Clear() {
+  meshes_.clear();
+  voxels_.clear();
+  points_ = 0;
+  new_points_ = 0;
+}
+
+std::vector<Eigen::Vector2d> WallStore::Snapshot(size_t max_points) const {
+  // Sorted voxel order makes the snapshot independent of hash-map iteration order, so
+  // that the daemon and the offline evaluator register the same points.
+  std::vector<std::pair<VoxelKey, Eigen::Vector2d>> cells;
+  cells.reserve(voxels_.size());
+  for (const auto& [key, refs] : voxels_) {
+    const Ref& r = *std::min_element(refs.begin(), refs.end(), [](const Ref& a, const Ref& b) {
+      return std::tie(a.mesh_id, a.index) < std::tie(b.mesh_id, b.index);
+    });
+    cells.emplace_back(key, meshes_.at(r.mesh_id)[r.index].p.cast<double>());
+  }
+  std::sort(cells.begin(), cells.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<Eigen::Vector2d> out;
+  const size_t n = cells.size();
+  const size_t take = (max_points == 0 || max_points >= n) ? n : max_points;
+  out.reserve(take);
+  for (size_t k = 0; k < take; ++k) out.push_back(cells[k * n / take].second);
+  return out;
+}
+
+std::vector<WallPoint> WallStore::QueryRadius(const Eigen::Vector2f& c, float radius) const {
+  std::vector<WallPoint> out;
+  const int r = static_cast<int>(std::ceil(radius / voxel_m_));
+  const auto cx = static_cast<int32_t>(std::floor(c.x() / voxel_m_));
+  const auto cy = static_cast<int32_t>(std::floor(c.y() / voxel_m_));
+  for (int dx = -r; dx <= r; ++dx) {
+    for (int dy = -r; dy <= r; ++dy) {
+      const uint64_t key = (static_cast<uint64_t>(static_cast<uint32_t>(cx + dx)) << 32) |
+                           static_cast<uint32_t>(cy + dy);
+      auto it = voxels_.find(key);
+      if (it == voxels_.end()) continue;
+      for (const Ref& ref : it->second) {
+        const WallPoint& wp = meshes_.at(ref.mesh_id)[ref.index];
+        if ((wp.p - c).squaredNorm() <= radius * radius) out.push_back(wp);
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace floorpose

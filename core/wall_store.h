@@ -1,0 +1,61 @@
+// The live wall points, keyed by mesh id (ADDED inserts, UPDATED replaces, REMOVED
+// deletes), with a voxel hash over all live points. Single writer (the daemon's io
+// thread); registration works on snapshots, never on the store itself.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "core/wall_extractor.h"
+
+namespace floorpose {
+
+class WallStore {
+ public:
+  explicit WallStore(double voxel_m = 0.05) : voxel_m_(voxel_m) {}
+
+  // Inserts or replaces the points of a mesh. Returns the number of points now live.
+  size_t Upsert(uint64_t mesh_id, std::vector<WallPoint> points);
+  // Returns false when the id is unknown.
+  bool Remove(uint64_t mesh_id);
+  bool Contains(uint64_t mesh_id) const { return meshes_.count(mesh_id) > 0; }
+  size_t MeshPoints(uint64_t mesh_id) const {
+    auto it = meshes_.find(mesh_id);
+    return it == meshes_.end() ? 0 : it->second.size();
+  }
+  void Clear();
+
+  size_t meshes() const { return meshes_.size(); }
+  size_t points() const { return points_; }
+  size_t occupied_voxels() const { return voxels_.size(); }
+  // Points added since the counter was last taken (for scheduling registrations).
+  size_t TakeNewPoints() { return std::exchange(new_points_, 0); }
+  size_t new_points() const { return new_points_; }
+
+  // One point per occupied voxel (the first live point in it, in voxel order), at most
+  // max_points (0 = all) spread evenly over the voxels: the registration input.
+  std::vector<Eigen::Vector2d> Snapshot(size_t max_points) const;
+  // Live points within radius of a position (slam frame).
+  std::vector<WallPoint> QueryRadius(const Eigen::Vector2f& center, float radius) const;
+
+ private:
+  struct Ref {
+    uint64_t mesh_id;
+    uint32_t index;
+  };
+  using VoxelKey = uint64_t;
+  VoxelKey KeyOf(const Eigen::Vector2f& p) const;
+  void IndexMesh(uint64_t mesh_id, const std::vector<WallPoint>& points);
+  void UnindexMesh(uint64_t mesh_id, const std::vector<WallPoint>& points);
+
+  double voxel_m_;
+  std::unordered_map<uint64_t, std::vector<WallPoint>> meshes_;
+  std::unordered_map<VoxelKey, std::vector<Ref>> voxels_;
+  size_t points_ = 0;
+  size_t new_points_ = 0;
+};
+
+}  // namespace floorpose

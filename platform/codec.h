@@ -1,0 +1,41 @@
+// Boundary of the daemon: protobuf payloads in, validated core types out. Every
+// rejection comes with a reason for the log line; nothing here throws or aborts.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/frames.h"
+#include "core/se2.h"
+#include "floorpose/v1/config.pb.h"
+#include "floorpose/v1/floorpose.pb.h"
+
+namespace floorpose::platform {
+
+struct DecodedMesh {
+  uint64_t mesh_id = 0;
+  v1::MeshDelta::Change change = v1::MeshDelta::CHANGE_UNSPECIFIED;
+  int64_t stamp_ns = 0;
+  std::vector<Eigen::Vector3f> vertices;  // slam frame, world coordinates; NaN = unusable
+  std::vector<uint32_t> triangles;
+  size_t unusable_vertices = 0;           // non-finite or beyond the coordinate limit
+};
+
+// Returns an empty string on success, else why the delta was rejected as a whole.
+std::string DecodeMeshDelta(const std::string& payload, HeadsetFrame frame,
+                            const v1::LimitsConfig& limits, DecodedMesh* out);
+
+struct DecodedPose {
+  int64_t stamp_ns = 0;
+  Pose2 pose_slam;
+  v1::HeadsetPose::TrackingState tracking = v1::HeadsetPose::TRACKING_UNSPECIFIED;
+};
+
+std::string DecodeHeadsetPose(const std::string& payload, HeadsetFrame frame,
+                              const v1::LimitsConfig& limits, DecodedPose* out);
+
+std::string DecodeCommand(const std::string& payload, v1::Command* out);
+
+}  // namespace floorpose::platform

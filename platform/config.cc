@@ -1,0 +1,136 @@
+#include "platform/config.h"
+
+#include <google/protobuf/descriptor.h>
+#include <google/protobuf/io/tokenizer.h>
+#include <google/protobuf/text_format.h>
+
+#include "core/frames.h"
+#include "platform/floor_plan_io.h"
+
+namespace floorpose::platform {
+namespace {
+
+namespace pb = google::protobuf;
+
+class ErrorCollector : public pb::io::ErrorCollector {
+ public:
+  void AddError(int line, pb::io::ColumnNumber column, const std::string& message) override {
+    if (text.empty())
+      text = "line " + std::to_string(line + 1) + ":" + std::to_string(column + 1) + ": " + message;
+  }
+  std::string text;
+};
+
+// Sets every singular field to its current value, so that defaults are printed too.
+void MaterializeDefaults(pb::Message* m) {
+  const pb::Descriptor* d = m->GetDescriptor();
+  const pb::Reflection* r = m->GetReflection();
+  for (int i = 0; i < d->field_count(); ++i) {
+    const pb::FieldDescriptor* f = d->field(i);
+    if (f->is_repeated()) continue;
+    switch (f->cpp_type()) {
+      case pb::FieldDescriptor::CPPTYPE_MESSAGE:
+        MaterializeDefaults(r->MutableMessage(m, f));
+        break;
+      case pb::FieldDescriptor::CPPTYPE_INT32: r->SetInt32(m, f, r->GetInt32(*m, f)); break;
+      case pb::FieldDescriptor::CPPTYPE_INT64: r->SetInt64(m, f, r->GetInt64(*m, f)); break;
+      case pb::FieldDescriptor::CPPTYPE_UINT32: r->SetUInt32(m, f, r->GetUInt32(*m, f)); break;
+      case pb::FieldDescriptor::CPPTYPE_UINT64: r->SetUInt64(m, f, r->GetUInt64(*m, f)); break;
+      case pb::FieldDescriptor::CPPTYPE_DOUBLE: r->SetDouble(m, f, r->GetDouble(*m, f)); break;
+      case pb::FieldDescriptor::CPPTYPE_FLOAT: r->SetFloat(m, f, r->GetFloat(*m, f)); break;
+      case pb::FieldDescriptor::CPPTYPE_BOOL: r->SetBool(m, f, r->GetBool(*m, f)); break;
+      case pb::FieldDescriptor::CPPTYPE_ENUM: r->SetEnum(m, f, r->GetEnum(*m, f)); break;
+      case pb::FieldDescriptor::CPPTYPE_STRING: r->SetString(m, f, r->GetString(*m, f)); break;
+    }
+  }
+}
+
+}  // namespace
+
+bool ParseConfig(const std::string& text, v1::FloorposedConfig* config, std::string* error) {
+  pb::TextFormat::Parser parser;
+  ErrorCollector errors;
+  parser.RecordErrorsTo(&errors);
+  if (!parser.ParseFromString(text, config)) {
+    *error = errors.text.empty() ? "config syntax error" : errors.text;
+    return false;
+  }
+  const std::string invalid = ValidateConfig(*config);
+  if (!invalid.empty()) {
+    *error = invalid;
+    return false;
+  }
+  return true;
+}
+
+bool LoadConfig(const std::string& path, v1::FloorposedConfig* config, std::string* error) {
+  if (path.empty()) {
+    config->Clear();
+    return true;
+  }
+  std::string text;
+  if (!ReadFile(path, 1u << 20, &text, error)) return false;
+  if (!ParseConfig(text, config, error)) {
+    *error = path + ": " + *error;
+    return false;
+  }
+  return true;
+}
+
+std::string ValidateConfig(const v1::FloorposedConfig& c) {
+  if (!ParseHeadsetFrame(c.headset_frame()))
+    return "headset_frame must be \"unity\" or \"zup\", not \"" + c.headset_frame() + "\"";
+  if (c.dds().domain_id() > 232) return "dds.domain_id must be 0..232";
+  if (c.dds().device_id().empty()) return "dds.device_id must not be empty";
+  if (!(c.walls().density_per_m2() > 0 && c.walls().density_per_m2() <= 10000))
+    return "walls.density_per_m2 must be in (0, 10000]";
+  if (!(c.walls().max_normal_up() > 0 && c.walls().max_normal_up() < 1))
+    return "walls.max_normal_up must be in (0, 1)";
+  if (!(c.icp().max_correspondence_m() > 0)) return "icp.max_correspondence_m must be positive";
+  if (c.icp().levels() > 8) return "icp.levels must be at most 8";
+  if (!(c.tracking().snapshot_voxel_m() > 0)) return "tracking.snapshot_voxel_m must be positive";
+  if (!(c.status_period_s() > 0)) return "status_period_s must be positive";
+  const std::string& l = c.log_level();
+  if (l != "trace" && l != "debug" && l != "info" && l != "warn" && l != "error")
+    return "log_level must be trace, debug, info, warn or error";
+  return {};
+}
+
+std::string ResolvedConfigText(const v1::FloorposedConfig& config) {
+  v1::FloorposedConfig copy = config;
+  MaterializeDefaults(&copy);
+  std::string out;
+  pb::TextFormat::PrintToString(copy, &out);
+  return out;
+}
+
+TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
+  TrackerOptions t;
+  const auto& i = c.icp();
+  t.icp.max_iterations = i.max_iterations();
+  t.icp.levels = i.levels();
+  t.icp.reject_sigma = i.reject_sigma();
+  t.icp.max_correspondence_m = i.max_correspondence_m();
+  t.icp.converge_translation_m = i.converge_translation_m();
+  t.icp.converge_rotation_rad = i.converge_rotation_rad();
+  t.icp.cauchy_scale_factor = i.cauchy_scale_factor();
+  t.icp.inlier_threshold_m = i.inlier_threshold_m();
+  const auto& k = c.tracking();
+  t.min_new_points = k.min_new_points();
+  t.max_interval_s = k.max_interval_s();
+  t.min_points = k.min_points();
+  t.reliable_rmse_m = k.reliable_rmse_m();
+  t.reliable_inlier_ratio = k.reliable_inlier_ratio();
+  return t;
+}
+
+WallExtractionOptions ToWallExtractionOptions(const v1::FloorposedConfig& c) {
+  WallExtractionOptions w;
+  w.max_normal_up = c.walls().max_normal_up();
+  w.density_per_m2 = c.walls().density_per_m2();
+  w.seed = c.walls().seed();
+  w.max_edge_m = c.walls().max_edge_m();
+  return w;
+}
+
+}  // namespace floorpose::platform

@@ -1,0 +1,27 @@
+// floorposed configuration: protobuf text format (proto/floorpose/v1/config.proto holds
+// every option with its unit and default).
+#pragma once
+
+#include <string>
+
+#include "core/tracker.h"
+#include "core/wall_extractor.h"
+#include "floorpose/v1/config.pb.h"
+
+namespace floorpose::platform {
+
+// Parses text-format config; an empty path gives the defaults. False with a message on
+// an unreadable file, a syntax error or an unknown option.
+bool LoadConfig(const std::string& path, v1::FloorposedConfig* config, std::string* error);
+bool ParseConfig(const std::string& text, v1::FloorposedConfig* config, std::string* error);
+
+// Checks values the schema cannot (ranges, names). Empty when valid.
+std::string ValidateConfig(const v1::FloorposedConfig& config);
+
+// Text format with every option present, defaults included.
+std::string ResolvedConfigText(const v1::FloorposedConfig& config);
+
+TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& config);
+WallExtractionOptions ToWallExtractionOptions(const v1::FloorposedConfig& config);
+
+}  // namespace floorpose::platform

@@ -1,0 +1,213 @@
+#include "platform/dds.h"
+
+#include <array>
+#include <stdexcept>
+
+#include "envelope.h"
+
+namespace floorpose::platform {
+namespace {
+
+struct TopicSpec {
+  Topic topic;
+  const char* name;
+  bool durable;    // transient-local, keep-last 1: late joiners get the latest at once
+  int32_t depth;   // keep-last depth; 0 = keep-all
+};
+
+constexpr std::array<TopicSpec, 6> kSpecs = {{
+    {Topic::kMeshDelta, "floorpose/v1/mesh_delta", false, 0},
+    {Topic::kHeadsetPose, "floorpose/v1/headset_pose", false, 64},
+    {Topic::kCommand, "floorpose/v1/command", false, 0},
+    {Topic::kPlanPose, "floorpose/v1/plan_pose", true, 1},
+    {Topic::kAlignment, "floorpose/v1/alignment", true, 1},
+    {Topic::kStatus, "floorpose/v1/status", true, 1},
+}};
+
+const TopicSpec& Spec(Topic t) { return kSpecs[static_cast<size_t>(t)]; }
+
+// Keep-all inputs are still bounded: a stuck daemon must not grow without limit.
+constexpr int32_t kKeepAllMaxSamples = 1024;
+
+dds_qos_t* MakeQos(Topic t, bool for_reader) {
+  const TopicSpec& s = Spec(t);
+  dds_qos_t* q = dds_create_qos();
+  dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+  dds_qset_durability(q, s.durable ? DDS_DURABILITY_TRANSIENT_LOCAL : DDS_DURABILITY_VOLATILE);
+  if (s.depth == 0) {
+    dds_qset_history(q, DDS_HISTORY_KEEP_ALL, 0);
+    dds_qset_resource_limits(q, kKeepAllMaxSamples, DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
+  } else {
+    // Readers of the durable outputs keep a little more than the writer, so a reader
+    // that drains in bursts sees every plan pose.
+    dds_qset_history(q, DDS_HISTORY_KEEP_LAST, for_reader && s.durable ? 64 : s.depth);
+  }
+  return q;
+}
+
+void Check(dds_return_t rc, const char* what) {
+  if (rc < 0) throw std::runtime_error(std::string(what) + ": " + dds_strretcode(rc));
+}
+
+}  // namespace
+
+const char* TopicName(Topic topic) { return Spec(topic).name; }
+
+std::optional<Topic> TopicFromName(std::string_view name) {
+  for (const TopicSpec& s : kSpecs)
+    if (name == s.name) return s.topic;
+  return std::nullopt;
+}
+
+std::string LoopbackCycloneConfig() {
+  return "<CycloneDDS><Domain Id=\"any\"><General>"
+         "<Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces>"
+         "<AllowMulticast>false</AllowMulticast></General>"
+         "<Discovery><ParticipantIndex>auto</ParticipantIndex>"
+         "<MaxAutoParticipantIndex>60</MaxAutoParticipantIndex>"
+         "<Peers><Peer Address=\"127.0.0.1\"/></Peers></Discovery>"
+         "</Domain></CycloneDDS>";
+}
+
+Participant::Participant(uint32_t domain_id, const std::string& cyclone_config) {
+  if (!cyclone_config.empty()) {
+    domain_ = dds_create_domain(domain_id, cyclone_config.c_str());
+    Check(domain_, "dds_create_domain");
+  }
+  participant_ = dds_create_participant(domain_id, nullptr, nullptr);
+  if (participant_ < 0) {
+    if (domain_ > 0) dds_delete(domain_);
+    Check(participant_, "dds_create_participant");
+  }
+  for (const TopicSpec& s : kSpecs) {
+    dds_qos_t* q = MakeQos(s.topic, false);
+    const dds_entity_t topic =
+        dds_create_topic(participant_, &floorpose_Envelope_desc, s.name, q, nullptr);
+    dds_delete_qos(q);
+    if (topic < 0) {
+      dds_delete(participant_);
+      if (domain_ > 0) dds_delete(domain_);
+      Check(topic, "dds_create_topic");
+    }
+    topics_.push_back(topic);
+  }
+}
+
+Participant::~Participant() {
+  dds_delete(participant_);
+  if (domain_ > 0) dds_delete(domain_);
+}
+
+Writer::Writer(const Participant& participant, Topic topic) : topic_(topic) {
+  dds_qos_t* q = MakeQos(topic, false);
+  writer_ = dds_create_writer(participant.entity(), participant.topic(topic), q, nullptr);
+  dds_delete_qos(q);
+  Check(writer_, "dds_create_writer");
+}
+
+Writer::~Writer() { dds_delete(writer_); }
+
+bool Writer::Write(const Envelope& e, std::string* error) {
+  floorpose_Envelope sample{};
+  sample.device_id = const_cast<char*>(e.device_id.c_str());
+  sample.seq = e.seq;
+  sample.stamp_ns = e.stamp_ns;
+  sample.payload._length = static_cast<uint32_t>(e.payload.size());
+  sample.payload._maximum = sample.payload._length;
+  sample.payload._buffer =
+      reinterpret_cast<uint8_t*>(const_cast<char*>(e.payload.data()));
+  sample.payload._release = false;
+  const dds_return_t rc = dds_write(writer_, &sample);
+  if (rc < 0 && error) *error = dds_strretcode(rc);
+  return rc >= 0;
+}
+
+int Writer::MatchedReaders() const {
+  dds_publication_matched_status_t st{};
+  if (dds_get_publication_matched_status(writer_, &st) < 0) return 0;
+  return static_cast<int>(st.current_count);
+}
+
+bool Writer::WaitForAcks(std::chrono::milliseconds timeout) {
+  return dds_wait_for_acks(writer_, DDS_MSECS(timeout.count())) == DDS_RETCODE_OK;
+}
+
+Reader::Reader(const Participant& participant, Topic topic) : topic_(topic) {
+  dds_qos_t* q = MakeQos(topic, true);
+  reader_ = dds_create_reader(participant.entity(), participant.topic(topic), q, nullptr);
+  dds_delete_qos(q);
+  Check(reader_, "dds_create_reader");
+}
+
+Reader::~Reader() { dds_delete(reader_); }
+
+std::vector<Envelope> Reader::Take(size_t max) {
+  constexpr size_t kBatch = 64;
+  std::vector<Envelope> out;
+  void* samples[kBatch];
+  dds_sample_info_t infos[kBatch];
+  while (out.size() < max) {
+    samples[0] = nullptr;  // let Cyclone loan the buffers
+    const size_t want = std::min(kBatch, max - out.size());
+    const dds_return_t n = dds_take(reader_, samples, infos, want, static_cast<uint32_t>(want));
+    if (n <= 0) break;
+    for (dds_return_t i = 0; i < n; ++i) {
+      if (!infos[i].valid_data) continue;
+      const auto* s = static_cast<const floorpose_Envelope*>(samples[i]);
+      Envelope e;
+      e.device_id = s->device_id ? s->device_id : "";
+      e.seq = s->seq;
+      e.stamp_ns = s->stamp_ns;
+      e.payload.assign(reinterpret_cast<const char*>(s->payload._buffer), s->payload._length);
+      out.push_back(std::move(e));
+    }
+    dds_return_loan(reader_, samples, n);
+    if (static_cast<size_t>(n) < want) break;
+  }
+  return out;
+}
+
+int Reader::MatchedWriters() const {
+  dds_subscription_matched_status_t st{};
+  if (dds_get_subscription_matched_status(reader_, &st) < 0) return 0;
+  return static_cast<int>(st.current_count);
+}
+
+Waiter::Waiter(const Participant& participant) {
+  waitset_ = dds_create_waitset(participant.entity());
+  Check(waitset_, "dds_create_waitset");
+  guard_ = dds_create_guardcondition(participant.entity());
+  Check(guard_, "dds_create_guardcondition");
+  Check(dds_waitset_attach(waitset_, guard_, guard_), "dds_waitset_attach");
+}
+
+Waiter::~Waiter() {
+  for (dds_entity_t c : conditions_) dds_delete(c);
+  dds_delete(guard_);
+  dds_delete(waitset_);
+}
+
+void Waiter::Attach(const Reader& reader) {
+  const dds_entity_t cond = dds_create_readcondition(reader.entity(), DDS_ANY_STATE);
+  Check(cond, "dds_create_readcondition");
+  conditions_.push_back(cond);
+  Check(dds_waitset_attach(waitset_, cond, cond), "dds_waitset_attach");
+}
+
+bool Waiter::Wait(std::chrono::nanoseconds timeout) {
+  dds_attach_t triggered[16];
+  const dds_return_t n = dds_waitset_wait(waitset_, triggered, 16, timeout.count());
+  bool woken = false;
+  for (dds_return_t i = 0; i < n && i < 16; ++i) {
+    if (triggered[i] == static_cast<dds_attach_t>(guard_)) {
+      bool was = false;
+      dds_take_guardcondition(guard_, &was);
+      woken = woken || was;
+    }
+  }
+  return woken;
+}
+
+void Waiter::Wake() { dds_set_guardcondition(guard_, true); }
+
+}  // namespace floorpose::platform

@@ -1,0 +1,119 @@
+// Cyclone DDS (C API) carrying protobuf payloads in the floorpose Envelope.
+// One participant per process, one topic per message kind, QoS per topic fixed here and
+// documented in docs/protocol.md. No work happens on Cyclone's threads: readers are
+// drained on the owner's thread, woken by a WaitSet.
+#pragma once
+
+#include <dds/dds.h>
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace floorpose::platform {
+
+// Topic names and their QoS.
+enum class Topic {
+  kMeshDelta,    // headset -> daemon: reliable, keep-all (bounded), volatile
+  kHeadsetPose,  // headset -> daemon: reliable, keep-last 64, volatile
+  kCommand,      // app -> daemon: reliable, keep-all (bounded), volatile
+  kPlanPose,     // daemon -> all: reliable, transient-local, keep-last 1 per device
+  kAlignment,    // daemon -> all: reliable, transient-local, keep-last 1 per device
+  kStatus,       // daemon -> all: reliable, transient-local, keep-last 1 per device
+};
+inline constexpr Topic kAllTopics[] = {Topic::kMeshDelta, Topic::kHeadsetPose, Topic::kCommand,
+                                       Topic::kPlanPose,  Topic::kAlignment,   Topic::kStatus};
+const char* TopicName(Topic topic);
+std::optional<Topic> TopicFromName(std::string_view name);
+
+// One received or sent envelope.
+struct Envelope {
+  std::string device_id;
+  uint64_t seq = 0;
+  int64_t stamp_ns = 0;
+  std::string payload;  // serialized protobuf
+};
+
+class Participant;
+
+class Writer {
+ public:
+  Writer(const Participant& participant, Topic topic);
+  ~Writer();
+  Writer(const Writer&) = delete;
+  Writer& operator=(const Writer&) = delete;
+  // Returns false (and says why in *error) when DDS refuses the sample.
+  bool Write(const Envelope& envelope, std::string* error = nullptr);
+  // Number of matched readers (for start-up synchronisation in tools and tests).
+  int MatchedReaders() const;
+  // Blocks until matched reliable readers acknowledged everything written, or timeout.
+  bool WaitForAcks(std::chrono::milliseconds timeout);
+  Topic topic() const { return topic_; }
+
+ private:
+  Topic topic_;
+  dds_entity_t writer_ = 0;
+};
+
+class Reader {
+ public:
+  Reader(const Participant& participant, Topic topic);
+  ~Reader();
+  Reader(const Reader&) = delete;
+  Reader& operator=(const Reader&) = delete;
+  // Takes up to max samples now available; invalid samples (disposals) are skipped.
+  std::vector<Envelope> Take(size_t max = 64);
+  int MatchedWriters() const;
+  Topic topic() const { return topic_; }
+  dds_entity_t entity() const { return reader_; }
+
+ private:
+  Topic topic_;
+  dds_entity_t reader_ = 0;
+};
+
+// A WaitSet over readers plus a guard condition to wake it (for shutdown).
+class Waiter {
+ public:
+  explicit Waiter(const Participant& participant);
+  ~Waiter();
+  Waiter(const Waiter&) = delete;
+  Waiter& operator=(const Waiter&) = delete;
+  void Attach(const Reader& reader);
+  // Blocks until data arrives, Wake() is called, or the timeout passes. Returns true when
+  // woken by Wake() (the flag is cleared).
+  bool Wait(std::chrono::nanoseconds timeout);
+  void Wake();  // thread-safe
+
+ private:
+  dds_entity_t waitset_ = 0;
+  dds_entity_t guard_ = 0;
+  std::vector<dds_entity_t> conditions_;
+};
+
+class Participant {
+ public:
+  // `cyclone_config` is Cyclone XML (or a file:// URI); empty uses CYCLONEDDS_URI.
+  // Throws std::runtime_error when DDS cannot start.
+  Participant(uint32_t domain_id, const std::string& cyclone_config);
+  ~Participant();
+  Participant(const Participant&) = delete;
+  Participant& operator=(const Participant&) = delete;
+  dds_entity_t entity() const { return participant_; }
+  dds_entity_t topic(Topic t) const { return topics_[static_cast<size_t>(t)]; }
+
+ private:
+  dds_entity_t domain_ = 0;
+  dds_entity_t participant_ = 0;
+  std::vector<dds_entity_t> topics_;
+};
+
+// Cyclone XML that keeps all traffic on the loopback interface with unicast discovery:
+// for tests, the demo and benchmarks (a unique domain id each keeps them apart).
+std::string LoopbackCycloneConfig();
+
+}  // namespace floorpose::platform

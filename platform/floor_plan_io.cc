@@ -1,0 +1,155 @@
+#include "platform/floor_plan_io.h"
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+namespace floorpose::platform {
+namespace {
+
+constexpr size_t kMaxPlanBytes = 256u << 20;  // larger files are not floor plans
+
+using Json = nlohmann::json;
+
+bool ToPoint(const Json& j, Eigen::Vector2d* p) {
+  if (!j.is_array() || j.size() < 2 || !j[0].is_number() || !j[1].is_number()) return false;
+  *p = {j[0].get<double>(), j[1].get<double>()};
+  return true;
+}
+
+// Appends the segments of a line string (or ring); false if it is not one.
+bool AddLine(const Json& coords, std::vector<Segment>* out) {
+  if (!coords.is_array()) return false;
+  Eigen::Vector2d prev = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < coords.size(); ++i) {
+    Eigen::Vector2d p;
+    if (!ToPoint(coords[i], &p)) return false;
+    if (i > 0) out->push_back({prev, p});
+    prev = p;
+  }
+  return true;
+}
+
+// Returns an error or empty; ignores geometry types that carry no walls (points).
+std::string AddGeometry(const Json& g, std::vector<Segment>* out, int depth) {
+  if (depth > 8) return "geometry nested too deep";
+  if (!g.is_object() || !g.contains("type") || !g["type"].is_string()) return "geometry without a type";
+  const std::string type = g["type"];
+  if (type == "GeometryCollection") {
+    if (!g.contains("geometries") || !g["geometries"].is_array()) return "GeometryCollection without geometries";
+    for (const Json& sub : g["geometries"]) {
+      std::string e = AddGeometry(sub, out, depth + 1);
+      if (!e.empty()) return e;
+    }
+    return {};
+  }
+  if (type == "Point" || type == "MultiPoint") return {};
+  if (!g.contains("coordinates")) return type + " without coordinates";
+  const Json& c = g["coordinates"];
+  bool ok = c.is_array();
+  if (type == "LineString") {
+    ok = ok && AddLine(c, out);
+  } else if (type == "MultiLineString" || type == "Polygon") {
+    for (size_t i = 0; ok && i < c.size(); ++i) ok = AddLine(c[i], out);
+  } else if (type == "MultiPolygon") {
+    for (size_t i = 0; ok && i < c.size(); ++i) {
+      ok = c[i].is_array();
+      for (size_t k = 0; ok && k < c[i].size(); ++k) ok = AddLine(c[i][k], out);
+    }
+  } else {
+    return "unsupported geometry type " + type;
+  }
+  return ok ? std::string() : "bad coordinates in a " + type;
+}
+
+}  // namespace
+
+bool ReadFile(const std::string& path, size_t max_bytes, std::string* contents, std::string* error) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    *error = path + ": not a readable file";
+    return false;
+  }
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) {
+    *error = path + ": " + ec.message();
+    return false;
+  }
+  if (size > max_bytes) {
+    *error = path + ": " + std::to_string(size) + " bytes, over the limit of " + std::to_string(max_bytes);
+    return false;
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    *error = path + ": " + std::strerror(errno);
+    return false;
+  }
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  *contents = ss.str();
+  return true;
+}
+
+FloorPlanParse ParseGeoJsonFloorPlan(std::string_view text, std::string id) {
+  FloorPlanParse out;
+  const Json doc = Json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (doc.is_discarded()) {
+    out.error = "GeoJSON: not valid JSON";
+    return out;
+  }
+  std::vector<Segment> raw;
+  auto add_feature = [&](const Json& f) -> std::string {
+    if (!f.is_object()) return "feature is not an object";
+    // Features marked as something other than a wall (doors, rooms' labels) are skipped.
+    if (f.contains("properties") && f["properties"].is_object() && f["properties"].contains("kind") &&
+        f["properties"]["kind"].is_string() && f["properties"]["kind"] != "wall")
+      return {};
+    if (!f.contains("geometry") || f["geometry"].is_null()) return {};
+    return AddGeometry(f["geometry"], &raw, 0);
+  };
+  std::string error;
+  if (!doc.is_object() || !doc.contains("type") || !doc["type"].is_string()) {
+    error = "top level is not a GeoJSON object";
+  } else if (doc["type"] == "FeatureCollection") {
+    if (!doc.contains("features") || !doc["features"].is_array()) {
+      error = "FeatureCollection without features";
+    } else {
+      for (size_t i = 0; i < doc["features"].size() && error.empty(); ++i) {
+        error = add_feature(doc["features"][i]);
+        if (!error.empty()) error = "feature " + std::to_string(i) + ": " + error;
+      }
+    }
+  } else if (doc["type"] == "Feature") {
+    error = add_feature(doc);
+  } else {
+    error = AddGeometry(doc, &raw, 0);
+  }
+  if (!error.empty()) {
+    out.error = "GeoJSON: " + error;
+    return out;
+  }
+  return MakeFloorPlan(std::move(id), std::move(raw));
+}
+
+FloorPlanParse LoadFloorPlan(const std::string& path) {
+  FloorPlanParse out;
+  std::string text;
+  if (!ReadFile(path, kMaxPlanBytes, &text, &out.error)) return out;
+  const std::filesystem::path p(path);
+  const std::string ext = p.extension().string();
+  const std::string id = p.stem().string();
+  if (ext == ".geojson" || ext == ".json") {
+    out = ParseGeoJsonFloorPlan(text, id);
+  } else if (ext == ".txt") {
+    out = ParseTextFloorPlan(text, id);
+  } else {
+    out.error = "unknown floor plan format '" + ext + "' (expected .geojson or .txt)";
+  }
+  if (!out.ok()) out.error = path + ": " + out.error;
+  return out;
+}
+
+}  // namespace floorpose::platform

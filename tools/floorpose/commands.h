@@ -1,0 +1,16 @@
+// The `floorpose` subcommands. Each registers its options on a CLI11 subcommand and
+// returns the process exit code when run.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace floorpose::tools {
+
+using Run = std::function<int()>;
+
+Run AddDemoCommand(CLI::App& app);
+Run AddReplayCommand(CLI::App& app);
+Run AddRecordCommand(CLI::App& app);
+
+}  // namespace floorpose::tools

@@ -1,0 +1,26 @@
+// floorpose: the command line of the floorpose project (demo, replay, record, ...).
+#include <spdlog/spdlog.h>
+
+#include "platform/logging.h"
+#include "tools/floorpose/commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"floorpose: indoor positioning on floor plans for AR headsets"};
+  app.require_subcommand(1);
+  std::string log_level = "info";
+  app.add_option("--log-level", log_level, "trace, debug, info, warn or error");
+  std::vector<std::pair<CLI::App*, floorpose::tools::Run>> commands;
+  auto add = [&](const char* name, const char* help, auto adder) {
+    CLI::App* sub = app.add_subcommand(name, help);
+    commands.emplace_back(sub, adder(*sub));
+  };
+  add("demo", "run floorposed on a bundled floor plan with a simulated walk",
+      floorpose::tools::AddDemoCommand);
+  add("replay", "publish a recording over DDS", floorpose::tools::AddReplayCommand);
+  add("record", "write every floorpose topic to a recording", floorpose::tools::AddRecordCommand);
+  CLI11_PARSE(app, argc, argv);
+  floorpose::platform::SetUpLogging("floorpose", log_level);
+  for (auto& [sub, run] : commands)
+    if (sub->parsed()) return run();
+  return 2;
+}

@@ -1,0 +1,60 @@
+// The headset's (or app's) side of the DDS link to one floorposed: publishes inputs for a
+// device and collects that device's outputs. Used by the demo and the integration tests.
+#pragma once
+
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "floorpose/v1/floorpose.pb.h"
+#include "platform/dds.h"
+
+namespace floorpose::tools {
+
+class HeadsetLink {
+ public:
+  // Throws std::runtime_error when DDS cannot start.
+  HeadsetLink(uint32_t domain_id, const std::string& cyclone_config, std::string device_id);
+
+  // Waits until the daemon's readers matched our writers and a status arrived.
+  bool WaitForDaemon(std::chrono::milliseconds timeout);
+  // Polls until pred() holds or the timeout passes; returns pred().
+  template <typename Pred>
+  bool WaitUntil(Pred pred, std::chrono::milliseconds timeout);
+
+  bool Send(platform::Topic topic, const google::protobuf::Message& msg, int64_t stamp_ns);
+  void Poll();  // drains the output readers into the fields below
+
+  std::vector<v1::PlanPose> plan_poses;
+  std::vector<v1::Alignment> alignments;
+  std::optional<v1::DaemonStatus> status;
+  std::vector<std::string> status_messages;  // every non-empty DaemonStatus.message
+  size_t foreign_envelopes = 0;              // outputs of other devices, ignored
+  size_t malformed_envelopes = 0;
+
+  platform::Participant& participant() { return *participant_; }
+  const std::string& device_id() const { return device_id_; }
+
+ private:
+  std::string device_id_;
+  std::unique_ptr<platform::Participant> participant_;
+  std::unique_ptr<platform::Writer> mesh_, pose_, command_;
+  std::unique_ptr<platform::Reader> plan_pose_, alignment_, status_;
+  std::unique_ptr<platform::Waiter> waiter_;
+  uint64_t seq_ = 0;
+};
+
+template <typename Pred>
+bool HeadsetLink::WaitUntil(Pred pred, std::chrono::milliseconds timeout) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (true) {
+    Poll();
+    if (pred()) return true;
+    if (std::chrono::steady_clock::now() >= end) return false;
+    waiter_->Wait(std::chrono::milliseconds(20));
+  }
+}
+
+}  // namespace floorpose::tools

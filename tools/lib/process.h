@@ -1,0 +1,40 @@
+// A child process (floorposed) started and stopped by the tools and the tests.
+#pragma once
+
+#include <sys/types.h>
+
+#include <chrono>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace floorpose::tools {
+
+class ChildProcess {
+ public:
+  // Starts argv[0] with the given arguments; stdout/stderr go to log_path when given.
+  ChildProcess(const std::vector<std::string>& argv, const std::string& log_path = "");
+  ~ChildProcess();  // SIGKILL if still running
+  ChildProcess(const ChildProcess&) = delete;
+  ChildProcess& operator=(const ChildProcess&) = delete;
+
+  bool started() const { return pid_ > 0; }
+  bool Running();
+  // SIGTERM, then wait up to timeout; SIGKILL after. Returns the exit code, or nothing if
+  // it had to be killed or died by a signal.
+  std::optional<int> Terminate(std::chrono::milliseconds timeout);
+  // How long the last Terminate() took.
+  std::chrono::milliseconds last_stop_time() const { return stop_time_; }
+
+ private:
+  std::optional<int> Reap(bool block);
+  pid_t pid_ = -1;
+  std::optional<int> exit_code_;
+  bool exited_ = false;
+  std::chrono::milliseconds stop_time_{0};
+};
+
+// floorposed beside this executable (build tree: ../daemon/floorposed) or $FLOORPOSED.
+std::string FindFloorposed();
+
+}  // namespace floorpose::tools
