@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# One entry point for a fresh Debian machine: installs what is missing, configures,
+# builds, then runs the demo or the tests.
+#
+#   tools/dev.sh demo [floorpose demo options]   build, then run `floorpose demo`
+#   tools/dev.sh test [ctest options]            build, then run every test suite
+#   tools/dev.sh build                           just install, configure and build
+#
+# BUILD_DIR (default: build) and BUILD_TYPE (default: RelWithDebInfo) may be set.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=(build-essential cmake pkg-config clang-format
+  cyclonedds-dev cyclonedds-tools libprotobuf-dev protobuf-compiler libeigen3-dev
+  libspdlog-dev libgtest-dev libgmock-dev libbenchmark-dev libsystemd-dev
+  libcli11-dev nlohmann-json3-dev)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "dev.sh: installing ${missing[*]}"
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+build_dir=${BUILD_DIR:-build}
+cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-RelWithDebInfo}" >/dev/null
+cmake --build "$build_dir" -j"$(nproc)"
+
+cmd=${1:-build}
+shift || true
+case "$cmd" in
+  demo) exec "$build_dir/tools/floorpose" demo "$@" ;;
+  test) exec ctest --test-dir "$build_dir" --output-on-failure -j"$(nproc)" "$@" ;;
+  build) ;;
+  *) echo "usage: tools/dev.sh demo|test|build" >&2; exit 2 ;;
+esac
