@@ -25,12 +25,25 @@ ClosestWall MakeHit(const FloorPlan& plan, uint32_t i, const Eigen::Vector2d& p)
 
 ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
     : plan_(plan), options_(options) {
+  // Memory is bounded by design: a plan too large for the requested cells (drawn in
+  // millimetres, or with a stray far-away segment) gets coarser cells instead of
+  // gigabytes or an overflowing cell count. Any cell size gives exact answers (see the
+  // header); only the candidate lists grow.
+  constexpr double kMaxCells = 1 << 24;
+  const Eigen::Vector2d size = plan_.max - plan_.min;
+  auto cell_count = [&](double c) {
+    const double margin2 = 2 * (options_.max_distance_m + c);
+    return std::ceil((size.x() + margin2) / c) * std::ceil((size.y() + margin2) / c);
+  };
+  for (int i = 0; i < 2100 && !(cell_count(options_.cell_m) <= kMaxCells); ++i)
+    options_.cell_m *= 2;
   const double cell = options_.cell_m;
   const double margin = options_.max_distance_m + cell;
   origin_ = plan_.min - Eigen::Vector2d::Constant(margin);
-  const Eigen::Vector2d extent = plan_.max - plan_.min + Eigen::Vector2d::Constant(2 * margin);
-  nx_ = std::max(1, static_cast<int>(std::ceil(extent.x() / cell)));
-  ny_ = std::max(1, static_cast<int>(std::ceil(extent.y() / cell)));
+  const Eigen::Vector2d extent = size + Eigen::Vector2d::Constant(2 * margin);
+  // std::max(1.0, NaN) is 1.0: no undefined conversion even for absurd bounds.
+  nx_ = static_cast<int>(std::min(kMaxCells, std::max(1.0, std::ceil(extent.x() / cell))));
+  ny_ = static_cast<int>(std::min(kMaxCells, std::max(1.0, std::ceil(extent.y() / cell))));
   const size_t n = static_cast<size_t>(nx_) * static_cast<size_t>(ny_);
   const double r = 0.5 * cell * std::sqrt(2.0);
   // Only segments within this distance of a centre can matter (see the header).

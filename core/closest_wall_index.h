@@ -27,8 +27,8 @@ struct ClosestWall {
 class ClosestWallIndex {
  public:
   struct Options {
-    double cell_m = 0.25;          // grid resolution
-    double max_distance_m = 3.0;   // beyond this, queries return nothing
+    double cell_m = 0.25;         // grid resolution
+    double max_distance_m = 3.0;  // beyond this, queries return nothing
   };
 
   ClosestWallIndex(const FloorPlan& plan, Options options);

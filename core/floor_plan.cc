@@ -46,6 +46,10 @@ FloorPlanParse MakeFloorPlan(std::string id, std::vector<Segment> raw) {
     lo = lo.cwiseMin(s.a).cwiseMin(s.b);
     hi = hi.cwiseMax(s.a).cwiseMax(s.b);
   }
+  if (!(hi - lo).allFinite()) {
+    out.error = "floor plan extent overflows (coordinates near the double limit)";
+    return out;
+  }
   out.plan.min = lo;
   out.plan.max = hi;
   return out;

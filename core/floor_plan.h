@@ -30,7 +30,7 @@ struct FloorPlan {
 // Result of parsing: either a plan or a message saying what is wrong and where.
 struct FloorPlanParse {
   FloorPlan plan;
-  std::string error;  // empty on success
+  std::string error;            // empty on success
   size_t dropped_segments = 0;  // zero-length or duplicate
   bool ok() const { return error.empty(); }
 };

@@ -6,9 +6,7 @@ namespace floorpose {
 namespace {
 
 // The y/z swap; its own inverse.
-Eigen::Matrix3d SwapYZ() {
-  return (Eigen::Matrix3d() << 1, 0, 0, 0, 0, 1, 0, 1, 0).finished();
-}
+Eigen::Matrix3d SwapYZ() { return (Eigen::Matrix3d() << 1, 0, 0, 0, 0, 1, 0, 1, 0).finished(); }
 
 }  // namespace
 
@@ -35,9 +33,9 @@ Pose2 HeadsetPoseToSlam(HeadsetFrame frame, const Eigen::Vector3d& p_headset,
   const Eigen::Quaterniond q = OrientationToSlam(frame, q_headset).normalized();
   // The viewing direction in the device's own axes: Unity's +z is slam's +y after the
   // swap; a Z-up device looks along +x.
-  const Eigen::Vector3d forward_device =
-      frame == HeadsetFrame::kUnityLeftHandedYUp ? Eigen::Vector3d::UnitY()
-                                                 : Eigen::Vector3d::UnitX();
+  const Eigen::Vector3d forward_device = frame == HeadsetFrame::kUnityLeftHandedYUp
+                                             ? Eigen::Vector3d::UnitY()
+                                             : Eigen::Vector3d::UnitX();
   const Eigen::Vector3d forward = q * forward_device;
   Pose2 pose;
   pose.position = p.head<2>();

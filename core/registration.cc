@@ -7,9 +7,29 @@
 
 namespace floorpose {
 
+const char* ToString(RegistrationMethod method) {
+  switch (method) {
+    case RegistrationMethod::kIcp: return "icp";
+    case RegistrationMethod::kIk: return "ik";
+    case RegistrationMethod::kHough: return "hough";
+  }
+  return "?";
+}
+
+bool ParseRegistrationMethod(const std::string& name, RegistrationMethod* method) {
+  for (RegistrationMethod m :
+       {RegistrationMethod::kIcp, RegistrationMethod::kIk, RegistrationMethod::kHough}) {
+    if (name == ToString(m)) {
+      *method = m;
+      return true;
+    }
+  }
+  return false;
+}
+
 void EvaluateFit(const std::vector<Eigen::Vector2d>& points, const ClosestWallIndex& index,
-                 const Se2& T, double max_corr, double inlier_threshold,
-                 RegistrationResult* result, double* truncated_mse) {
+                 const Se2& T, double max_corr, double inlier_threshold, RegistrationResult* result,
+                 double* truncated_mse) {
   const Eigen::Matrix2d R = T.R();
   double sum_matched = 0, sum_inlier = 0, sum_trunc = 0;
   uint32_t matched = 0, inliers = 0;
@@ -41,12 +61,157 @@ void EvaluateFit(const std::vector<Eigen::Vector2d>& points, const ClosestWallIn
 
 namespace {
 
-struct Pair {
+// One constraint row: a . (theta, x, y) + r = 0 in the linearisation (eq. 4.4).
+struct Row {
   Eigen::Vector2d p;  // transformed point
-  Eigen::Vector2d n;  // wall normal
-  double r;           // signed point-to-line residual n . (p - y)
+  Eigen::Vector2d n;  // direction of the residual (a wall normal, or an axis)
+  double r;           // signed residual n . (p - y)
   double d;           // distance to the closest point on the segment
 };
+
+// Closest-wall pairs of the transformed points (every stride-th), within max_corr. With
+// point_to_point_at_ends, a closest point at a segment's end gives two rows (x and y), as
+// the squared distance to a point is isotropic there (Pottmann et al. 2004, section 3).
+void MakeRows(const std::vector<Eigen::Vector2d>& points, size_t stride, const Se2& T,
+              const ClosestWallIndex& index, double max_corr, bool point_to_point_at_ends,
+              std::vector<Row>* rows) {
+  rows->clear();
+  const Eigen::Matrix2d R = T.R();
+  const auto& segments = index.plan().segments;
+  for (size_t i = 0; i < points.size(); i += stride) {
+    const Eigen::Vector2d p = R * points[i] + T.t;
+    const auto hit = index.Query(p);
+    if (!hit || hit->distance > max_corr) continue;
+    const Segment& s = segments[hit->segment];
+    const bool at_end =
+        point_to_point_at_ends && hit->distance > 1e-9 &&
+        ((hit->point - s.a).squaredNorm() < 1e-18 || (hit->point - s.b).squaredNorm() < 1e-18);
+    if (at_end) {
+      const Eigen::Vector2d e = p - hit->point;
+      rows->push_back({p, Eigen::Vector2d::UnitX(), e.x(), hit->distance});
+      rows->push_back({p, Eigen::Vector2d::UnitY(), e.y(), hit->distance});
+    } else {
+      rows->push_back({p, hit->normal, hit->normal.dot(p - hit->point), hit->distance});
+    }
+  }
+}
+
+struct Step {
+  bool ok = false;
+  std::string reason;
+  Eigen::Vector3d delta = Eigen::Vector3d::Zero();  // (theta, x, y) about the centroid
+  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();  // unscaled normal matrix
+  Eigen::Vector3d eigenvalues = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d eigenvectors = Eigen::Matrix3d::Identity();
+  std::vector<Eigen::Vector3d> degenerate;
+};
+
+// Picky rejection, Cauchy weights, and the weighted least-squares step with solution
+// remapping. Unknowns are (theta, x, y) about the centroid of the rows; theta is scaled
+// by the RMS radius so that its eigenvalue compares with the translations'.
+Step SolveStep(const std::vector<Row>& rows, const IcpOptions& o, bool translation_only) {
+  Step st;
+  if (rows.size() < 3) {
+    st.reason = "fewer than 3 correspondences";
+    return st;
+  }
+  // Picky ICP (Zinsser et al. 2003): reject pairs beyond reject_sigma deviations.
+  double sum2 = 0;
+  for (const Row& q : rows) sum2 += q.d * q.d;
+  const double reject = std::max(o.reject_sigma * std::sqrt(sum2 / rows.size()), 0.01);
+  std::vector<double> abs_r;
+  abs_r.reserve(rows.size());
+  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+  for (const Row& q : rows) {
+    if (q.d > reject) continue;
+    abs_r.push_back(std::abs(q.r));
+    centroid += q.p;
+  }
+  if (abs_r.size() < 3) {
+    st.reason = "fewer than 3 pairs after rejection";
+    return st;
+  }
+  centroid /= static_cast<double>(abs_r.size());
+  // Cauchy scale tied to the data: the median absolute residual of the kept pairs.
+  std::nth_element(abs_r.begin(), abs_r.begin() + abs_r.size() / 2, abs_r.end());
+  const double c = std::max(o.cauchy_scale_factor * abs_r[abs_r.size() / 2], 0.01);
+  double radius2 = 0;
+  for (const Row& q : rows)
+    if (q.d <= reject) radius2 += (q.p - centroid).squaredNorm();
+  const double radius = std::max(std::sqrt(radius2 / abs_r.size()), 0.1);
+
+  // Equation 4.4 in 2D: A_i = [p x n / radius, n], b_i = n . (p - y).
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d g = Eigen::Vector3d::Zero();
+  double weight_sum = 0;
+  for (const Row& q : rows) {
+    if (q.d > reject) continue;
+    const Eigen::Vector2d p = q.p - centroid;
+    const Eigen::Vector3d a((p.x() * q.n.y() - p.y() * q.n.x()) / radius, q.n.x(), q.n.y());
+    const double w = o.cauchy_scale_factor > 0 ? 1.0 / (1.0 + (q.r / c) * (q.r / c)) : 1.0;
+    H.noalias() += w * a * a.transpose();
+    g.noalias() += w * a * q.r;
+    weight_sum += w;
+  }
+  if (translation_only) {
+    H.row(0).setZero();
+    H.col(0).setZero();
+    g(0) = 0;
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(H);
+  st.eigenvalues = eig.eigenvalues();
+  st.eigenvectors = eig.eigenvectors();
+  const Eigen::DiagonalMatrix<double, 3> unscale(1.0 / radius, 1.0, 1.0);
+  st.H = unscale * H * unscale;  // back to (theta, x, y)
+  st.centroid = centroid;
+  // Solve in the eigenbasis, dropping the directions the data does not constrain
+  // (solution remapping, Zhang and Singh 2016): the update never moves along them.
+  const double floor = std::max(o.degeneracy_ratio * weight_sum, 1e-12 * weight_sum);
+  Eigen::Vector3d delta_scaled = Eigen::Vector3d::Zero();
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d v = st.eigenvectors.col(i);
+    const double lambda = st.eigenvalues(i);
+    if (translation_only && std::abs(v(0)) > 0.5) continue;  // the zeroed rotation axis
+    if (lambda <= floor) {
+      st.degenerate.push_back(v);
+      continue;
+    }
+    delta_scaled -= v * (v.dot(g) / lambda);
+  }
+  if (st.degenerate.size() == (translation_only ? 2u : 3u)) {
+    st.reason = "no direction constrained";
+    return st;
+  }
+  st.delta = Eigen::Vector3d(delta_scaled(0) / radius, delta_scaled(1), delta_scaled(2));
+  if (!st.delta.allFinite()) {
+    st.reason = "non-finite update";
+    return st;
+  }
+  st.ok = true;
+  return st;
+}
+
+// Rotation by theta about centre c, then translation t: p -> R(p - c) + c + t.
+Se2 AboutCentre(double theta, const Eigen::Vector2d& c, const Eigen::Vector2d& t) {
+  const Se2 R{theta, {0, 0}};
+  return {theta, c + t - R.R() * c};
+}
+
+void Finish(const std::vector<Eigen::Vector2d>& points, const ClosestWallIndex& index,
+            const IcpOptions& o, const Step& last, RegistrationResult* result) {
+  result->normal_matrix = last.H;
+  result->eigenvalues = last.eigenvalues;
+  result->eigenvectors = last.eigenvectors;
+  result->degenerate_directions = last.degenerate;
+  EvaluateFit(points, index, result->T_plan_slam, o.max_correspondence_m, o.inlier_threshold_m,
+              result, nullptr);
+}
+
+bool SmallStep(const Eigen::Vector3d& delta, const IcpOptions& o) {
+  return std::abs(delta(0)) < o.converge_rotation_rad &&
+         delta.tail<2>().norm() < o.converge_translation_m;
+}
 
 }  // namespace
 
@@ -57,97 +222,209 @@ RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& points,
   result.method = "icp";
   result.T_plan_slam = initial;
   Se2 T = initial;
-  if (points.size() < 3) {
-    result.reason = "fewer than 3 points";
-    EvaluateFit(points, index, T, o.max_correspondence_m, o.inlier_threshold_m, &result, nullptr);
-    return result;
-  }
-  std::vector<Pair> pairs;
-  pairs.reserve(points.size());
-  std::vector<double> abs_r;
+  std::vector<Row> rows;
+  rows.reserve(points.size());
+  Step last;
   bool converged_at_finest = false;
-
-  for (int h = static_cast<int>(o.levels); h >= 0; --h) {
+  // Algorithm 4.2: coarse to fine; level h uses every 2^h-th point and maxIter / 2^h.
+  for (int h = static_cast<int>(o.levels); h >= 0 && result.reason.empty(); --h) {
     const size_t stride = size_t{1} << h;
     const uint32_t max_iter = std::max<uint32_t>(1, o.max_iterations >> h);
     bool converged = false;
     for (uint32_t it = 0; it < max_iter; ++it) {
       ++result.iterations;
-      const Eigen::Matrix2d R = T.R();
-      pairs.clear();
-      for (size_t i = 0; i < points.size(); i += stride) {
-        const Eigen::Vector2d p = R * points[i] + T.t;
-        const auto hit = index.Query(p);
-        if (!hit || hit->distance > o.max_correspondence_m) continue;
-        pairs.push_back({p, hit->normal, hit->normal.dot(p - hit->point), hit->distance});
-      }
-      if (pairs.size() < 3) {
-        result.reason = "fewer than 3 correspondences";
+      MakeRows(points, stride, T, index, o.max_correspondence_m, false, &rows);
+      Step st = SolveStep(rows, o, false);
+      if (!st.ok) {
+        result.reason = st.reason;
         break;
       }
-      // Picky ICP (Zinsser et al. 2003): reject pairs beyond reject_sigma deviations.
-      double sum2 = 0;
-      for (const Pair& q : pairs) sum2 += q.d * q.d;
-      const double sigma = std::sqrt(sum2 / pairs.size());
-      const double reject = std::max(o.reject_sigma * sigma, 0.01);
-      // Cauchy scale tied to the data: the median absolute residual of kept pairs.
-      abs_r.clear();
-      for (const Pair& q : pairs)
-        if (q.d <= reject) abs_r.push_back(std::abs(q.r));
-      if (abs_r.size() < 3) {
-        result.reason = "fewer than 3 pairs after rejection";
-        break;
-      }
-      std::nth_element(abs_r.begin(), abs_r.begin() + abs_r.size() / 2, abs_r.end());
-      const double c = std::max(o.cauchy_scale_factor * abs_r[abs_r.size() / 2], 0.01);
-      Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
-      for (const Pair& q : pairs) centroid += q.p;
-      centroid /= static_cast<double>(pairs.size());
-
-      // Equation 4.4 in 2D about the centroid: A_i = [p x n, n], b_i = n . (p - y).
-      Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-      Eigen::Vector3d g = Eigen::Vector3d::Zero();
-      for (const Pair& q : pairs) {
-        if (q.d > reject) continue;
-        const Eigen::Vector2d p = q.p - centroid;
-        const Eigen::Vector3d a(p.x() * q.n.y() - p.y() * q.n.x(), q.n.x(), q.n.y());
-        const double w = o.cauchy_scale_factor > 0 ? 1.0 / (1.0 + (q.r / c) * (q.r / c)) : 1.0;
-        H.noalias() += w * a * a.transpose();
-        g.noalias() += w * a * q.r;
-      }
-      result.normal_matrix = H;
-      const Eigen::LDLT<Eigen::Matrix3d> ldlt(H);
-      if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) {
-        result.reason = "singular normal matrix";
-        break;
-      }
-      const Eigen::Vector3d delta = -ldlt.solve(g);
-      if (!delta.allFinite()) {
-        result.reason = "non-finite update";
-        break;
-      }
-      // Rotate by delta(0) about the centroid, then translate.
-      const Se2 step_about_centroid{delta(0), centroid + delta.tail<2>() -
-                                                  Se2{delta(0), {0, 0}}.R() * centroid};
-      T = step_about_centroid * T;
-      if (std::abs(delta(0)) < o.converge_rotation_rad &&
-          delta.tail<2>().norm() < o.converge_translation_m) {
+      T = AboutCentre(st.delta(0), st.centroid, st.delta.tail<2>()) * T;
+      last = std::move(st);
+      if (SmallStep(last.delta, o)) {
         converged = true;
         break;
       }
     }
-    if (!result.reason.empty()) break;
     converged_at_finest = converged;
   }
-
   result.T_plan_slam = T;
   result.converged = result.reason.empty() && converged_at_finest;
   if (result.reason.empty() && !result.converged) result.reason = "iteration limit";
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(result.normal_matrix,
-                                                           Eigen::EigenvaluesOnly);
-  result.eigenvalues = eig.eigenvalues();
-  EvaluateFit(points, index, T, o.max_correspondence_m, o.inlier_threshold_m, &result, nullptr);
+  Finish(points, index, o, last, &result);
   return result;
+}
+
+RegistrationResult RegisterIk(const std::vector<Eigen::Vector2d>& points,
+                              const ClosestWallIndex& index, const Se2& initial,
+                              const IcpOptions& o) {
+  RegistrationResult result;
+  result.method = "ik";
+  Se2 T = initial;
+  std::vector<Row> rows;
+  rows.reserve(points.size());
+  Step last;
+  double score = 0;
+  EvaluateFit(points, index, T, o.max_correspondence_m, o.inlier_threshold_m, nullptr, &score);
+  for (uint32_t it = 0; it < o.max_iterations; ++it) {
+    ++result.iterations;
+    MakeRows(points, 1, T, index, o.max_correspondence_m, true, &rows);
+    Step st = SolveStep(rows, o, false);  // Algorithm 4.4
+    if (!st.ok) {
+      result.reason = st.reason;
+      break;
+    }
+    // Algorithm 4.5 in 2D: v(x) = c_bar + omega J (x - centroid) vanishes at the
+    // instantaneous centre G = centroid + J c_bar / omega; the rigid motion is the
+    // rotation by omega about G (a translation by c_bar when omega is ~0).
+    const double omega = st.delta(0);
+    const Eigen::Vector2d c_bar = st.delta.tail<2>();
+    bool improved = false;
+    for (double scale = 1.0; scale > 1.0 / 32; scale *= 0.5) {
+      Se2 motion;
+      if (std::abs(omega * scale) < 1e-12) {
+        motion = {0.0, c_bar * scale};
+      } else {
+        const Eigen::Vector2d G = st.centroid + Eigen::Vector2d(-c_bar.y(), c_bar.x()) / omega;
+        motion = AboutCentre(omega * scale, G, Eigen::Vector2d::Zero());
+      }
+      const Se2 candidate = motion * T;
+      double candidate_score = 0;
+      EvaluateFit(points, index, candidate, o.max_correspondence_m, o.inlier_threshold_m, nullptr,
+                  &candidate_score);
+      if (candidate_score <= score) {  // Algorithm 4.3 line 9: only a better fit
+        T = candidate;
+        score = candidate_score;
+        improved = true;
+        break;
+      }
+    }
+    last = std::move(st);
+    if (!improved || SmallStep(last.delta, o)) {
+      result.converged = true;  // no better fit nearby: a minimum
+      break;
+    }
+  }
+  result.T_plan_slam = T;
+  if (result.reason.empty() && !result.converged) result.reason = "iteration limit";
+  if (!result.reason.empty()) result.converged = false;
+  Finish(points, index, o, last, &result);
+  return result;
+}
+
+RegistrationResult RegisterHough(const std::vector<Eigen::Vector2d>& points,
+                                 const std::vector<Eigen::Vector2d>& normals,
+                                 const ClosestWallIndex& index, const Se2& initial,
+                                 const IcpOptions& o, const HoughOptions& h) {
+  RegistrationResult result;
+  result.method = "hough";
+  result.T_plan_slam = initial;
+  if (normals.size() != points.size() || points.size() < 3) {
+    result.reason = "Hough needs a normal for every point";
+    Finish(points, index, o, Step{}, &result);
+    return result;
+  }
+  // Equation 4.6: a point with a normal is a line, theta = atan2(n.y, n.x); walls are
+  // two-sided, so angles are taken modulo pi. Histograms of the cloud (in the plan frame
+  // under the initial guess, one vote a point) and of the plan (wall length).
+  const int bins = std::max(8, static_cast<int>(std::lround(M_PI / h.bin_rad)));
+  const double bin = M_PI / bins;
+  auto angle_bin = [&](const Eigen::Vector2d& n) {
+    double a = std::atan2(n.y(), n.x());
+    a = std::fmod(a + 2 * M_PI, M_PI);
+    return std::min(bins - 1, static_cast<int>(a / bin));
+  };
+  std::vector<double> cloud_hist(bins, 0.0), plan_hist(bins, 0.0);
+  const Eigen::Matrix2d R0 = initial.R();
+  for (const Eigen::Vector2d& n : normals)
+    if (n.allFinite() && n.squaredNorm() > 1e-12) cloud_hist[angle_bin(R0 * n)] += 1.0;
+  for (const Segment& s : index.plan().segments) plan_hist[angle_bin(s.Normal())] += s.Length();
+  // Gaussian smoothing (circular) makes the correlation peak well-defined.
+  const int half = std::max(1, static_cast<int>(std::ceil(3 * h.smooth_rad / bin)));
+  auto smooth = [&](const std::vector<double>& in) {
+    std::vector<double> out(bins, 0.0);
+    for (int i = 0; i < bins; ++i)
+      for (int k = -half; k <= half; ++k) {
+        const double x = k * bin / h.smooth_rad;
+        out[i] += in[((i + k) % bins + bins) % bins] * std::exp(-0.5 * x * x);
+      }
+    return out;
+  };
+  cloud_hist = smooth(cloud_hist);
+  plan_hist = smooth(plan_hist);
+  // Algorithm 4.6 lines 5-16: the rotation whose shifted histogram agrees best.
+  const int max_shift = static_cast<int>(std::floor(h.max_rotation_rad / bin));
+  std::vector<double> score(2 * max_shift + 1, 0.0);
+  for (int s = -max_shift; s <= max_shift; ++s) {
+    double sum = 0;
+    for (int b = 0; b < bins; ++b) sum += cloud_hist[b] * plan_hist[((b + s) % bins + bins) % bins];
+    score[s + max_shift] = sum;
+  }
+  const int best = static_cast<int>(std::max_element(score.begin(), score.end()) - score.begin());
+  double shift = best - max_shift;
+  if (best > 0 && best + 1 < static_cast<int>(score.size())) {  // parabolic refinement
+    const double l = score[best - 1], c = score[best], r = score[best + 1];
+    const double denom = l - 2 * c + r;
+    if (denom < 0) shift += 0.5 * (l - r) / denom;
+  }
+  const double omega = shift * bin;
+  // Rotate about the cloud's centroid in the plan frame, so the rotation does not swing
+  // the cloud away from where the initial guess put it.
+  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+  for (const Eigen::Vector2d& p : points) centroid += initial * p;
+  centroid /= static_cast<double>(points.size());
+  Se2 T = AboutCentre(omega, centroid, Eigen::Vector2d::Zero()) * initial;
+
+  // Algorithm 4.7, point-to-line: translation-only steps until they vanish.
+  std::vector<Row> rows;
+  Step last;
+  for (uint32_t it = 0; it < o.max_iterations; ++it) {
+    ++result.iterations;
+    MakeRows(points, 1, T, index, o.max_correspondence_m, false, &rows);
+    Step st = SolveStep(rows, o, true);
+    if (!st.ok) {
+      result.reason = st.reason;
+      break;
+    }
+    T = Se2{0.0, st.delta.tail<2>()} * T;
+    last = std::move(st);
+    if (SmallStep(last.delta, o)) {
+      result.converged = true;
+      break;
+    }
+  }
+  result.T_plan_slam = T;
+  if (result.reason.empty() && !result.converged) result.reason = "iteration limit";
+  Finish(points, index, o, last, &result);
+  return result;
+}
+
+RegistrationResult Register(const std::vector<Eigen::Vector2d>& points,
+                            const std::vector<Eigen::Vector2d>& normals,
+                            const ClosestWallIndex& index, const Se2& initial,
+                            const RegistrationOptions& options) {
+  const std::vector<Eigen::Vector2d>* use_points = &points;
+  const std::vector<Eigen::Vector2d>* use_normals = &normals;
+  std::vector<Eigen::Vector2d> kept_points, kept_normals;
+  if (options.wall_buffer_m > 0) {
+    // The thesis' buffer (section 6.4.3): points far from every wall under the current
+    // alignment are furniture or people, not walls.
+    for (size_t i = 0; i < points.size(); ++i) {
+      const auto hit = index.Query(initial * points[i]);
+      if (!hit || hit->distance > options.wall_buffer_m) continue;
+      kept_points.push_back(points[i]);
+      if (i < normals.size()) kept_normals.push_back(normals[i]);
+    }
+    use_points = &kept_points;
+    use_normals = &kept_normals;
+  }
+  switch (options.method) {
+    case RegistrationMethod::kIcp: return RegisterIcp(*use_points, index, initial, options.icp);
+    case RegistrationMethod::kIk: return RegisterIk(*use_points, index, initial, options.icp);
+    case RegistrationMethod::kHough:
+      return RegisterHough(*use_points, *use_normals, index, initial, options.icp, options.hough);
+  }
+  return {};
 }
 
 }  // namespace floorpose

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/closest_wall_index.h"
@@ -17,29 +18,58 @@ struct RegistrationResult {
   Se2 T_plan_slam;
   bool converged = false;
   uint32_t iterations = 0;
-  uint32_t points = 0;      // points given
-  uint32_t matched = 0;     // points with a wall within the correspondence distance
-  uint32_t inliers = 0;     // points within the inlier threshold
-  double inlier_rmse = 0.0; // metres, over inliers
-  double rmse = 0.0;        // metres, over matched points
+  uint32_t points = 0;       // points given
+  uint32_t matched = 0;      // points with a wall within the correspondence distance
+  uint32_t inliers = 0;      // points within the inlier threshold
+  double inlier_rmse = 0.0;  // metres, over inliers
+  double rmse = 0.0;         // metres, over matched points
   // Sum of A^T A over the last iteration's pairs, unknowns (theta, x, y) with theta
   // about the cloud's centroid; its eigenvalues (ascending) tell which directions the
   // data constrains.
   Eigen::Matrix3d normal_matrix = Eigen::Matrix3d::Zero();
   Eigen::Vector3d eigenvalues = Eigen::Vector3d::Zero();
+  // Unit eigenvectors (columns, ascending) of the normal matrix with theta scaled by the
+  // cloud's radius, and those the data leaves unconstrained (solution remapping, Zhang
+  // and Singh 2016): the solution did not move along them.
+  Eigen::Matrix3d eigenvectors = Eigen::Matrix3d::Identity();
+  std::vector<Eigen::Vector3d> degenerate_directions;
   double time_ms = 0.0;  // filled by the caller, which owns the clock
   std::string reason;    // why it did not converge, if it did not
 };
 
 struct IcpOptions {
-  uint32_t max_iterations = 50;        // at the finest level (Algorithm 4.2 line 7)
-  uint32_t levels = 2;                 // h_max
-  double reject_sigma = 2.5;           // picky ICP
+  uint32_t max_iterations = 50;  // at the finest level (Algorithm 4.2 line 7)
+  uint32_t levels = 2;           // h_max
+  double reject_sigma = 2.5;     // picky ICP
   double max_correspondence_m = 1.5;
   double converge_translation_m = 1e-4;
   double converge_rotation_rad = 1e-5;
-  double cauchy_scale_factor = 1.0;    // 0 = plain least squares
+  double cauchy_scale_factor = 1.0;  // 0 = plain least squares
   double inlier_threshold_m = 0.2;
+  // A direction is degenerate when its eigenvalue is below this share of the total
+  // weight of the pairs (theta measured as arc length at the cloud's RMS radius, so
+  // rotation and translation compare). 0 disables solution remapping.
+  double degeneracy_ratio = 0.01;
+};
+
+enum class RegistrationMethod { kIcp, kIk, kHough };
+const char* ToString(RegistrationMethod method);
+bool ParseRegistrationMethod(const std::string& name, RegistrationMethod* method);
+
+struct HoughOptions {
+  double max_rotation_rad = 0.6;  // search +-this about the initial rotation (< 45 deg)
+  double bin_rad = 0.0025;        // histogram resolution
+  double smooth_rad = 0.01;       // Gaussian smoothing of both histograms
+};
+
+// The options the thesis varies (section 6.4.3) plus the method's own.
+struct RegistrationOptions {
+  RegistrationMethod method = RegistrationMethod::kIcp;
+  IcpOptions icp;  // iteration, rejection, kernel and degeneracy settings of every method
+  HoughOptions hough;
+  // Keep only points within this distance of a plan wall under the initial transform
+  // (the thesis' buffer, 0 or 0.5 m); 0 keeps all.
+  double wall_buffer_m = 0.0;
 };
 
 // Point-to-line ICP after thesis Algorithm 4.2: multi-resolution (level h uses every
@@ -49,6 +79,31 @@ struct IcpOptions {
 RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& points_slam,
                                const ClosestWallIndex& index, const Se2& T_plan_slam_initial,
                                const IcpOptions& options);
+
+// Instantaneous kinematics after Pottmann et al. 2004 (thesis Algorithms 4.3 to 4.5) in
+// 2D: the velocity field v(x) = c_bar + omega J x minimising the local quadratic
+// approximants of the squared distance (point-to-line for a segment's interior,
+// point-to-point at its ends), turned into the rigid rotation by omega about the
+// instantaneous centre (the 2D Pluecker axis), applied only when it fits better
+// (Alg. 4.3 line 9), with step halving otherwise.
+RegistrationResult RegisterIk(const std::vector<Eigen::Vector2d>& points_slam,
+                              const ClosestWallIndex& index, const Se2& T_plan_slam_initial,
+                              const IcpOptions& options);
+
+// Thesis Algorithms 4.6 and 4.7: the rotation from the histogram of point normal angles
+// correlated with the plan's wall angles (weighted by length, modulo pi since walls have
+// two faces), then translation-only ICP (point-to-line, a 2x2 solve per iteration).
+RegistrationResult RegisterHough(const std::vector<Eigen::Vector2d>& points_slam,
+                                 const std::vector<Eigen::Vector2d>& normals_slam,
+                                 const ClosestWallIndex& index, const Se2& T_plan_slam_initial,
+                                 const IcpOptions& icp, const HoughOptions& hough);
+
+// Runs the chosen method, after the wall buffer. normals_slam may be empty except for
+// Hough.
+RegistrationResult Register(const std::vector<Eigen::Vector2d>& points_slam,
+                            const std::vector<Eigen::Vector2d>& normals_slam,
+                            const ClosestWallIndex& index, const Se2& T_plan_slam_initial,
+                            const RegistrationOptions& options);
 
 // Fit statistics of a transform on a cloud (no optimisation): fills points, matched,
 // inliers, rmse, inlier_rmse. `truncated_mse` (out, optional) is the mean of

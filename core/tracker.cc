@@ -98,8 +98,8 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
   const IcpOptions& o = options_.icp;
   RegistrationResult old_fit;
   double old_score = 0, new_score = 0;
-  EvaluateFit(cloud, *index_, alignment_.T_plan_slam, o.max_correspondence_m,
-              o.inlier_threshold_m, &old_fit, &old_score);
+  EvaluateFit(cloud, *index_, alignment_.T_plan_slam, o.max_correspondence_m, o.inlier_threshold_m,
+              &old_fit, &old_score);
   EvaluateFit(cloud, *index_, result.T_plan_slam, o.max_correspondence_m, o.inlier_threshold_m,
               nullptr, &new_score);
   if (!result.T_plan_slam.t.allFinite() || !std::isfinite(result.T_plan_slam.theta)) {

@@ -18,9 +18,9 @@ namespace floorpose {
 
 struct TrackerOptions {
   IcpOptions icp;
-  uint32_t min_new_points = 500;   // register after this many new wall points...
-  double max_interval_s = 3.0;     // ...or after this long with any new points
-  uint32_t min_points = 200;       // no registration on fewer points
+  uint32_t min_new_points = 500;  // register after this many new wall points...
+  double max_interval_s = 3.0;    // ...or after this long with any new points
+  uint32_t min_points = 200;      // no registration on fewer points
   double reliable_rmse_m = 0.15;
   double reliable_inlier_ratio = 0.5;
 };

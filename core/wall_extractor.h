@@ -17,7 +17,7 @@ struct WallExtractionOptions {
   double max_normal_up = 0.1;    // |n . up| below this is a vertical face (Alg. 4.1 line 7)
   double density_per_m2 = 50.0;  // points per square metre of wall face
   uint64_t seed = 1;
-  double max_edge_m = 10.0;      // longer edges are corrupt input
+  double max_edge_m = 10.0;  // longer edges are corrupt input
 };
 
 // A mesh already in the slam frame (right-handed, Z up, world coordinates).

@@ -31,9 +31,10 @@ void WallStore::UnindexMesh(uint64_t mesh_id, const std::vector<WallPoint>& poin
 
 size_t WallStore::Upsert(uint64_t mesh_id, std::vector<WallPoint> points) {
   // Non-finite points never enter the store.
-  points.erase(std::remove_if(points.begin(), points.end(),
-                              [](const WallPoint& w) { return !w.p.allFinite() || !w.n.allFinite(); }),
-               points.end());
+  points.erase(
+      std::remove_if(points.begin(), points.end(),
+                     [](const WallPoint& w) { return !w.p.allFinite() || !w.n.allFinite(); }),
+      points.end());
   auto it = meshes_.find(mesh_id);
   if (it != meshes_.end()) {
     UnindexMesh(mesh_id, it->second);

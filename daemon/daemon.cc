@@ -63,7 +63,8 @@ v1::Alignment::Source ToProto(AlignmentSource s) {
 
 Daemon::Daemon(v1::FloorposedConfig config)
     : config_(std::move(config)),
-      frame_(ParseHeadsetFrame(config_.headset_frame()).value_or(HeadsetFrame::kUnityLeftHandedYUp)),
+      frame_(
+          ParseHeadsetFrame(config_.headset_frame()).value_or(HeadsetFrame::kUnityLeftHandedYUp)),
       wall_options_(platform::ToWallExtractionOptions(config_)),
       device_id_(config_.dds().device_id()),
       tracker_(platform::ToTrackerOptions(config_)),
@@ -134,8 +135,8 @@ std::string Daemon::LoadPlan(const std::string& path, const std::string& floor) 
   ClosestWallIndex::Options index_options;
   index_options.max_distance_m = std::max(3.0, config_.icp().max_correspondence_m());
   auto index = std::make_shared<const ClosestWallIndex>(parsed.plan, index_options);
-  spdlog::info("floor plan {}: {} segments ({} dropped), {:.1f} x {:.1f} m, index {:.1f} MB",
-               path, parsed.plan.segments.size(), parsed.dropped_segments,
+  spdlog::info("floor plan {}: {} segments ({} dropped), {:.1f} x {:.1f} m, index {:.1f} MB", path,
+               parsed.plan.segments.size(), parsed.dropped_segments,
                parsed.plan.max.x() - parsed.plan.min.x(), parsed.plan.max.y() - parsed.plan.min.y(),
                static_cast<double>(index->MemoryBytes()) / 1e6);
   tracker_.SetPlan(std::move(index));
@@ -191,9 +192,9 @@ void Daemon::HandleMeshDelta(const platform::Envelope& e) {
   std::vector<WallPoint> points =
       ExtractWallPoints({&mesh.vertices, &mesh.triangles}, mesh.mesh_id, wall_options_, &report);
   if (report.bad_indices || report.degenerate_triangles || mesh.unusable_vertices) {
-    spdlog::warn("mesh {}: dropped {} triangles with bad indices, {} degenerate; {} unusable vertices",
-                 mesh.mesh_id, report.bad_indices, report.degenerate_triangles,
-                 mesh.unusable_vertices);
+    spdlog::warn(
+        "mesh {}: dropped {} triangles with bad indices, {} degenerate; {} unusable vertices",
+        mesh.mesh_id, report.bad_indices, report.degenerate_triangles, mesh.unusable_vertices);
   }
   const bool known = store_.Contains(mesh.mesh_id);
   if (mesh.change == v1::MeshDelta::UPDATED && !known) {
@@ -223,7 +224,13 @@ void Daemon::HandlePose(const platform::Envelope& e) {
   const std::string error = platform::DecodeHeadsetPose(e.payload, frame_, config_.limits(), &pose);
   if (!error.empty()) return Reject(error);
   latest_stamp_ns_ = std::max(latest_stamp_ns_, pose.stamp_ns);
-  const PlanPoseEstimate est = tracker_.Correct(pose.pose_slam);
+  PlanPoseEstimate est = tracker_.Correct(pose.pose_slam);
+  if (pose.tracking == v1::HeadsetPose::TRACKING_LOST) {
+    // The headset itself does not know where it is: neither do we.
+    est.reliability.flag = ReliabilityFlag::kUnreliable;
+    est.reliability.probability = 0.0;
+    est.reliability.reason = "headset tracking lost";
+  }
   v1::PlanPose out;
   out.set_source_stamp_ns(pose.stamp_ns);
   out.set_x(est.pose.position.x());
@@ -250,9 +257,9 @@ void Daemon::HandleCommand(const platform::Envelope& e) {
   if (error.empty()) {
     switch (cmd.command_case()) {
       case v1::Command::kLoadPlan:
-        error = LoadPlan(cmd.load_plan().path(), cmd.load_plan().floor().empty()
-                                                     ? config_.floor()
-                                                     : cmd.load_plan().floor());
+        error =
+            LoadPlan(cmd.load_plan().path(),
+                     cmd.load_plan().floor().empty() ? config_.floor() : cmd.load_plan().floor());
         if (error.empty()) {
           store_.TakeNewPoints();  // the store is kept: the walls are the same walls
           done = "plan loaded: " + cmd.load_plan().path();
@@ -260,11 +267,13 @@ void Daemon::HandleCommand(const platform::Envelope& e) {
         break;
       case v1::Command::kWallPick: {
         const auto& p = cmd.wall_pick();
-        const Eigen::Vector3d point =
-            PointToSlam(frame_, {p.headset_point().x(), p.headset_point().y(), p.headset_point().z()});
+        const Eigen::Vector3d point = PointToSlam(
+            frame_, {p.headset_point().x(), p.headset_point().y(), p.headset_point().z()});
         const Eigen::Vector3d normal = PointToSlam(
             frame_, {p.headset_normal().x(), p.headset_normal().y(), p.headset_normal().z()});
-        WallPick pick{point.head<2>(), normal.head<2>(), {p.plan_x(), p.plan_y()},
+        WallPick pick{point.head<2>(),
+                      normal.head<2>(),
+                      {p.plan_x(), p.plan_y()},
                       {p.plan_normal_x(), p.plan_normal_y()}};
         error = tracker_.ApplyWallPick(pick, latest_stamp_ns_);
         if (error.empty()) done = "wall pick applied";
@@ -279,8 +288,7 @@ void Daemon::HandleCommand(const platform::Envelope& e) {
         store_.Clear();
         done = "reset: alignment and wall store cleared";
         break;
-      case v1::Command::COMMAND_NOT_SET:
-        break;
+      case v1::Command::COMMAND_NOT_SET: break;
     }
   }
   const std::string prefix = "request " + std::to_string(cmd.request_id()) + ": ";
@@ -354,11 +362,13 @@ void Daemon::ApplyFinishedRegistration() {
   worker_busy_ = false;
   RegistrationResult& r = done->result;
   counters_.set_registrations(counters_.registrations() + 1);
-  const Tracker::Decision d = tracker_.Offer(r, done->job.cloud, done->job.version, done->job.stamp_ns);
-  last_registration_ = r;
-  spdlog::info("registration: {} points, {} inliers, inlier RMSE {:.3f} m, {} iterations, {:.1f} ms: {}{}",
-               r.points, r.inliers, r.inlier_rmse, r.iterations, r.time_ms,
-               d.accepted ? "accepted" : "rejected: ", d.reason);
+  const Tracker::Decision d =
+      tracker_.Offer(r, done->job.cloud, done->job.version, done->job.stamp_ns);
+  last_registration_ = {r, d.accepted, d.reason};
+  spdlog::info(
+      "registration: {} points, {} inliers, inlier RMSE {:.3f} m, {} iterations, {:.1f} ms: {}{}",
+      r.points, r.inliers, r.inlier_rmse, r.iterations, r.time_ms,
+      d.accepted ? "accepted" : "rejected: ", d.reason);
   if (d.accepted) {
     counters_.set_registrations_accepted(counters_.registrations_accepted() + 1);
     PublishAlignment();
@@ -368,7 +378,7 @@ void Daemon::ApplyFinishedRegistration() {
 void Daemon::Publish(platform::Writer& writer, const google::protobuf::Message& msg) {
   platform::Envelope e;
   e.device_id = device_id_;
-  e.seq = ++seq_;
+  e.seq = writer.NextSeq();
   e.stamp_ns = platform::WallClockNs();
   msg.SerializeToString(&e.payload);
   std::string error;
@@ -400,7 +410,12 @@ void Daemon::PublishStatus(const std::string& message) {
   s.set_live_meshes(store_.meshes());
   s.set_wall_points(store_.points());
   *s.mutable_counters() = counters_;
-  if (last_registration_) *s.mutable_last_registration() = ToProto(*last_registration_);
+  if (last_registration_) {
+    *s.mutable_last_registration() = ToProto(last_registration_->result);
+    s.mutable_last_registration()->set_accepted(last_registration_->accepted);
+    if (!last_registration_->accepted)
+      s.mutable_last_registration()->set_reason(last_registration_->why);
+  }
   s.set_alignment_version(tracker_.alignment().version);
   s.set_stamp_ns(platform::MonotonicNs());
   s.set_message(message);

@@ -79,8 +79,12 @@ class Daemon {
   WallStore store_;
   std::string floor_;
   v1::DaemonStatus::Counters counters_;
-  std::optional<RegistrationResult> last_registration_;
-  uint64_t seq_ = 0;
+  struct LastRegistration {
+    RegistrationResult result;
+    bool accepted = false;
+    std::string why;
+  };
+  std::optional<LastRegistration> last_registration_;
   int64_t latest_stamp_ns_ = 0;
   int64_t next_status_ns_ = 0;
   bool worker_busy_ = false;

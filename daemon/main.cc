@@ -1,9 +1,9 @@
 // floorposed: aligns a headset's wall scans to a floor plan and publishes plan poses.
+#include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 #include <csignal>
 #include <cstdio>
 #include <iostream>
-#include <spdlog/spdlog.h>
 
 #include "daemon/daemon.h"
 #include "platform/clock.h"
@@ -33,7 +33,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (!plan_override.empty()) config.set_plan_path(plan_override);
-  if (domain_override >= 0) config.mutable_dds()->set_domain_id(static_cast<uint32_t>(domain_override));
+  if (domain_override >= 0)
+    config.mutable_dds()->set_domain_id(static_cast<uint32_t>(domain_override));
   if (!device_override.empty()) config.mutable_dds()->set_device_id(device_override);
   if (const std::string invalid = platform::ValidateConfig(config); !invalid.empty()) {
     std::fprintf(stderr, "floorposed: %s\n", invalid.c_str());
@@ -60,8 +61,8 @@ int main(int argc, char** argv) {
   }
   platform::NotifyReady();
   const auto watchdog = platform::WatchdogPeriod();
-  const auto tick = std::min<std::chrono::microseconds>(
-      watchdog.value_or(std::chrono::seconds(1)), std::chrono::seconds(1));
+  const auto tick = std::min<std::chrono::microseconds>(watchdog.value_or(std::chrono::seconds(1)),
+                                                        std::chrono::seconds(1));
   while (true) {
     timespec timeout{static_cast<time_t>(tick.count() / 1000000),
                      static_cast<long>((tick.count() % 1000000) * 1000)};

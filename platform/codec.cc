@@ -56,7 +56,8 @@ std::string DecodeMeshDelta(const std::string& payload, HeadsetFrame frame,
     const Eigen::Vector3d v(msg.vertices(static_cast<int>(3 * i)),
                             msg.vertices(static_cast<int>(3 * i + 1)),
                             msg.vertices(static_cast<int>(3 * i + 2)));
-    const Eigen::Vector3d w = T.topLeftCorner<3, 3>() * PointToSlam(frame, v) + T.topRightCorner<3, 1>();
+    const Eigen::Vector3d w =
+        T.topLeftCorner<3, 3>() * PointToSlam(frame, v) + T.topRightCorner<3, 1>();
     if (!w.allFinite() || w.cwiseAbs().maxCoeff() > max_abs) {
       out->vertices[i] = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
       ++out->unusable_vertices;
@@ -73,7 +74,8 @@ std::string DecodeHeadsetPose(const std::string& payload, HeadsetFrame frame,
   v1::HeadsetPose msg;
   if (!msg.ParseFromString(payload)) return "malformed HeadsetPose protobuf";
   if (!v1::HeadsetPose::TrackingState_IsValid(msg.tracking()))
-    return "HeadsetPose: unknown tracking state " + std::to_string(static_cast<int>(msg.tracking()));
+    return "HeadsetPose: unknown tracking state " +
+           std::to_string(static_cast<int>(msg.tracking()));
   const auto& p = msg.position();
   const auto& q = msg.orientation();
   if (!Finite(p.x()) || !Finite(p.y()) || !Finite(p.z()) || !Finite(q.x()) || !Finite(q.y()) ||

@@ -20,7 +20,7 @@ struct DecodedMesh {
   int64_t stamp_ns = 0;
   std::vector<Eigen::Vector3f> vertices;  // slam frame, world coordinates; NaN = unusable
   std::vector<uint32_t> triangles;
-  size_t unusable_vertices = 0;           // non-finite or beyond the coordinate limit
+  size_t unusable_vertices = 0;  // non-finite or beyond the coordinate limit
 };
 
 // Returns an empty string on success, else why the delta was rejected as a whole.

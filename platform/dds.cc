@@ -11,8 +11,8 @@ namespace {
 struct TopicSpec {
   Topic topic;
   const char* name;
-  bool durable;    // transient-local, keep-last 1: late joiners get the latest at once
-  int32_t depth;   // keep-last depth; 0 = keep-all
+  bool durable;   // transient-local, keep-last 1: late joiners get the latest at once
+  int32_t depth;  // keep-last depth; 0 = keep-all
 };
 
 constexpr std::array<TopicSpec, 6> kSpecs = {{
@@ -114,8 +114,7 @@ bool Writer::Write(const Envelope& e, std::string* error) {
   sample.stamp_ns = e.stamp_ns;
   sample.payload._length = static_cast<uint32_t>(e.payload.size());
   sample.payload._maximum = sample.payload._length;
-  sample.payload._buffer =
-      reinterpret_cast<uint8_t*>(const_cast<char*>(e.payload.data()));
+  sample.payload._buffer = reinterpret_cast<uint8_t*>(const_cast<char*>(e.payload.data()));
   sample.payload._release = false;
   const dds_return_t rc = dds_write(writer_, &sample);
   if (rc < 0 && error) *error = dds_strretcode(rc);

@@ -48,6 +48,8 @@ class Writer {
   Writer& operator=(const Writer&) = delete;
   // Returns false (and says why in *error) when DDS refuses the sample.
   bool Write(const Envelope& envelope, std::string* error = nullptr);
+  // The next sequence number of this writer (envelope seq counts per writer, from 1).
+  uint64_t NextSeq() { return ++seq_; }
   // Number of matched readers (for start-up synchronisation in tools and tests).
   int MatchedReaders() const;
   // Blocks until matched reliable readers acknowledged everything written, or timeout.
@@ -57,6 +59,7 @@ class Writer {
  private:
   Topic topic_;
   dds_entity_t writer_ = 0;
+  uint64_t seq_ = 0;
 };
 
 class Reader {

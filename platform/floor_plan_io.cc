@@ -36,10 +36,12 @@ bool AddLine(const Json& coords, std::vector<Segment>* out) {
 // Returns an error or empty; ignores geometry types that carry no walls (points).
 std::string AddGeometry(const Json& g, std::vector<Segment>* out, int depth) {
   if (depth > 8) return "geometry nested too deep";
-  if (!g.is_object() || !g.contains("type") || !g["type"].is_string()) return "geometry without a type";
+  if (!g.is_object() || !g.contains("type") || !g["type"].is_string())
+    return "geometry without a type";
   const std::string type = g["type"];
   if (type == "GeometryCollection") {
-    if (!g.contains("geometries") || !g["geometries"].is_array()) return "GeometryCollection without geometries";
+    if (!g.contains("geometries") || !g["geometries"].is_array())
+      return "GeometryCollection without geometries";
     for (const Json& sub : g["geometries"]) {
       std::string e = AddGeometry(sub, out, depth + 1);
       if (!e.empty()) return e;
@@ -67,7 +69,8 @@ std::string AddGeometry(const Json& g, std::vector<Segment>* out, int depth) {
 
 }  // namespace
 
-bool ReadFile(const std::string& path, size_t max_bytes, std::string* contents, std::string* error) {
+bool ReadFile(const std::string& path, size_t max_bytes, std::string* contents,
+              std::string* error) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
     *error = path + ": not a readable file";
@@ -79,7 +82,8 @@ bool ReadFile(const std::string& path, size_t max_bytes, std::string* contents, 
     return false;
   }
   if (size > max_bytes) {
-    *error = path + ": " + std::to_string(size) + " bytes, over the limit of " + std::to_string(max_bytes);
+    *error = path + ": " + std::to_string(size) + " bytes, over the limit of " +
+             std::to_string(max_bytes);
     return false;
   }
   std::ifstream in(path, std::ios::binary);
@@ -104,8 +108,9 @@ FloorPlanParse ParseGeoJsonFloorPlan(std::string_view text, std::string id) {
   auto add_feature = [&](const Json& f) -> std::string {
     if (!f.is_object()) return "feature is not an object";
     // Features marked as something other than a wall (doors, rooms' labels) are skipped.
-    if (f.contains("properties") && f["properties"].is_object() && f["properties"].contains("kind") &&
-        f["properties"]["kind"].is_string() && f["properties"]["kind"] != "wall")
+    if (f.contains("properties") && f["properties"].is_object() &&
+        f["properties"].contains("kind") && f["properties"]["kind"].is_string() &&
+        f["properties"]["kind"] != "wall")
       return {};
     if (!f.contains("geometry") || f["geometry"].is_null()) return {};
     return AddGeometry(f["geometry"], &raw, 0);

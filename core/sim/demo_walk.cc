@@ -132,7 +132,8 @@ DemoWalk SimulateDemoWalk(const FloorPlan& plan, const std::vector<Eigen::Vector
           const uint32_t a0 = vertex(p.a, 0), b0 = vertex(p.b, 0);
           const uint32_t a1 = vertex(p.a, h / 2), b1 = vertex(p.b, h / 2);
           const uint32_t a2 = vertex(p.a, h), b2 = vertex(p.b, h);
-          for (uint32_t t : {a0, b0, b1, a0, b1, a1, a1, b1, b2, a1, b2, a2}) mesh.triangles.push_back(t);
+          for (uint32_t t : {a0, b0, b1, a0, b1, a1, a1, b1, b2, a1, b2, a2})
+            mesh.triangles.push_back(t);
         }
         // A patch of floor near the walls: horizontal, to be filtered out.
         centre /= static_cast<double>(chunk_pieces[key].size());

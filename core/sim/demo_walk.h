@@ -21,11 +21,11 @@ struct DemoWalkOptions {
   double pose_period_s = 0.3;
   int poses_per_mesh_update = 3;
   double sensor_range_m = 3.5;
-  double chunk_m = 3.0;            // mesh chunk size (one mesh id a chunk)
-  double piece_m = 0.5;            // wall pieces, each a quad from floor to wall_height
+  double chunk_m = 3.0;  // mesh chunk size (one mesh id a chunk)
+  double piece_m = 0.5;  // wall pieces, each a quad from floor to wall_height
   double wall_height_m = 2.5;
   double vertex_noise_m = 0.02;
-  double update_after_s = 4.0;     // a chunk seen again this much later is UPDATED
+  double update_after_s = 4.0;  // a chunk seen again this much later is UPDATED
   // SLAM drift: heading bias and odometry scale error, plus the initial offset of the
   // SLAM frame from the plan.
   double heading_drift_rad_per_m = 0.0015;
@@ -48,16 +48,16 @@ struct SimMesh {
 
 struct SimStep {
   int64_t stamp_ns = 0;
-  Pose2 true_plan;   // ground truth on the plan
-  Pose2 slam;        // what the headset reports (slam frame)
+  Pose2 true_plan;              // ground truth on the plan
+  Pose2 slam;                   // what the headset reports (slam frame)
   std::vector<SimMesh> meshes;  // published just before this pose
 };
 
 struct DemoWalk {
   std::vector<SimStep> steps;
-  WallPick pick;             // in slam / plan frames
+  WallPick pick;  // in slam / plan frames
   double pick_height_m = 1.5;
-  Se2 T_slam_plan_initial;   // the truth at the start
+  Se2 T_slam_plan_initial;  // the truth at the start
   double length_m = 0.0;
 };
 

@@ -99,8 +99,8 @@ int RunDemo(const DemoOptions& o) {
   const sim::DemoWalk walk = SimulateDemoWalk(plan.plan, waypoints, walk_options);
 
   // A private domain: loopback only, an id from our pid so parallel demos stay apart.
-  const uint32_t domain = o.domain >= 0 ? static_cast<uint32_t>(o.domain)
-                                        : 100 + static_cast<uint32_t>(getpid() % 120);
+  const uint32_t domain =
+      o.domain >= 0 ? static_cast<uint32_t>(o.domain) : 100 + static_cast<uint32_t>(getpid() % 120);
   const fs::path tmp = fs::temp_directory_path() / ("floorpose-demo-" + std::to_string(getpid()));
   fs::create_directories(tmp);
   const std::string config_path = (tmp / "floorposed.conf").string();
@@ -114,7 +114,8 @@ int RunDemo(const DemoOptions& o) {
   const std::string log_path = o.log.empty() ? (tmp / "floorposed.log").string() : o.log;
   const std::string floorposed = o.floorposed.empty() ? FindFloorposed() : o.floorposed;
   std::printf("floorpose demo: plan %s (%zu walls), walk of %.0f m in %zu poses, domain %u\n",
-              plan_path.c_str(), plan.plan.segments.size(), walk.length_m, walk.steps.size(), domain);
+              plan_path.c_str(), plan.plan.segments.size(), walk.length_m, walk.steps.size(),
+              domain);
   std::printf("starting %s (log: %s)\n", floorposed.c_str(), log_path.c_str());
   std::fflush(stdout);
   ChildProcess daemon({floorposed, "--config", config_path}, log_path);
@@ -131,8 +132,8 @@ int RunDemo(const DemoOptions& o) {
                   link.status_messages.empty() ? "nothing" : link.status_messages.back());
     return 1;
   }
-  std::printf("wall pick at plan (%.2f, %.2f): alignment version %lu\n",
-              walk.pick.plan_point.x(), walk.pick.plan_point.y(),
+  std::printf("wall pick at plan (%.2f, %.2f): alignment version %lu\n", walk.pick.plan_point.x(),
+              walk.pick.plan_point.y(),
               static_cast<unsigned long>(link.alignments.back().version()));
   std::printf("%8s %8s %8s  %8s %8s  %7s  %-10s %s\n", "t [s]", "x", "y", "true x", "true y",
               "err [m]", "flag", "alignment");
@@ -156,8 +157,8 @@ int RunDemo(const DemoOptions& o) {
       reliable_within_1m += is_reliable && err <= 1.0;
       if (printed % static_cast<size_t>(std::max(1, o.every)) == 0)
         std::printf("%8.1f %8.2f %8.2f  %8.2f %8.2f  %7.3f  %-10s v%lu\n",
-                    static_cast<double>(p.source_stamp_ns()) * 1e-9, p.x(), p.y(), truth.position.x(),
-                    truth.position.y(), err,
+                    static_cast<double>(p.source_stamp_ns()) * 1e-9, p.x(), p.y(),
+                    truth.position.x(), truth.position.y(), err,
                     v1::Reliability::Flag_Name(p.reliability().flag()).c_str(),
                     static_cast<unsigned long>(p.alignment_version()));
     }
@@ -174,11 +175,13 @@ int RunDemo(const DemoOptions& o) {
     link.Poll();
     report(link.plan_poses.size());
   }
-  link.WaitUntil([&] { return link.plan_poses.size() >= walk.steps.size(); }, std::chrono::seconds(5));
+  link.WaitUntil([&] { return link.plan_poses.size() >= walk.steps.size(); },
+                 std::chrono::seconds(5));
   report(link.plan_poses.size());
   // One more status so the summary has the final counters.
-  link.WaitUntil([&] { return link.status && link.status->counters().poses_in() >= walk.steps.size(); },
-                 std::chrono::seconds(3));
+  link.WaitUntil(
+      [&] { return link.status && link.status->counters().poses_in() >= walk.steps.size(); },
+      std::chrono::seconds(3));
   const auto exit_code = daemon.Terminate(std::chrono::seconds(5));
 
   const size_t received = link.plan_poses.size();
@@ -198,7 +201,8 @@ int RunDemo(const DemoOptions& o) {
                 static_cast<unsigned long>(c.registrations()),
                 static_cast<unsigned long>(c.registrations_accepted()));
     std::printf("  last registration                  %.1f ms, %u points, inlier RMSE %.3f m\n",
-                link.status->last_registration().time_ms(), link.status->last_registration().points(),
+                link.status->last_registration().time_ms(),
+                link.status->last_registration().points(),
                 link.status->last_registration().inlier_rmse_m());
     std::printf("  wall points / live meshes          %lu / %lu\n",
                 static_cast<unsigned long>(link.status->wall_points()),

@@ -51,7 +51,8 @@ int RunReplay(const ReplayOptions& o) {
   // Give subscribers a chance to match, so the first records are not lost.
   const auto deadline = std::chrono::steady_clock::now() +
                         std::chrono::milliseconds(static_cast<int64_t>(o.wait_s * 1000));
-  while (writers.begin()->second->MatchedReaders() == 0 && std::chrono::steady_clock::now() < deadline)
+  while (writers.begin()->second->MatchedReaders() == 0 &&
+         std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   if (writers.begin()->second->MatchedReaders() == 0)
     spdlog::warn("no subscriber matched within {:.0f} s; publishing anyway", o.wait_s);
@@ -68,9 +69,11 @@ int RunReplay(const ReplayOptions& o) {
       continue;
     }
     if (sent == 0) first_stamp = record.receive_stamp_ns();
-    const double offset_s = static_cast<double>(record.receive_stamp_ns() - first_stamp) * 1e-9 / o.rate;
-    std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                              std::chrono::duration<double>(std::max(0.0, offset_s))));
+    const double offset_s =
+        static_cast<double>(record.receive_stamp_ns() - first_stamp) * 1e-9 / o.rate;
+    std::this_thread::sleep_until(start +
+                                  std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                      std::chrono::duration<double>(std::max(0.0, offset_s))));
     std::string error;
     if (!it->second->Write(platform::FromProto(record.envelope()), &error))
       spdlog::warn("record {}: publish failed: {}", reader.records_read(), error);

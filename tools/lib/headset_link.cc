@@ -32,16 +32,17 @@ bool HeadsetLink::WaitForDaemon(std::chrono::milliseconds timeout) {
 }
 
 bool HeadsetLink::Send(Topic topic, const google::protobuf::Message& msg, int64_t stamp_ns) {
-  platform::Envelope e;
-  e.device_id = device_id_;
-  e.seq = ++seq_;
-  e.stamp_ns = stamp_ns;
-  msg.SerializeToString(&e.payload);
   platform::Writer* w = topic == Topic::kMeshDelta     ? mesh_.get()
                         : topic == Topic::kHeadsetPose ? pose_.get()
                         : topic == Topic::kCommand     ? command_.get()
                                                        : nullptr;
-  return w && w->Write(e);
+  if (!w) return false;
+  platform::Envelope e;
+  e.device_id = device_id_;
+  e.seq = w->NextSeq();
+  e.stamp_ns = stamp_ns;
+  msg.SerializeToString(&e.payload);
+  return w->Write(e);
 }
 
 void HeadsetLink::Poll() {
@@ -56,13 +57,17 @@ void HeadsetLink::Poll() {
   };
   take(*plan_pose_, [&](const std::string& bytes) {
     v1::PlanPose p;
-    if (p.ParseFromString(bytes)) plan_poses.push_back(std::move(p));
-    else ++malformed_envelopes;
+    if (p.ParseFromString(bytes))
+      plan_poses.push_back(std::move(p));
+    else
+      ++malformed_envelopes;
   });
   take(*alignment_, [&](const std::string& bytes) {
     v1::Alignment a;
-    if (a.ParseFromString(bytes)) alignments.push_back(std::move(a));
-    else ++malformed_envelopes;
+    if (a.ParseFromString(bytes))
+      alignments.push_back(std::move(a));
+    else
+      ++malformed_envelopes;
   });
   take(*status_, [&](const std::string& bytes) {
     v1::DaemonStatus s;

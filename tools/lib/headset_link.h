@@ -43,7 +43,6 @@ class HeadsetLink {
   std::unique_ptr<platform::Writer> mesh_, pose_, command_;
   std::unique_ptr<platform::Reader> plan_pose_, alignment_, status_;
   std::unique_ptr<platform::Waiter> waiter_;
-  uint64_t seq_ = 0;
 };
 
 template <typename Pred>

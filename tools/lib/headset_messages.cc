@@ -58,8 +58,8 @@ v1::Command ToWallPickCommand(const sim::DemoWalk& walk, HeadsetFrame frame, uin
   v1::Command cmd;
   cmd.set_request_id(request_id);
   auto* pick = cmd.mutable_wall_pick();
-  const Eigen::Vector3d p = ToHeadset(
-      frame, {walk.pick.slam_point.x(), walk.pick.slam_point.y(), walk.pick_height_m});
+  const Eigen::Vector3d p =
+      ToHeadset(frame, {walk.pick.slam_point.x(), walk.pick.slam_point.y(), walk.pick_height_m});
   const Eigen::Vector3d n =
       ToHeadset(frame, {walk.pick.slam_normal.x(), walk.pick.slam_normal.y(), 0.0});
   pick->mutable_headset_point()->set_x(p.x());

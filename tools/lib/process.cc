@@ -81,7 +81,8 @@ std::string FindFloorposed() {
   const auto self = std::filesystem::read_symlink("/proc/self/exe", ec).parent_path();
   for (const auto& candidate : {self / "floorposed", self / ".." / "daemon" / "floorposed",
                                 self / ".." / ".." / "daemon" / "floorposed"}) {
-    if (std::filesystem::exists(candidate, ec)) return std::filesystem::weakly_canonical(candidate, ec).string();
+    if (std::filesystem::exists(candidate, ec))
+      return std::filesystem::weakly_canonical(candidate, ec).string();
   }
   return "floorposed";  // then execvp searches PATH (an installed floorposed)
 }
