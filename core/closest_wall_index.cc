@@ -25,6 +25,11 @@ ClosestWall MakeHit(const FloorPlan& plan, uint32_t i, const Eigen::Vector2d& p)
 
 ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
     : plan_(plan), options_(options) {
+  data_.reserve(plan_.segments.size());
+  for (const Segment& s : plan_.segments) {
+    const Eigen::Vector2d d = s.b - s.a;
+    data_.push_back({s.a, d, s.Normal(), d.squaredNorm() > 0 ? 1.0 / d.squaredNorm() : 0.0});
+  }
   // Memory is bounded by design: a plan too large for the requested cells (drawn in
   // millimetres, or with a stray far-away segment) gets coarser cells instead of
   // gigabytes or an overflowing cell count. Any cell size gives exact answers (see the
@@ -100,21 +105,31 @@ std::optional<ClosestWall> ClosestWallIndex::Query(const Eigen::Vector2d& p) con
   const size_t i = static_cast<size_t>(static_cast<int>(fy)) * nx_ + static_cast<int>(fx);
   double best = options_.max_distance_m * options_.max_distance_m;
   int64_t best_k = -1;
+  double best_u = 0;
   for (uint32_t j = cell_begin_[i]; j < cell_begin_[i + 1]; ++j) {
-    const Segment& s = plan_.segments[candidates_[j]];
-    const double d2 = (ClosestPointOnSegment(s, p) - p).squaredNorm();
+    const SegmentData& s = data_[candidates_[j]];
+    const Eigen::Vector2d ap = p - s.a;
+    const double u = std::clamp(ap.dot(s.d) * s.inv_len2, 0.0, 1.0);
+    const double d2 = (ap - u * s.d).squaredNorm();
     if (d2 <= best) {
       best = d2;
       best_k = candidates_[j];
+      best_u = u;
     }
   }
   if (best_k < 0) return std::nullopt;
-  return MakeHit(plan_, static_cast<uint32_t>(best_k), p);
+  const SegmentData& s = data_[best_k];
+  ClosestWall hit;
+  hit.segment = static_cast<uint32_t>(best_k);
+  hit.point = s.a + best_u * s.d;
+  hit.normal = s.normal;
+  hit.distance = std::sqrt(best);
+  return hit;
 }
 
 size_t ClosestWallIndex::MemoryBytes() const {
   return cell_begin_.size() * sizeof(uint32_t) + candidates_.size() * sizeof(uint32_t) +
-         plan_.segments.size() * sizeof(Segment);
+         plan_.segments.size() * (sizeof(Segment) + sizeof(SegmentData));
 }
 
 std::optional<ClosestWall> BruteForceClosestWall(const FloorPlan& plan, const Eigen::Vector2d& p,

@@ -42,8 +42,15 @@ class ClosestWallIndex {
   size_t cells() const { return cell_begin_.size() - 1; }
 
  private:
+  // What a query needs of a segment, precomputed: a, b - a, 1 / |b - a|^2, unit normal.
+  struct SegmentData {
+    Eigen::Vector2d a, d, normal;
+    double inv_len2;
+  };
+
   FloorPlan plan_;
   Options options_;
+  std::vector<SegmentData> data_;
   Eigen::Vector2d origin_;
   int nx_ = 0, ny_ = 0;
   std::vector<uint32_t> cell_begin_;  // CSR layout: candidates of cell i are

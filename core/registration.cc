@@ -208,6 +208,27 @@ void Finish(const std::vector<Eigen::Vector2d>& points, const ClosestWallIndex& 
               result, nullptr);
 }
 
+// Algorithm 4.2's h_max, raised until the coarsest level has at most coarsest_points.
+int TopLevel(size_t points, const IcpOptions& o) {
+  int h = static_cast<int>(o.levels);
+  while (h < 16 && o.coarsest_points > 0 && (points >> h) > o.coarsest_points) ++h;
+  return h;
+}
+
+// Mean of min(d, max_corr)^2 over every stride-th point: the "better fit" score.
+double TruncatedScore(const std::vector<Eigen::Vector2d>& points, size_t stride, const Se2& T,
+                      const ClosestWallIndex& index, double max_corr) {
+  const Eigen::Matrix2d R = T.R();
+  const double cap2 = max_corr * max_corr;
+  double sum = 0;
+  size_t n = 0;
+  for (size_t i = 0; i < points.size(); i += stride, ++n) {
+    const auto hit = index.Query(R * points[i] + T.t);
+    sum += hit ? std::min(hit->distance * hit->distance, cap2) : cap2;
+  }
+  return n ? sum / n : cap2;
+}
+
 bool SmallStep(const Eigen::Vector3d& delta, const IcpOptions& o) {
   return std::abs(delta(0)) < o.converge_rotation_rad &&
          delta.tail<2>().norm() < o.converge_translation_m;
@@ -227,9 +248,11 @@ RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& points,
   Step last;
   bool converged_at_finest = false;
   // Algorithm 4.2: coarse to fine; level h uses every 2^h-th point and maxIter / 2^h.
-  for (int h = static_cast<int>(o.levels); h >= 0 && result.reason.empty(); --h) {
+  for (int h = TopLevel(points.size(), o); h >= 0 && result.reason.empty(); --h) {
     const size_t stride = size_t{1} << h;
-    const uint32_t max_iter = std::max<uint32_t>(1, o.max_iterations >> h);
+    // Every level may iterate to convergence: coarse iterations are cheap, and a level
+    // that stops early only hands its work to a finer, dearer one.
+    const uint32_t max_iter = o.max_iterations;
     bool converged = false;
     for (uint32_t it = 0; it < max_iter; ++it) {
       ++result.iterations;
@@ -264,50 +287,58 @@ RegistrationResult RegisterIk(const std::vector<Eigen::Vector2d>& points,
   std::vector<Row> rows;
   rows.reserve(points.size());
   Step last;
-  double score = 0;
-  EvaluateFit(points, index, T, o.max_correspondence_m, o.inlier_threshold_m, nullptr, &score);
-  for (uint32_t it = 0; it < o.max_iterations; ++it) {
-    ++result.iterations;
-    MakeRows(points, 1, T, index, o.max_correspondence_m, true, &rows);
-    Step st = SolveStep(rows, o, false);  // Algorithm 4.4
-    if (!st.ok) {
-      result.reason = st.reason;
-      break;
-    }
-    // Algorithm 4.5 in 2D: v(x) = c_bar + omega J (x - centroid) vanishes at the
-    // instantaneous centre G = centroid + J c_bar / omega; the rigid motion is the
-    // rotation by omega about G (a translation by c_bar when omega is ~0).
-    const double omega = st.delta(0);
-    const Eigen::Vector2d c_bar = st.delta.tail<2>();
-    bool improved = false;
-    for (double scale = 1.0; scale > 1.0 / 32; scale *= 0.5) {
-      Se2 motion;
-      if (std::abs(omega * scale) < 1e-12) {
-        motion = {0.0, c_bar * scale};
-      } else {
-        const Eigen::Vector2d G = st.centroid + Eigen::Vector2d(-c_bar.y(), c_bar.x()) / omega;
-        motion = AboutCentre(omega * scale, G, Eigen::Vector2d::Zero());
+  bool converged_at_finest = false;
+  // The same coarse-to-fine levels as ICP (Algorithm 4.2), each with Algorithm 4.3.
+  for (int h = TopLevel(points.size(), o); h >= 0 && result.reason.empty(); --h) {
+    const size_t stride = size_t{1} << h;
+    // Every level may iterate to convergence: coarse iterations are cheap, and a level
+    // that stops early only hands its work to a finer, dearer one.
+    const uint32_t max_iter = o.max_iterations;
+    double score = TruncatedScore(points, stride, T, index, o.max_correspondence_m);
+    bool converged = false;
+    for (uint32_t it = 0; it < max_iter; ++it) {
+      ++result.iterations;
+      MakeRows(points, stride, T, index, o.max_correspondence_m, true, &rows);
+      Step st = SolveStep(rows, o, false);  // Algorithm 4.4
+      if (!st.ok) {
+        result.reason = st.reason;
+        break;
       }
-      const Se2 candidate = motion * T;
-      double candidate_score = 0;
-      EvaluateFit(points, index, candidate, o.max_correspondence_m, o.inlier_threshold_m, nullptr,
-                  &candidate_score);
-      if (candidate_score <= score) {  // Algorithm 4.3 line 9: only a better fit
-        T = candidate;
-        score = candidate_score;
-        improved = true;
+      // Algorithm 4.5 in 2D: v(x) = c_bar + omega J (x - centroid) vanishes at the
+      // instantaneous centre G = centroid + J c_bar / omega; the rigid motion is the
+      // rotation by omega about G (a translation by c_bar when omega is ~0).
+      const double omega = st.delta(0);
+      const Eigen::Vector2d c_bar = st.delta.tail<2>();
+      bool improved = false;
+      for (double scale = 1.0; scale > 1.0 / 32; scale *= 0.5) {
+        Se2 motion;
+        if (std::abs(omega * scale) < 1e-12) {
+          motion = {0.0, c_bar * scale};
+        } else {
+          const Eigen::Vector2d G = st.centroid + Eigen::Vector2d(-c_bar.y(), c_bar.x()) / omega;
+          motion = AboutCentre(omega * scale, G, Eigen::Vector2d::Zero());
+        }
+        const Se2 candidate = motion * T;
+        const double candidate_score =
+            TruncatedScore(points, stride, candidate, index, o.max_correspondence_m);
+        if (candidate_score <= score) {  // Algorithm 4.3 line 9: only a better fit
+          T = candidate;
+          score = candidate_score;
+          improved = true;
+          break;
+        }
+      }
+      last = std::move(st);
+      if (!improved || SmallStep(last.delta, o)) {
+        converged = true;  // no better fit nearby: a minimum at this level
         break;
       }
     }
-    last = std::move(st);
-    if (!improved || SmallStep(last.delta, o)) {
-      result.converged = true;  // no better fit nearby: a minimum
-      break;
-    }
+    converged_at_finest = converged;
   }
   result.T_plan_slam = T;
+  result.converged = result.reason.empty() && converged_at_finest;
   if (result.reason.empty() && !result.converged) result.reason = "iteration limit";
-  if (!result.reason.empty()) result.converged = false;
   Finish(points, index, o, last, &result);
   return result;
 }

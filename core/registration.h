@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -39,11 +40,14 @@ struct RegistrationResult {
 
 struct IcpOptions {
   uint32_t max_iterations = 50;  // at the finest level (Algorithm 4.2 line 7)
-  uint32_t levels = 2;           // h_max
-  double reject_sigma = 2.5;     // picky ICP
+  uint32_t levels = 2;           // h_max, at least
+  // More levels when needed so the coarsest uses at most this many points: large clouds
+  // converge on a subset and the full cloud only polishes (one or two iterations).
+  uint32_t coarsest_points = 1000;
+  double reject_sigma = 2.5;  // picky ICP
   double max_correspondence_m = 1.5;
-  double converge_translation_m = 1e-4;
-  double converge_rotation_rad = 1e-5;
+  double converge_translation_m = 3e-4;
+  double converge_rotation_rad = 3e-5;
   double cauchy_scale_factor = 1.0;  // 0 = plain least squares
   double inlier_threshold_m = 0.2;
   // A direction is degenerate when its eigenvalue is below this share of the total
@@ -57,9 +61,10 @@ const char* ToString(RegistrationMethod method);
 bool ParseRegistrationMethod(const std::string& name, RegistrationMethod* method);
 
 struct HoughOptions {
-  double max_rotation_rad = 0.6;  // search +-this about the initial rotation (< 45 deg)
-  double bin_rad = 0.0025;        // histogram resolution
-  double smooth_rad = 0.01;       // Gaussian smoothing of both histograms
+  // The config's defaults (35 and 0.15 degrees, config.proto), so that tools and daemon agree.
+  double max_rotation_rad = 35.0 * M_PI / 180.0;  // search +-this about the initial rotation
+  double bin_rad = 0.15 * M_PI / 180.0;           // histogram resolution
+  double smooth_rad = 0.01;                       // Gaussian smoothing of both histograms
 };
 
 // The options the thesis varies (section 6.4.3) plus the method's own.

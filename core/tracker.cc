@@ -19,6 +19,15 @@ std::optional<Se2> AlignFromWallPick(const WallPick& pick) {
   return T;
 }
 
+RegistrationOptions ToRegistrationOptions(const TrackerOptions& t) {
+  RegistrationOptions r;
+  r.method = t.method;
+  r.icp = t.icp;
+  r.hough = t.hough;
+  r.wall_buffer_m = t.wall_buffer_m;
+  return r;
+}
+
 void Tracker::SetPlan(std::shared_ptr<const ClosestWallIndex> index) {
   index_ = std::move(index);
   Reset();

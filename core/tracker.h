@@ -18,12 +18,18 @@ namespace floorpose {
 
 struct TrackerOptions {
   IcpOptions icp;
+  RegistrationMethod method = RegistrationMethod::kIcp;
+  HoughOptions hough;
+  double wall_buffer_m = 0.0;     // see RegistrationOptions
+  bool local_meshes = false;      // register only meshes new since the last run (thesis "local")
   uint32_t min_new_points = 500;  // register after this many new wall points...
   double max_interval_s = 3.0;    // ...or after this long with any new points
   uint32_t min_points = 200;      // no registration on fewer points
   double reliable_rmse_m = 0.15;
   double reliable_inlier_ratio = 0.5;
 };
+
+RegistrationOptions ToRegistrationOptions(const TrackerOptions& options);
 
 // Thesis section 6.3.4: one wall point with its normal, seen by the headset (slam
 // frame, horizontal part) and chosen on the plan.

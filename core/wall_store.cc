@@ -37,23 +37,24 @@ size_t WallStore::Upsert(uint64_t mesh_id, std::vector<WallPoint> points) {
       points.end());
   auto it = meshes_.find(mesh_id);
   if (it != meshes_.end()) {
-    UnindexMesh(mesh_id, it->second);
-    points_ -= it->second.size();
-    it->second = std::move(points);
+    UnindexMesh(mesh_id, it->second.points);
+    points_ -= it->second.points.size();
+    it->second.points = std::move(points);
   } else {
-    it = meshes_.emplace(mesh_id, std::move(points)).first;
+    it = meshes_.emplace(mesh_id, Mesh{std::move(points), 0}).first;
   }
-  IndexMesh(mesh_id, it->second);
-  points_ += it->second.size();
-  new_points_ += it->second.size();
+  it->second.generation = ++generation_;
+  IndexMesh(mesh_id, it->second.points);
+  points_ += it->second.points.size();
+  new_points_ += it->second.points.size();
   return points_;
 }
 
 bool WallStore::Remove(uint64_t mesh_id) {
   auto it = meshes_.find(mesh_id);
   if (it == meshes_.end()) return false;
-  UnindexMesh(mesh_id, it->second);
-  points_ -= it->second.size();
+  UnindexMesh(mesh_id, it->second.points);
+  points_ -= it->second.points.size();
   meshes_.erase(it);
   return true;
 }
@@ -65,24 +66,36 @@ void WallStore::Clear() {
   new_points_ = 0;
 }
 
-std::vector<Eigen::Vector2d> WallStore::Snapshot(size_t max_points) const {
+std::vector<Eigen::Vector2d> WallStore::Snapshot(size_t max_points,
+                                                 std::vector<Eigen::Vector2d>* normals,
+                                                 uint64_t since_generation) const {
   // Sorted voxel order makes the snapshot independent of hash-map iteration order, so
   // that the daemon and the offline evaluator register the same points.
-  std::vector<std::pair<VoxelKey, Eigen::Vector2d>> cells;
+  std::vector<std::pair<VoxelKey, const WallPoint*>> cells;
   cells.reserve(voxels_.size());
   for (const auto& [key, refs] : voxels_) {
-    const Ref& r = *std::min_element(refs.begin(), refs.end(), [](const Ref& a, const Ref& b) {
-      return std::tie(a.mesh_id, a.index) < std::tie(b.mesh_id, b.index);
-    });
-    cells.emplace_back(key, meshes_.at(r.mesh_id)[r.index].p.cast<double>());
+    const Ref* best = nullptr;
+    for (const Ref& r : refs) {
+      if (since_generation && meshes_.at(r.mesh_id).generation <= since_generation) continue;
+      if (!best || std::tie(r.mesh_id, r.index) < std::tie(best->mesh_id, best->index)) best = &r;
+    }
+    if (best) cells.emplace_back(key, &meshes_.at(best->mesh_id).points[best->index]);
   }
   std::sort(cells.begin(), cells.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<Eigen::Vector2d> out;
   const size_t n = cells.size();
   const size_t take = (max_points == 0 || max_points >= n) ? n : max_points;
+  std::vector<Eigen::Vector2d> out;
   out.reserve(take);
-  for (size_t k = 0; k < take; ++k) out.push_back(cells[k * n / take].second);
+  if (normals) {
+    normals->clear();
+    normals->reserve(take);
+  }
+  for (size_t k = 0; k < take; ++k) {
+    const WallPoint& wp = *cells[k * n / take].second;
+    out.push_back(wp.p.cast<double>());
+    if (normals) normals->push_back(wp.n.cast<double>());
+  }
   return out;
 }
 
@@ -98,7 +111,7 @@ std::vector<WallPoint> WallStore::QueryRadius(const Eigen::Vector2f& c, float ra
       auto it = voxels_.find(key);
       if (it == voxels_.end()) continue;
       for (const Ref& ref : it->second) {
-        const WallPoint& wp = meshes_.at(ref.mesh_id)[ref.index];
+        const WallPoint& wp = meshes_.at(ref.mesh_id).points[ref.index];
         if ((wp.p - c).squaredNorm() <= radius * radius) out.push_back(wp);
       }
     }

@@ -24,7 +24,7 @@ class WallStore {
   bool Contains(uint64_t mesh_id) const { return meshes_.count(mesh_id) > 0; }
   size_t MeshPoints(uint64_t mesh_id) const {
     auto it = meshes_.find(mesh_id);
-    return it == meshes_.end() ? 0 : it->second.size();
+    return it == meshes_.end() ? 0 : it->second.points.size();
   }
   void Clear();
 
@@ -35,9 +35,16 @@ class WallStore {
   size_t TakeNewPoints() { return std::exchange(new_points_, 0); }
   size_t new_points() const { return new_points_; }
 
-  // One point per occupied voxel (the first live point in it, in voxel order), at most
-  // max_points (0 = all) spread evenly over the voxels: the registration input.
-  std::vector<Eigen::Vector2d> Snapshot(size_t max_points) const;
+  // One point per occupied voxel (the point of the lowest mesh id and index in it, in
+  // voxel order), at most max_points (0 = all) spread evenly over the voxels: the
+  // registration input. With `normals`, their wall normals too. With since_generation,
+  // only points of meshes inserted or replaced after that generation (the thesis'
+  // "local" registration; 0 = all, its "global").
+  std::vector<Eigen::Vector2d> Snapshot(size_t max_points,
+                                        std::vector<Eigen::Vector2d>* normals = nullptr,
+                                        uint64_t since_generation = 0) const;
+  // Increments on every Upsert; a mesh remembers the generation that last wrote it.
+  uint64_t generation() const { return generation_; }
   // Live points within radius of a position (slam frame).
   std::vector<WallPoint> QueryRadius(const Eigen::Vector2f& center, float radius) const;
 
@@ -52,10 +59,15 @@ class WallStore {
   void UnindexMesh(uint64_t mesh_id, const std::vector<WallPoint>& points);
 
   double voxel_m_;
-  std::unordered_map<uint64_t, std::vector<WallPoint>> meshes_;
+  struct Mesh {
+    std::vector<WallPoint> points;
+    uint64_t generation = 0;
+  };
+  std::unordered_map<uint64_t, Mesh> meshes_;
   std::unordered_map<VoxelKey, std::vector<Ref>> voxels_;
   size_t points_ = 0;
   size_t new_points_ = 0;
+  uint64_t generation_ = 0;
 };
 
 }  // namespace floorpose

@@ -309,9 +309,12 @@ void Daemon::MaybeStartRegistration() {
   store_.TakeNewPoints();
   tracker_.MarkRegistrationStarted(latest_stamp_ns_);
   Job job;
-  job.cloud = store_.Snapshot(config_.tracking().max_points());
+  const TrackerOptions& options = tracker_.options();
+  job.cloud = store_.Snapshot(config_.tracking().max_points(), &job.normals,
+                              options.local_meshes ? last_run_generation_ : 0);
+  last_run_generation_ = store_.generation();
   job.index = tracker_.index();
-  job.icp = tracker_.options().icp;
+  job.options = ToRegistrationOptions(options);
   job.initial = tracker_.alignment().T_plan_slam;
   job.version = tracker_.alignment().version;
   job.stamp_ns = latest_stamp_ns_;
@@ -338,7 +341,7 @@ void Daemon::WorkerLoop() {
     Done done;
     if (job.index) {
       const int64_t t0 = platform::MonotonicNs();
-      done.result = RegisterIcp(job.cloud, *job.index, job.initial, job.icp);
+      done.result = Register(job.cloud, job.normals, *job.index, job.initial, job.options);
       done.result.time_ms = static_cast<double>(platform::MonotonicNs() - t0) * 1e-6;
     } else {
       done.result.reason = "no floor plan";

@@ -39,9 +39,9 @@ class Daemon {
 
  private:
   struct Job {
-    std::vector<Eigen::Vector2d> cloud;
+    std::vector<Eigen::Vector2d> cloud, normals;
     std::shared_ptr<const ClosestWallIndex> index;  // keeps the plan alive while it runs
-    IcpOptions icp;
+    RegistrationOptions options;
     Se2 initial;
     uint64_t version = 0;
     int64_t stamp_ns = 0;
@@ -88,6 +88,7 @@ class Daemon {
   int64_t latest_stamp_ns_ = 0;
   int64_t next_status_ns_ = 0;
   bool worker_busy_ = false;
+  uint64_t last_run_generation_ = 0;  // store generation the last registration saw
 
   // Io thread <-> worker: one job slot, one result slot (latest wins).
   std::mutex mu_;

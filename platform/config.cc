@@ -4,6 +4,8 @@
 #include <google/protobuf/io/tokenizer.h>
 #include <google/protobuf/text_format.h>
 
+#include <cmath>
+
 #include "core/frames.h"
 #include "platform/floor_plan_io.h"
 
@@ -90,6 +92,20 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (c.icp().levels() > 8) return "icp.levels must be at most 8";
   if (!(c.tracking().snapshot_voxel_m() > 0)) return "tracking.snapshot_voxel_m must be positive";
   if (!(c.status_period_s() > 0)) return "status_period_s must be positive";
+  RegistrationMethod method;
+  if (!ParseRegistrationMethod(c.registration().method(), &method))
+    return "registration.method must be icp, ik or hough, not \"" + c.registration().method() +
+           "\"";
+  if (c.registration().meshes() != "global" && c.registration().meshes() != "local")
+    return "registration.meshes must be global or local";
+  if (!(c.registration().hough_max_rotation_deg() > 0 &&
+        c.registration().hough_max_rotation_deg() < 45))
+    return "registration.hough_max_rotation_deg must be in (0, 45)";
+  if (!(c.registration().hough_bin_deg() > 0 && c.registration().hough_bin_deg() <= 5))
+    return "registration.hough_bin_deg must be in (0, 5]";
+  if (!(c.registration().wall_buffer_m() >= 0)) return "registration.wall_buffer_m must be >= 0";
+  if (!(c.icp().degeneracy_ratio() >= 0 && c.icp().degeneracy_ratio() < 1))
+    return "icp.degeneracy_ratio must be in [0, 1)";
   const std::string& l = c.log_level();
   if (l != "trace" && l != "debug" && l != "info" && l != "warn" && l != "error")
     return "log_level must be trace, debug, info, warn or error";
@@ -115,6 +131,14 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.icp.converge_rotation_rad = i.converge_rotation_rad();
   t.icp.cauchy_scale_factor = i.cauchy_scale_factor();
   t.icp.inlier_threshold_m = i.inlier_threshold_m();
+  t.icp.degeneracy_ratio = i.degeneracy_ratio();
+  t.icp.coarsest_points = i.coarsest_points();
+  const auto& r = c.registration();
+  ParseRegistrationMethod(r.method(), &t.method);  // validated by ValidateConfig
+  t.wall_buffer_m = r.wall_buffer_m();
+  t.local_meshes = r.meshes() == "local";
+  t.hough.max_rotation_rad = r.hough_max_rotation_deg() * M_PI / 180.0;
+  t.hough.bin_rad = r.hough_bin_deg() * M_PI / 180.0;
   const auto& k = c.tracking();
   t.min_new_points = k.min_new_points();
   t.max_interval_s = k.max_interval_s();

@@ -1,0 +1,184 @@
+// Floor plans: the thesis' text format (section 6.4.2) and the cleaning every loader
+// goes through. Broken files must give a clear error, never a crash or a huge allocation.
+#include "core/floor_plan.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <limits>
+
+#include "core/random.h"
+#include "tests/test_util.h"
+
+namespace floorpose {
+namespace {
+
+using ::testing::HasSubstr;
+
+TEST(FloorPlanTextTest, ParsesGoodInput) {
+  // A leading '+', exponents, CRLF line ends and blank lines are all fine.
+  const auto parse =
+      ParseTextFloorPlan("3\r\n0 0 4 0\r\n\r\n+4 0 4 3.5\n  4 3.5 -1e0 3.5 \n", "room");
+  ASSERT_TRUE(parse.ok()) << parse.error;
+  EXPECT_EQ(parse.plan.id, "room");
+  ASSERT_EQ(parse.plan.segments.size(), 3u);
+  EXPECT_EQ(parse.dropped_segments, 0u);
+  EXPECT_EQ(parse.plan.segments[1].a, Eigen::Vector2d(4, 0));
+  EXPECT_EQ(parse.plan.segments[2].b, Eigen::Vector2d(-1, 3.5));
+  EXPECT_EQ(parse.plan.min, Eigen::Vector2d(-1, 0));
+  EXPECT_EQ(parse.plan.max, Eigen::Vector2d(4, 3.5));
+}
+
+struct BrokenCase {
+  const char* name;
+  const char* text;
+  const char* error_part;  // the error must say this
+};
+
+// Test failures name the case rather than dumping its bytes.
+void PrintTo(const BrokenCase& c, std::ostream* os) { *os << c.name; }
+
+class FloorPlanTextBrokenTest : public ::testing::TestWithParam<BrokenCase> {};
+
+TEST_P(FloorPlanTextBrokenTest, GivesClearError) {
+  const BrokenCase& c = GetParam();
+  const auto parse = ParseTextFloorPlan(c.text, "broken");
+  EXPECT_FALSE(parse.ok());
+  EXPECT_THAT(parse.error, HasSubstr("text floor plan"));
+  EXPECT_THAT(parse.error, HasSubstr(c.error_part));
+  EXPECT_TRUE(parse.plan.segments.empty());
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, FloorPlanTextBrokenTest,
+    ::testing::Values(
+        BrokenCase{"Empty", "", "segment count missing"},
+        BrokenCase{"OnlyWhitespace", " \n\t\n", "segment count missing"},
+        BrokenCase{"CountNotANumber", "walls\n0 0 1 0\n", "segment count missing"},
+        BrokenCase{"CountLargerThanLines", "3\n0 0 1 0\n1 0 1 1\n",
+                   "segment 3 of 3: unexpected end of file"},
+        BrokenCase{"LineCut", "2\n0 0 1 0\n1 0 1\n", "segment 2 of 2: unexpected end"},
+        BrokenCase{"NotANumber", "2\n0 0 1 0\n1 0 x 1\n", "line 3: not a finite number: 'x'"},
+        BrokenCase{"NumberWithGarbage", "1\n0 0 1 0x\n", "not a finite number: '0x'"},
+        BrokenCase{"NaN", "1\n0 0 nan 1\n", "line 2: not a finite number: 'nan'"},
+        BrokenCase{"Infinity", "1\n0 0 inf 1\n", "not a finite number"},
+        BrokenCase{"OutOfRange", "1\n0 0 1e999 1\n", "not a finite number"},
+        BrokenCase{"TrailingGarbage", "1\n0 0 1 0\nend\n", "more data after the 1 segments"},
+        BrokenCase{"TrailingNumber", "1\n0 0 1 0 5\n", "more data after"},
+        BrokenCase{"NegativeCount", "-2\n0 0 1 0\n1 0 1 1\n", "bad segment count"},
+        BrokenCase{"ZeroCount", "0\n", "bad segment count"},
+        BrokenCase{"FractionalCount", "1.5\n0 0 1 0\n", "bad segment count"},
+        BrokenCase{"AbsurdCount", "1e12\n0 0 1 0\n", "bad segment count"},
+        // Allowed as a count, but there is no data: must fail fast without reserving
+        // memory for ten million segments.
+        BrokenCase{"HugeCountNoData", "10000000\n", "segment 1 of 10000000: unexpected end"},
+        BrokenCase{"Binary", "\x01\x02\xff\xfe", "segment count missing"}),
+    [](const ::testing::TestParamInfo<BrokenCase>& c) { return c.param.name; });
+
+TEST(FloorPlanTextTest, LongBadTokenIsShortenedInTheMessage) {
+  const std::string token(1000, 'z');
+  const auto parse = ParseTextFloorPlan("1\n0 0 1 " + token + "\n", "p");
+  ASSERT_FALSE(parse.ok());
+  EXPECT_LT(parse.error.size(), 200u);
+}
+
+TEST(FloorPlanTextTest, AllSegmentsDegenerateIsAnError) {
+  const auto parse = ParseTextFloorPlan("2\n1 1 1 1\n2 2 2 2\n", "p");
+  EXPECT_FALSE(parse.ok());
+  EXPECT_THAT(parse.error, HasSubstr("no usable wall segments"));
+  EXPECT_EQ(parse.dropped_segments, 2u);
+}
+
+TEST(FloorPlanTextTest, MutatedFilesNeverCrash) {
+  // Seeded random corruptions of a good file: each parse either succeeds with finite
+  // segments or says why it failed.
+  const std::string good = "4\n0 0 4 0\n4 0 4 3\n4 3 0 3\n0 3 0 0\n";
+  const std::string alphabet = "0123456789 \n.-+eEnaix\t\r";
+  SplitMix64 rng(21);
+  int ok = 0, failed = 0;
+  for (int i = 0; i < 3000; ++i) {
+    std::string text = good;
+    const int edits = 1 + static_cast<int>(rng.Next() % 4);
+    for (int e = 0; e < edits && !text.empty(); ++e) {
+      const size_t at = rng.Next() % text.size();
+      switch (rng.Next() % 3) {
+        case 0: text[at] = alphabet[rng.Next() % alphabet.size()]; break;
+        case 1: text.erase(at, 1); break;
+        case 2: text.resize(at); break;
+      }
+    }
+    const auto parse = ParseTextFloorPlan(text, "fuzz");
+    if (parse.ok()) {
+      ++ok;
+      for (const Segment& s : parse.plan.segments)
+        ASSERT_TRUE(s.a.allFinite() && s.b.allFinite()) << text;
+    } else {
+      ++failed;
+      ASSERT_FALSE(parse.error.empty());
+    }
+  }
+  // Both outcomes happen, so the corruptions exercised the error paths and the good one.
+  EXPECT_GT(ok, 0);
+  EXPECT_GT(failed, 0);
+}
+
+TEST(MakeFloorPlanTest, DropsZeroLengthDuplicateAndNonFiniteSegments) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<Segment> raw = {
+      {{0, 0}, {4, 0}},            // kept
+      {{4, 0}, {4, 3}},            // kept, shares an end with the first
+      {{2, 2}, {2, 2}},            // zero length
+      {{1, 1}, {1.0005, 1}},       // shorter than 1 mm
+      {{0, 0}, {4, 0}},            // duplicate
+      {{4, 3}, {4, 0}},            // reversed duplicate
+      {{0.0002, 0}, {4, 0.0001}},  // duplicate within the 1 mm rounding
+      {{nan, 0}, {1, 1}},          // non-finite
+      {{0, 0}, {2, 0}},            // overlaps the first but is a different segment: kept
+  };
+  const auto parse = MakeFloorPlan("p", raw);
+  ASSERT_TRUE(parse.ok()) << parse.error;
+  EXPECT_EQ(parse.plan.segments.size(), 3u);
+  EXPECT_EQ(parse.dropped_segments, 6u);
+  EXPECT_EQ(parse.plan.min, Eigen::Vector2d(0, 0));
+  EXPECT_EQ(parse.plan.max, Eigen::Vector2d(4, 3));
+}
+
+TEST(MakeFloorPlanTest, BoundsMustBeFinite) {
+  // Each coordinate is finite, but the plan's extent overflows a double.
+  const auto parse = MakeFloorPlan("p", {{{-1e308, 0}, {-1e308, 1}}, {{1e308, 5}, {1e308, 7}}});
+  EXPECT_FALSE(parse.ok());
+  EXPECT_THAT(parse.error, HasSubstr("extent"));
+}
+
+TEST(MakeFloorPlanTest, EmptyInputIsAnError) {
+  const auto parse = MakeFloorPlan("p", {});
+  EXPECT_FALSE(parse.ok());
+  EXPECT_THAT(parse.error, HasSubstr("no usable wall segments"));
+}
+
+TEST(SegmentTest, ClosestPointMatchesDenseSampling) {
+  // Oracle: the nearest of 2001 points along the segment is at most half a step farther.
+  SplitMix64 rng(22);
+  for (int i = 0; i < 300; ++i) {
+    const Segment s{testing::RandomVector2(rng, {-5, -5}, {5, 5}),
+                    testing::RandomVector2(rng, {-5, -5}, {5, 5})};
+    const Eigen::Vector2d p = testing::RandomVector2(rng, {-8, -8}, {8, 8});
+    const Eigen::Vector2d c = ClosestPointOnSegment(s, p);
+    // c lies on the segment.
+    EXPECT_NEAR((c - s.a).norm() + (s.b - c).norm(), s.Length(), 1e-9);
+    double best = std::numeric_limits<double>::infinity();
+    for (int k = 0; k <= 2000; ++k)
+      best = std::min(best, (s.a + (s.b - s.a) * (k / 2000.0) - p).norm());
+    const double d = (c - p).norm();
+    EXPECT_LE(d, best + 1e-12);
+    EXPECT_GE(d, best - 0.5 * s.Length() / 2000.0 - 1e-12);
+    // The normal is unit and perpendicular.
+    EXPECT_NEAR(s.Normal().norm(), 1.0, 1e-12);
+    EXPECT_NEAR(s.Normal().dot(s.b - s.a), 0.0, 1e-9);
+  }
+  const Segment point{{1, 2}, {1, 2}};
+  EXPECT_EQ(ClosestPointOnSegment(point, {5, 5}), Eigen::Vector2d(1, 2));
+}
+
+}  // namespace
+}  // namespace floorpose

@@ -1,0 +1,368 @@
+// Registration on a synthetic room with a known answer: wall points sampled on the plan,
+// moved into the slam frame by a known T_slam_plan. Point-to-line ICP (thesis Algorithm
+// 4.2) in detail; instantaneous kinematics (Algorithms 4.3-4.5) and Hough (4.6, 4.7)
+// through the common entry point.
+#include "core/registration.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+
+#include "core/random.h"
+#include "tests/test_util.h"
+
+namespace floorpose {
+namespace {
+
+using testing::Deg;
+using testing::IsNearlySe2;
+
+// A 10 x 7 m room with an inner wall and a short stub: no symmetry that ICP could
+// confuse with the truth.
+FloorPlan Room() {
+  auto parse = MakeFloorPlan("room", {
+                                         {{0, 0}, {10, 0}},
+                                         {{10, 0}, {10, 7}},
+                                         {{10, 7}, {0, 7}},
+                                         {{0, 7}, {0, 0}},
+                                         {{4, 0}, {4, 4.5}},  // inner wall
+                                         {{7, 7}, {7, 5.5}},  // stub from the top wall
+                                         {{4, 4.5}, {5.5, 4.5}},
+                                     });
+  EXPECT_TRUE(parse.ok()) << parse.error;
+  return parse.plan;
+}
+
+// Wall points with their wall normals in the slam frame: points every 2 cm on the plan
+// walls, mapped by T_slam_plan, with Gaussian noise of noise_m per axis. Walls are
+// two-sided, so each wall's normal gets a random sign.
+struct Cloud {
+  std::vector<Eigen::Vector2d> points, normals;
+};
+
+Cloud SlamCloudWithNormals(const FloorPlan& plan, const Se2& T_slam_plan, double noise_m,
+                           uint64_t seed) {
+  SplitMix64 rng(seed);
+  Cloud out;
+  for (const Segment& s : plan.segments) {
+    const Eigen::Vector2d n = T_slam_plan.R() * s.Normal() * (rng.Uniform() < 0.5 ? -1.0 : 1.0);
+    const FloorPlan one{"", {s}, {}, {}};
+    for (const Eigen::Vector2d& p : testing::SampleWalls(one, 0.02)) {
+      const Eigen::Vector2d noise(rng.Gaussian(), rng.Gaussian());
+      out.points.push_back(T_slam_plan * p + noise_m * noise);
+      out.normals.push_back(n);
+    }
+  }
+  return out;
+}
+
+std::vector<Eigen::Vector2d> SlamCloud(const FloorPlan& plan, const Se2& T_slam_plan,
+                                       double noise_m, uint64_t seed) {
+  return SlamCloudWithNormals(plan, T_slam_plan, noise_m, seed).points;
+}
+
+class IcpTest : public ::testing::Test {
+ protected:
+  IcpTest() : plan_(Room()), index_(plan_) {}
+  FloorPlan plan_;
+  ClosestWallIndex index_;
+  IcpOptions options_;
+};
+
+TEST_F(IcpTest, RecoversKnownTransformFromIdentity) {
+  // The example of the brief: 5 degrees and 0.8 m between slam and plan.
+  const Se2 T_slam_plan{Deg(5), {0.8, 0.0}};
+  const Se2 truth = T_slam_plan.Inverse();
+  const auto cloud = SlamCloud(plan_, T_slam_plan, 0.0, 1);
+  const RegistrationResult r = RegisterIcp(cloud, index_, Se2::Identity(), options_);
+  EXPECT_TRUE(r.converged) << r.reason;
+  EXPECT_THAT(r.T_plan_slam, IsNearlySe2(truth, 0.02, Deg(0.2)));
+}
+
+TEST_F(IcpTest, RecoversSeededRandomTransformsOnCleanPoints) {
+  SplitMix64 rng(31);
+  for (int i = 0; i < 10; ++i) {
+    SCOPED_TRACE("case " + std::to_string(i));
+    const Se2 T_slam_plan = testing::RandomSe2(rng, Deg(6), 0.6);
+    const Se2 truth = T_slam_plan.Inverse();
+    // The initial guess is the truth with an error, as a wall pick would give.
+    const Se2 error = testing::RandomSe2(rng, Deg(4), 0.4);
+    const auto cloud = SlamCloud(plan_, T_slam_plan, 0.0, 100 + i);
+    const RegistrationResult r = RegisterIcp(cloud, index_, error * truth, options_);
+    EXPECT_TRUE(r.converged) << r.reason;
+    EXPECT_THAT(r.T_plan_slam, IsNearlySe2(truth, 0.02, Deg(0.2)));
+    EXPECT_LT(r.inlier_rmse, 0.005);
+    // On exact data Gauss-Newton needs a few steps per level (5 to 7 in all here); many
+    // more would mean a wrong Jacobian (eq. 4.4), even if it crawls to the answer.
+    EXPECT_LE(r.iterations, 15u);
+  }
+}
+
+TEST_F(IcpTest, NoisyPointsStayWithinFiveCentimetres) {
+  SplitMix64 rng(32);
+  for (int i = 0; i < 6; ++i) {
+    SCOPED_TRACE("case " + std::to_string(i));
+    const double noise = i % 2 == 0 ? 0.01 : 0.02;
+    const Se2 T_slam_plan = testing::RandomSe2(rng, Deg(5), 0.8);
+    const Se2 truth = T_slam_plan.Inverse();
+    const auto cloud = SlamCloud(plan_, T_slam_plan, noise, 200 + i);
+    const RegistrationResult r = RegisterIcp(cloud, index_, Se2::Identity(), options_);
+    EXPECT_THAT(r.T_plan_slam, IsNearlySe2(truth, 0.05, Deg(0.5)));
+    // The residual is the noise across the walls, not the alignment error.
+    EXPECT_NEAR(r.inlier_rmse, noise, 0.5 * noise);
+  }
+}
+
+TEST_F(IcpTest, ClutterIsRejected) {
+  // A third of the points are clutter (furniture, people) spread over the room. Picky
+  // rejection and the Cauchy kernel keep them from pulling the fit.
+  SplitMix64 rng(34);
+  for (int i = 0; i < 6; ++i) {
+    SCOPED_TRACE("case " + std::to_string(i));
+    const Se2 T_slam_plan = testing::RandomSe2(rng, Deg(5), 0.8);
+    const Se2 truth = T_slam_plan.Inverse();
+    auto cloud = SlamCloud(plan_, T_slam_plan, 0.01, 400 + i);
+    const size_t walls = cloud.size();
+    for (size_t k = 0; k < walls / 2; ++k)
+      cloud.push_back(T_slam_plan * testing::RandomVector2(rng, {0.5, 0.5}, {9.5, 6.5}));
+    const RegistrationResult r = RegisterIcp(cloud, index_, Se2::Identity(), options_);
+    EXPECT_TRUE(r.converged) << r.reason;
+    EXPECT_THAT(r.T_plan_slam, IsNearlySe2(truth, 0.05, Deg(0.5)));
+  }
+}
+
+TEST_F(IcpTest, ReportFieldsAreFilled) {
+  const Se2 T_slam_plan{Deg(3), {0.3, -0.2}};
+  const auto cloud = SlamCloud(plan_, T_slam_plan, 0.005, 3);
+  const RegistrationResult r = RegisterIcp(cloud, index_, Se2::Identity(), options_);
+  EXPECT_EQ(r.method, "icp");
+  EXPECT_TRUE(r.converged) << r.reason;
+  EXPECT_TRUE(r.reason.empty()) << r.reason;
+  EXPECT_GT(r.iterations, 0u);
+  EXPECT_LE(r.iterations, options_.max_iterations * 2);  // 50/4 + 50/2 + 50 at most
+  EXPECT_EQ(r.points, cloud.size());
+  EXPECT_LE(r.inliers, r.matched);
+  EXPECT_LE(r.matched, r.points);
+  EXPECT_GT(r.inliers, 0.98 * static_cast<double>(r.points));
+  EXPECT_GT(r.rmse, 0.0);
+  EXPECT_LE(r.inlier_rmse, r.rmse + 1e-12);
+  // The normal matrix is symmetric and, in a closed room, positive definite.
+  EXPECT_TRUE(r.normal_matrix.isApprox(r.normal_matrix.transpose()));
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(r.normal_matrix).eigenvalues()(0), 0.0);
+  // The eigenvalues (of the radius-scaled matrix) ascend, are positive, and come with
+  // an orthonormal basis; nothing is degenerate.
+  EXPECT_LE(r.eigenvalues(0), r.eigenvalues(1));
+  EXPECT_LE(r.eigenvalues(1), r.eigenvalues(2));
+  EXPECT_GT(r.eigenvalues(0), 0.0);
+  EXPECT_TRUE((r.eigenvectors.transpose() * r.eigenvectors).isIdentity(1e-9));
+  EXPECT_TRUE(r.degenerate_directions.empty());
+  EXPECT_EQ(r.time_ms, 0.0);  // the caller owns the clock
+}
+
+class RegistrationMethodTest : public ::testing::TestWithParam<RegistrationMethod> {
+ protected:
+  RegistrationMethodTest() : plan_(Room()), index_(plan_) { options_.method = GetParam(); }
+  FloorPlan plan_;
+  ClosestWallIndex index_;
+  RegistrationOptions options_;
+};
+
+TEST_P(RegistrationMethodTest, RecoversKnownTransformFromIdentity) {
+  SplitMix64 rng(35);
+  for (int i = 0; i < 6; ++i) {
+    SCOPED_TRACE("case " + std::to_string(i));
+    const Se2 T_slam_plan = testing::RandomSe2(rng, Deg(5), 0.8);
+    const Se2 truth = T_slam_plan.Inverse();
+    const Cloud cloud = SlamCloudWithNormals(plan_, T_slam_plan, 0.0, 500 + i);
+    const RegistrationResult r =
+        Register(cloud.points, cloud.normals, index_, Se2::Identity(), options_);
+    EXPECT_EQ(r.method, ToString(GetParam()));
+    EXPECT_TRUE(r.converged) << r.reason;
+    EXPECT_THAT(r.T_plan_slam, IsNearlySe2(truth, 0.02, Deg(0.2)));
+    EXPECT_EQ(r.points, cloud.points.size());
+  }
+}
+
+TEST_P(RegistrationMethodTest, NoisyPointsStayWithinFiveCentimetres) {
+  SplitMix64 rng(36);
+  for (int i = 0; i < 4; ++i) {
+    SCOPED_TRACE("case " + std::to_string(i));
+    const Se2 T_slam_plan = testing::RandomSe2(rng, Deg(5), 0.8);
+    const Cloud cloud = SlamCloudWithNormals(plan_, T_slam_plan, 0.02, 600 + i);
+    const RegistrationResult r =
+        Register(cloud.points, cloud.normals, index_, Se2::Identity(), options_);
+    EXPECT_THAT(r.T_plan_slam, IsNearlySe2(T_slam_plan.Inverse(), 0.05, Deg(0.5)));
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Methods, RegistrationMethodTest,
+                         ::testing::Values(RegistrationMethod::kIcp, RegistrationMethod::kIk,
+                                           RegistrationMethod::kHough),
+                         [](const ::testing::TestParamInfo<RegistrationMethod>& m) {
+                           return std::string(ToString(m.param));
+                         });
+
+TEST(RegistrationTest, MethodNamesRoundTrip) {
+  for (RegistrationMethod m :
+       {RegistrationMethod::kIcp, RegistrationMethod::kIk, RegistrationMethod::kHough}) {
+    RegistrationMethod parsed = RegistrationMethod::kIcp;
+    ASSERT_TRUE(ParseRegistrationMethod(ToString(m), &parsed)) << ToString(m);
+    EXPECT_EQ(parsed, m);
+  }
+  RegistrationMethod unchanged = RegistrationMethod::kIk;
+  EXPECT_FALSE(ParseRegistrationMethod("ICP", &unchanged));
+  EXPECT_FALSE(ParseRegistrationMethod("", &unchanged));
+  EXPECT_EQ(unchanged, RegistrationMethod::kIk);
+}
+
+TEST(RegistrationTest, WallBufferDropsPointsFarFromWalls) {
+  // The thesis' 0.5 m buffer (section 6.4.3): under the initial transform, points more
+  // than the buffer away from every wall do not enter the registration.
+  const FloorPlan plan = Room();
+  const ClosestWallIndex index(plan);
+  const Se2 T_slam_plan{Deg(1), {0.05, 0.05}};
+  Cloud cloud = SlamCloudWithNormals(plan, T_slam_plan, 0.0, 7);
+  const size_t walls = cloud.points.size();
+  SplitMix64 rng(37);
+  for (int i = 0; i < 300; ++i) {  // clutter at least 1.5 m from every wall
+    cloud.points.push_back(T_slam_plan * testing::RandomVector2(rng, {1.5, 1.5}, {2.5, 5.5}));
+    cloud.normals.push_back({1, 0});
+  }
+  RegistrationOptions options;
+  options.wall_buffer_m = 0.5;
+  const RegistrationResult r =
+      Register(cloud.points, cloud.normals, index, Se2::Identity(), options);
+  EXPECT_EQ(r.points, walls);
+  EXPECT_THAT(r.T_plan_slam, IsNearlySe2(T_slam_plan.Inverse(), 0.02, Deg(0.2)));
+  options.wall_buffer_m = 0;
+  EXPECT_EQ(Register(cloud.points, cloud.normals, index, Se2::Identity(), options).points,
+            cloud.points.size());
+}
+
+TEST(RegistrationTest, HoughNeedsANormalPerPoint) {
+  const FloorPlan plan = Room();
+  const ClosestWallIndex index(plan);
+  const Cloud cloud = SlamCloudWithNormals(plan, Se2{Deg(2), {0.1, 0.1}}, 0.0, 8);
+  const Se2 initial{0.01, {0.02, 0.03}};
+  const RegistrationResult r = RegisterHough(cloud.points, {}, index, initial, {}, {});
+  EXPECT_FALSE(r.converged);
+  EXPECT_THAT(r.reason, ::testing::HasSubstr("normal"));
+  EXPECT_THAT(r.T_plan_slam, IsNearlySe2(initial, 0.0, 0.0));
+}
+
+TEST(IcpDegenerateTest, CorridorLeavesOneDirectionUnconstrained) {
+  // Two parallel walls: sliding along x changes nothing. The smallest eigenvalue
+  // vanishes, its direction is reported as degenerate (solution remapping), and the
+  // constrained part is still found: the rotation and the offset across.
+  auto parse = MakeFloorPlan("corridor", {{{0, 0}, {30, 0}}, {{0, 2}, {30, 2}}});
+  ASSERT_TRUE(parse.ok());
+  const ClosestWallIndex index(parse.plan);
+  const Se2 T_slam_plan{Deg(2), {0.1, 0.3}};
+  std::vector<Eigen::Vector2d> cloud;
+  for (const auto& p : testing::SampleWalls(parse.plan, 0.05)) {
+    if (p.x() > 10 && p.x() < 20) cloud.push_back(T_slam_plan * p);
+  }
+  const RegistrationResult r = RegisterIcp(cloud, index, Se2::Identity(), IcpOptions{});
+  EXPECT_LT(r.eigenvalues(0), 1e-9 * r.eigenvalues(2)) << r.eigenvalues.transpose();
+  EXPECT_GT(r.eigenvalues(1), 0.0);
+  ASSERT_EQ(r.degenerate_directions.size(), 1u);
+  EXPECT_NEAR(std::abs(r.degenerate_directions[0](1)), 1.0, 1e-6)  // (theta, x, y)
+      << r.degenerate_directions[0].transpose();
+  const Se2 truth = T_slam_plan.Inverse();
+  EXPECT_NEAR(WrapAngle(r.T_plan_slam.theta - truth.theta), 0.0, Deg(0.2));
+  for (const auto& p : cloud) {
+    const Eigen::Vector2d q = r.T_plan_slam * p;
+    EXPECT_NEAR(std::min(std::abs(q.y()), std::abs(q.y() - 2)), 0.0, 0.02);
+  }
+}
+
+TEST(IcpDegenerateTest, TooFewPointsReturnsTheInitialGuess) {
+  const ClosestWallIndex index(Room());
+  const Se2 initial{0.1, {0.2, 0.3}};
+  const RegistrationResult r = RegisterIcp({{0, 0}, {1, 0}}, index, initial, IcpOptions{});
+  EXPECT_FALSE(r.converged);
+  EXPECT_FALSE(r.reason.empty());
+  EXPECT_THAT(r.T_plan_slam, IsNearlySe2(initial, 0.0, 0.0));
+  EXPECT_EQ(r.points, 2u);
+
+  const RegistrationResult empty = RegisterIcp({}, index, initial, IcpOptions{});
+  EXPECT_FALSE(empty.converged);
+  EXPECT_EQ(empty.points, 0u);
+}
+
+TEST(IcpDegenerateTest, PointsFarFromEveryWallDoNotConverge) {
+  const FloorPlan plan = Room();
+  const ClosestWallIndex index(plan);
+  std::vector<Eigen::Vector2d> far;
+  for (int i = 0; i < 100; ++i) far.push_back({100.0 + i, 100.0});
+  const RegistrationResult r = RegisterIcp(far, index, Se2::Identity(), IcpOptions{});
+  EXPECT_FALSE(r.converged);
+  EXPECT_THAT(r.reason, ::testing::HasSubstr("correspondences"));
+  EXPECT_EQ(r.matched, 0u);
+  EXPECT_TRUE(r.T_plan_slam.t.allFinite());
+}
+
+TEST(EvaluateFitTest, ExactValuesOnOneWall) {
+  // One long wall along x; points 0.1 m beside it, and as many points with no wall
+  // within the correspondence distance.
+  auto parse = MakeFloorPlan("wall", {{{0, 0}, {20, 0}}});
+  ASSERT_TRUE(parse.ok());
+  const ClosestWallIndex index(parse.plan);
+  std::vector<Eigen::Vector2d> cloud;
+  for (int i = 0; i < 50; ++i) cloud.push_back({1.0 + 0.3 * i, 0.1});
+  RegistrationResult r;
+  double mse = -1;
+  EvaluateFit(cloud, index, Se2::Identity(), 1.5, 0.2, &r, &mse);
+  EXPECT_EQ(r.points, 50u);
+  EXPECT_EQ(r.matched, 50u);
+  EXPECT_EQ(r.inliers, 50u);
+  EXPECT_NEAR(r.rmse, 0.1, 1e-12);
+  EXPECT_NEAR(r.inlier_rmse, 0.1, 1e-12);
+  EXPECT_NEAR(mse, 0.01, 1e-12);
+
+  // A tighter inlier threshold keeps the matches but drops the inliers.
+  EvaluateFit(cloud, index, Se2::Identity(), 1.5, 0.05, &r, &mse);
+  EXPECT_EQ(r.matched, 50u);
+  EXPECT_EQ(r.inliers, 0u);
+  EXPECT_EQ(r.inlier_rmse, 0.0);
+
+  // The same points shifted onto the wall by the transform fit exactly.
+  EvaluateFit(cloud, index, Se2{0, {0, -0.1}}, 1.5, 0.2, &r, &mse);
+  EXPECT_NEAR(r.rmse, 0.0, 1e-12);
+  EXPECT_NEAR(mse, 0.0, 1e-20);
+
+  // Unmatched points count as the correspondence distance squared (section 6.4.3).
+  for (int i = 0; i < 50; ++i) cloud.push_back({1.0 + 0.3 * i, 2.0});
+  EvaluateFit(cloud, index, Se2::Identity(), 1.5, 0.2, &r, &mse);
+  EXPECT_EQ(r.points, 100u);
+  EXPECT_EQ(r.matched, 50u);
+  EXPECT_NEAR(r.rmse, 0.1, 1e-12);
+  EXPECT_NEAR(mse, (50 * 0.01 + 50 * 1.5 * 1.5) / 100, 1e-12);
+
+  // No points: nothing matched, the worst score.
+  EvaluateFit({}, index, Se2::Identity(), 1.5, 0.2, &r, &mse);
+  EXPECT_EQ(r.points, 0u);
+  EXPECT_EQ(r.rmse, 0.0);
+  EXPECT_NEAR(mse, 2.25, 1e-12);
+}
+
+TEST(EvaluateFitTest, TruthScoresBetterThanAPerturbedTransform) {
+  const FloorPlan plan = Room();
+  const ClosestWallIndex index(plan);
+  SplitMix64 rng(33);
+  for (int i = 0; i < 10; ++i) {
+    const Se2 T_slam_plan = testing::RandomSe2(rng, Deg(10), 1.0);
+    const auto cloud = SlamCloud(plan, T_slam_plan, 0.01, 300 + i);
+    const Se2 truth = T_slam_plan.Inverse();
+    double at_truth = 0, off = 0;
+    EvaluateFit(cloud, index, truth, 1.5, 0.2, nullptr, &at_truth);
+    EvaluateFit(cloud, index, testing::RandomSe2(rng, Deg(3), 0.2) * truth, 1.5, 0.2, nullptr,
+                &off);
+    EXPECT_LT(at_truth, off);
+    EXPECT_NEAR(at_truth, 0.01 * 0.01, 5e-5);  // the noise variance across the walls
+  }
+}
+
+}  // namespace
+}  // namespace floorpose

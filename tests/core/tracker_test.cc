@@ -1,0 +1,300 @@
+// The tracker: the wall pick of eq. 6.2, the flip, the state machine and the acceptance
+// rule of section 6.4.3, driven with injected stamps (no clock, no sleeps).
+#include "core/tracker.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <limits>
+
+#include "core/random.h"
+#include "tests/test_util.h"
+
+namespace floorpose {
+namespace {
+
+using testing::Deg;
+using ::testing::HasSubstr;
+using testing::IsNearlySe2;
+
+FloorPlan Room() {
+  auto parse = MakeFloorPlan("room", {
+                                         {{0, 0}, {10, 0}},
+                                         {{10, 0}, {10, 7}},
+                                         {{10, 7}, {0, 7}},
+                                         {{0, 7}, {0, 0}},
+                                         {{4, 0}, {4, 4.5}},
+                                         {{7, 7}, {7, 5.5}},
+                                         {{4, 4.5}, {5.5, 4.5}},
+                                     });
+  EXPECT_TRUE(parse.ok()) << parse.error;
+  return parse.plan;
+}
+
+// The pick a wearer makes when slam and plan are related by T_plan_slam: a point on a
+// plan wall with its normal, and the same point and normal seen in slam.
+WallPick PickFor(const Se2& T_plan_slam, const Eigen::Vector2d& plan_point,
+                 const Eigen::Vector2d& plan_normal) {
+  const Se2 T_slam_plan = T_plan_slam.Inverse();
+  return {T_slam_plan * plan_point, T_slam_plan.R() * plan_normal, plan_point, plan_normal};
+}
+
+TEST(AlignFromWallPickTest, RecoversRandomTransformsExactly) {
+  // Equation 6.2: one point with its normal fixes all three degrees of freedom.
+  const FloorPlan plan = Room();
+  SplitMix64 rng(51);
+  for (int i = 0; i < 500; ++i) {
+    const Se2 truth{rng.Uniform(-M_PI, M_PI), {rng.Uniform(-50, 50), rng.Uniform(-50, 50)}};
+    const Segment& wall = plan.segments[rng.Next() % plan.segments.size()];
+    const Eigen::Vector2d point = wall.a + rng.Uniform() * (wall.b - wall.a);
+    WallPick pick = PickFor(truth, point, wall.Normal());
+    pick.slam_normal *= rng.Uniform(0.5, 2.0);  // the normals need not be unit
+    const auto T = AlignFromWallPick(pick);
+    ASSERT_TRUE(T.has_value());
+    EXPECT_THAT(*T, IsNearlySe2(truth, 1e-9, 1e-12));
+  }
+}
+
+TEST(AlignFromWallPickTest, RejectsZeroAndNonFiniteInput) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const WallPick good = PickFor(Se2{0.3, {1, 2}}, {4, 2}, {1, 0});
+  ASSERT_TRUE(AlignFromWallPick(good).has_value());
+  WallPick bad = good;
+  bad.slam_normal = {0, 0};
+  EXPECT_FALSE(AlignFromWallPick(bad).has_value());
+  bad = good;
+  bad.plan_normal = {1e-9, 0};
+  EXPECT_FALSE(AlignFromWallPick(bad).has_value());
+  bad = good;
+  bad.slam_point.x() = nan;
+  EXPECT_FALSE(AlignFromWallPick(bad).has_value());
+  bad = good;
+  bad.plan_normal.y() = nan;
+  EXPECT_FALSE(AlignFromWallPick(bad).has_value());
+}
+
+class TrackerTest : public ::testing::Test {
+ protected:
+  TrackerTest()
+      : plan_(Room()),
+        index_(std::make_shared<const ClosestWallIndex>(plan_)),
+        tracker_(TrackerOptions{}) {}
+
+  // Wall points every 2 cm, in the slam frame of truth_.
+  std::vector<Eigen::Vector2d> Cloud() const {
+    std::vector<Eigen::Vector2d> out;
+    const Se2 T_slam_plan = truth_.Inverse();
+    for (const auto& p : testing::SampleWalls(plan_, 0.02)) out.push_back(T_slam_plan * p);
+    return out;
+  }
+
+  // A registration result for transform T on the cloud, as RegisterIcp would report it.
+  RegistrationResult ResultFor(const Se2& T, const std::vector<Eigen::Vector2d>& cloud) const {
+    RegistrationResult r;
+    r.method = "test";
+    r.T_plan_slam = T;
+    r.converged = true;
+    EvaluateFit(cloud, *index_, T, 1.5, 0.2, &r, nullptr);
+    return r;
+  }
+
+  FloorPlan plan_;
+  std::shared_ptr<const ClosestWallIndex> index_;
+  Tracker tracker_;
+  const Se2 truth_{Deg(20), {3.0, -1.5}};  // T_plan_slam
+};
+
+TEST_F(TrackerTest, StatesFromPlanToPick) {
+  EXPECT_EQ(tracker_.state(), TrackState::kWaitingForPlan);
+  EXPECT_STREQ(ToString(tracker_.state()), "WAITING_FOR_PLAN");
+  EXPECT_THAT(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), HasSubstr("plan"));
+
+  tracker_.SetPlan(index_);
+  EXPECT_TRUE(tracker_.has_plan());
+  EXPECT_EQ(tracker_.state(), TrackState::kWaitingForAlignment);
+  EXPECT_FALSE(tracker_.has_alignment());
+  EXPECT_EQ(tracker_.CurrentReliability().flag, ReliabilityFlag::kUnreliable);
+
+  WallPick zero = PickFor(truth_, {4, 2}, {1, 0});
+  zero.slam_normal = {0, 0};
+  EXPECT_FALSE(tracker_.ApplyWallPick(zero, 1).empty());
+  EXPECT_EQ(tracker_.state(), TrackState::kWaitingForAlignment);
+
+  EXPECT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 5), "");
+  // A pick alone is not checked against the walls yet: DEGRADED until a registration.
+  EXPECT_EQ(tracker_.state(), TrackState::kDegraded);
+  EXPECT_STREQ(ToString(tracker_.state()), "DEGRADED");
+  EXPECT_EQ(tracker_.alignment().version, 1u);
+  EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kWallPick);
+  EXPECT_EQ(tracker_.alignment().stamp_ns, 5);
+  EXPECT_THAT(tracker_.alignment().T_plan_slam, IsNearlySe2(truth_, 1e-9, 1e-12));
+
+  // A new plan drops the alignment, which belonged to the old one.
+  tracker_.SetPlan(index_);
+  EXPECT_EQ(tracker_.state(), TrackState::kWaitingForAlignment);
+  EXPECT_EQ(tracker_.alignment().version, 0u);
+}
+
+TEST_F(TrackerTest, FlipTurnsHalfAroundThePickPoint) {
+  tracker_.SetPlan(index_);
+  EXPECT_FALSE(tracker_.Flip(1).empty());  // nothing to flip yet
+  const WallPick pick = PickFor(truth_, {4, 2}, {1, 0});
+  ASSERT_EQ(tracker_.ApplyWallPick(pick, 1), "");
+  const Se2 before = tracker_.alignment().T_plan_slam;
+  ASSERT_EQ(tracker_.Flip(2), "");
+  const Se2 after = tracker_.alignment().T_plan_slam;
+
+  EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kFlip);
+  EXPECT_EQ(tracker_.alignment().version, 2u);
+  // The pick point maps to itself; the heading turns by pi; everything else mirrors
+  // through the pick point.
+  EXPECT_NEAR((after * pick.slam_point - pick.plan_point).norm(), 0.0, 1e-9);
+  EXPECT_NEAR(std::abs(WrapAngle(after.theta - before.theta)), M_PI, 1e-12);
+  SplitMix64 rng(52);
+  for (int i = 0; i < 20; ++i) {
+    const Eigen::Vector2d p = testing::RandomVector2(rng, {-20, -20}, {20, 20});
+    EXPECT_NEAR((after * p - (2 * pick.plan_point - before * p)).norm(), 0.0, 1e-9);
+  }
+  EXPECT_EQ(tracker_.state(), TrackState::kDegraded);
+  // Flipping twice is the identity.
+  ASSERT_EQ(tracker_.Flip(3), "");
+  EXPECT_THAT(tracker_.alignment().T_plan_slam, IsNearlySe2(before, 1e-9, 1e-12));
+}
+
+TEST_F(TrackerTest, CorrectAppliesTheAlignment) {
+  tracker_.SetPlan(index_);
+  // Before any alignment the pose passes through, flagged unreliable.
+  const Pose2 pose{{1.5, -2.0}, 0.4, 1.7};
+  PlanPoseEstimate e = tracker_.Correct(pose);
+  EXPECT_EQ(e.alignment_version, 0u);
+  EXPECT_EQ(e.reliability.flag, ReliabilityFlag::kUnreliable);
+  EXPECT_EQ(e.pose.position, pose.position);
+
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
+  SplitMix64 rng(53);
+  for (int i = 0; i < 50; ++i) {
+    const Pose2 p{testing::RandomVector2(rng, {-10, -10}, {10, 10}), rng.Uniform(-M_PI, M_PI),
+                  rng.Uniform(0, 2)};
+    e = tracker_.Correct(p);
+    EXPECT_NEAR((e.pose.position - (truth_.R() * p.position + truth_.t)).norm(), 0.0, 1e-9);
+    EXPECT_NEAR(WrapAngle(e.pose.heading - (p.heading + truth_.theta)), 0.0, 1e-12);
+    EXPECT_EQ(e.pose.z, p.z);
+    EXPECT_EQ(e.alignment_version, 1u);
+    EXPECT_EQ(e.reliability.flag, ReliabilityFlag::kDegraded);
+  }
+}
+
+TEST_F(TrackerTest, OfferAcceptsBetterRejectsWorseAndStale) {
+  tracker_.SetPlan(index_);
+  // The pick is 2 degrees and 15 cm off the truth.
+  const Se2 picked = Se2{Deg(2), {0.1, -0.1}} * truth_;
+  const Se2 T_slam_plan = picked.Inverse();
+  const Eigen::Vector2d plan_point(4, 2), plan_normal(1, 0);
+  ASSERT_EQ(
+      tracker_.ApplyWallPick(
+          {T_slam_plan * plan_point, T_slam_plan.R() * plan_normal, plan_point, plan_normal}, 1),
+      "");
+  const uint64_t v1 = tracker_.alignment().version;
+  const auto cloud = Cloud();
+
+  // Worse than the alignment in use: rejected, nothing changes.
+  const Se2 worse = Se2{Deg(5), {0.3, 0.2}} * truth_;
+  Tracker::Decision d = tracker_.Offer(ResultFor(worse, cloud), cloud, v1, 2);
+  EXPECT_FALSE(d.accepted);
+  EXPECT_THAT(d.reason, HasSubstr("not better"));
+  EXPECT_EQ(tracker_.alignment().version, v1);
+  EXPECT_THAT(tracker_.alignment().T_plan_slam, IsNearlySe2(picked, 1e-9, 1e-12));
+
+  // Based on an alignment that is no longer in use: rejected even though it is better.
+  d = tracker_.Offer(ResultFor(truth_, cloud), cloud, v1 + 1, 3);
+  EXPECT_FALSE(d.accepted);
+  EXPECT_THAT(d.reason, HasSubstr("alignment changed"));
+  EXPECT_EQ(tracker_.alignment().version, v1);
+
+  // A failed registration is never taken.
+  RegistrationResult failed = ResultFor(truth_, cloud);
+  failed.matched = 0;
+  failed.reason = "fewer than 3 correspondences";
+  EXPECT_FALSE(tracker_.Offer(failed, cloud, v1, 4).accepted);
+  RegistrationResult nan = ResultFor(truth_, cloud);
+  nan.T_plan_slam.theta = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(tracker_.Offer(nan, cloud, v1, 4).accepted);
+
+  // Better and current: accepted, a new version, and the fit makes it reliable.
+  d = tracker_.Offer(ResultFor(truth_, cloud), cloud, v1, 5);
+  EXPECT_TRUE(d.accepted) << d.reason;
+  EXPECT_GT(tracker_.alignment().version, v1);
+  EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kRegistration);
+  EXPECT_EQ(tracker_.alignment().stamp_ns, 5);
+  ASSERT_TRUE(tracker_.alignment().registration.has_value());
+  EXPECT_THAT(tracker_.alignment().T_plan_slam, IsNearlySe2(truth_, 1e-12, 1e-12));
+  EXPECT_EQ(tracker_.state(), TrackState::kTracking);
+  const Reliability r = tracker_.CurrentReliability();
+  EXPECT_EQ(r.flag, ReliabilityFlag::kReliable);
+  EXPECT_GT(r.probability, 0.9);
+
+  // The same offer again, on the old version, is stale.
+  d = tracker_.Offer(ResultFor(truth_, cloud), cloud, v1, 6);
+  EXPECT_FALSE(d.accepted);
+  EXPECT_THAT(d.reason, HasSubstr("alignment changed"));
+}
+
+TEST_F(TrackerTest, OfferBasedOnAReplacedAlignmentIsStale) {
+  // A registration started from the pick; meanwhile the wearer flipped. The result is
+  // far better than the flipped alignment, but it answers a question nobody asks any
+  // more, so it is dropped.
+  tracker_.SetPlan(index_);
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
+  const uint64_t started_from = tracker_.alignment().version;
+  ASSERT_EQ(tracker_.Flip(2), "");
+  const auto cloud = Cloud();
+  const Tracker::Decision d = tracker_.Offer(ResultFor(truth_, cloud), cloud, started_from, 3);
+  EXPECT_FALSE(d.accepted);
+  EXPECT_THAT(d.reason, HasSubstr("alignment changed"));
+  EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kFlip);
+}
+
+TEST_F(TrackerTest, PickThenIcpThenCorrectEndToEnd) {
+  // The daemon's loop in miniature: pick with an error, register from the alignment in
+  // use, offer the result, correct poses with it.
+  tracker_.SetPlan(index_);
+  const Se2 picked = Se2{Deg(-3), {-0.2, 0.25}} * truth_;
+  const Se2 T_slam_plan = picked.Inverse();
+  ASSERT_EQ(tracker_.ApplyWallPick({T_slam_plan * Eigen::Vector2d(10, 3),
+                                    T_slam_plan.R() * Eigen::Vector2d(-1, 0),
+                                    {10, 3},
+                                    {-1, 0}},
+                                   1),
+            "");
+  const auto cloud = Cloud();
+  ASSERT_TRUE(tracker_.RegistrationDue(2'000'000'000, cloud.size(), cloud.size()));
+  tracker_.MarkRegistrationStarted(2'000'000'000);
+  const uint64_t version = tracker_.alignment().version;
+  const RegistrationResult r = RegisterIcp(
+      cloud, *tracker_.index(), tracker_.alignment().T_plan_slam, tracker_.options().icp);
+  ASSERT_TRUE(tracker_.Offer(r, cloud, version, 3).accepted);
+  EXPECT_EQ(tracker_.state(), TrackState::kTracking);
+  const Pose2 pose{truth_.Inverse() * Eigen::Vector2d(5, 5), 0.0, 1.6};
+  EXPECT_NEAR((tracker_.Correct(pose).pose.position - Eigen::Vector2d(5, 5)).norm(), 0.0, 0.02);
+}
+
+TEST_F(TrackerTest, RegistrationDueFollowsPointsAndInjectedTime) {
+  const TrackerOptions& o = tracker_.options();
+  const int64_t s = 1'000'000'000;                                // one second in nanoseconds
+  EXPECT_FALSE(tracker_.RegistrationDue(100 * s, 10000, 10000));  // no plan
+  tracker_.SetPlan(index_);
+  EXPECT_FALSE(tracker_.RegistrationDue(100 * s, 10000, 10000));  // no alignment
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
+  tracker_.MarkRegistrationStarted(10 * s);
+  EXPECT_TRUE(tracker_.RegistrationDue(10 * s, o.min_points, o.min_new_points));
+  EXPECT_FALSE(tracker_.RegistrationDue(10 * s, o.min_points - 1, o.min_new_points));
+  EXPECT_FALSE(tracker_.RegistrationDue(10 * s, o.min_points, o.min_new_points - 1));
+  EXPECT_FALSE(tracker_.RegistrationDue(100 * s, o.min_points, 0));  // nothing new
+  // Few new points, but max_interval_s has passed since the last start.
+  const auto interval = static_cast<int64_t>(o.max_interval_s * 1e9);
+  EXPECT_FALSE(tracker_.RegistrationDue(10 * s + interval - 1, o.min_points, 1));
+  EXPECT_TRUE(tracker_.RegistrationDue(10 * s + interval, o.min_points, 1));
+}
+
+}  // namespace
+}  // namespace floorpose

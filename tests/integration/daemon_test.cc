@@ -1,0 +1,297 @@
+// floorposed end to end: a real daemon process on a private loopback DDS domain, driven
+// by a real Cyclone participant in the test, as the HoloLens app would.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "core/sim/demo_walk.h"
+#include "core/wall_extractor.h"
+#include "floorpose/v1/config.pb.h"
+#include "platform/config.h"
+#include "platform/dds.h"
+#include "tools/lib/headset_link.h"
+#include "tools/lib/headset_messages.h"
+#include "tools/lib/process.h"
+
+namespace floorpose {
+namespace {
+
+namespace fs = std::filesystem;
+using platform::Topic;
+using std::chrono::seconds;
+
+constexpr HeadsetFrame kFrame = HeadsetFrame::kUnityLeftHandedYUp;
+
+// A 10 m x 6 m room with an inner wall and a pillar, so no direction is unconstrained.
+const char* kRoomGeoJson = R"({"type": "FeatureCollection", "features": [
+  {"type": "Feature", "properties": {"kind": "wall"}, "geometry": {"type": "Polygon",
+   "coordinates": [[[0, 0], [10, 0], [10, 6], [0, 6], [0, 0]]]}},
+  {"type": "Feature", "properties": {"kind": "wall"}, "geometry": {"type": "LineString",
+   "coordinates": [[4, 0], [4, 3.5]]}},
+  {"type": "Feature", "properties": {"kind": "wall"}, "geometry": {"type": "Polygon",
+   "coordinates": [[[7, 3], [7.5, 3], [7.5, 3.6], [7, 3.6], [7, 3]]]}},
+  {"type": "Feature", "properties": {"kind": "door"}, "geometry": {"type": "Point",
+   "coordinates": [5, 0]}}]})";
+
+// A unique domain per test (and per test process), so parallel ctest runs stay apart.
+uint32_t UniqueDomain() {
+  static int counter = 0;
+  return 1 + static_cast<uint32_t>((getpid() * 7 + counter++) % 200);
+}
+
+class DaemonTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::path(::testing::TempDir()) /
+           ("floorposed-" + std::to_string(getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+    plan_path_ = (dir_ / "room.geojson").string();
+    std::ofstream(plan_path_) << kRoomGeoJson;
+    domain_ = UniqueDomain();
+  }
+
+  void StartDaemon(const std::string& extra_config = "") {
+    const std::string config_path = (dir_ / "floorposed.conf").string();
+    std::ofstream(config_path) << "dds { domain_id: " << domain_
+                               << " device_id: \"hl-test\" cyclonedds_uri: '"
+                               << platform::LoopbackCycloneConfig() << "' }\n"
+                               << "plan_path: \"" << plan_path_ << "\"\n"
+                               << "status_period_s: 0.1\nlog_level: \"debug\"\n"
+                               << extra_config;
+    daemon_ = std::make_unique<tools::ChildProcess>(
+        std::vector<std::string>{FLOORPOSED_PATH, "--config", config_path},
+        (dir_ / "floorposed.log").string());
+    ASSERT_TRUE(daemon_->started());
+    link_ =
+        std::make_unique<tools::HeadsetLink>(domain_, platform::LoopbackCycloneConfig(), "hl-test");
+    ASSERT_TRUE(link_->WaitForDaemon(seconds(15))) << "floorposed did not come up; log in " << dir_;
+  }
+
+  void TearDown() override {
+    if (daemon_ && daemon_->Running()) {
+      const auto code = daemon_->Terminate(seconds(2));
+      EXPECT_EQ(code, 0) << "floorposed did not stop cleanly within 2 s after SIGTERM";
+    }
+  }
+
+  // Waits for a status that satisfies pred (statuses come every 0.1 s).
+  template <typename Pred>
+  bool WaitForStatus(Pred pred) {
+    return link_->WaitUntil([&] { return link_->status && pred(*link_->status); }, seconds(10));
+  }
+
+  sim::DemoWalk Walk(double pick_error_m, uint64_t seed) {
+    sim::DemoWalkOptions o;
+    o.seed = seed;
+    o.heading_drift_rad_per_m = 0;
+    o.scale_error = 0;
+    o.initial_theta_rad = 0.7;
+    o.initial_offset_m = {2.0, -3.0};
+    o.pick_point_error_m = pick_error_m;
+    o.pick_normal_error_rad = pick_error_m > 0 ? 0.05 : 0.0;
+    const FloorPlanParse plan = MakeFloorPlan("room", {{{0, 0}, {10, 0}},
+                                                       {{10, 0}, {10, 6}},
+                                                       {{10, 6}, {0, 6}},
+                                                       {{0, 6}, {0, 0}},
+                                                       {{4, 0}, {4, 3.5}},
+                                                       {{7, 3}, {7.5, 3}},
+                                                       {{7.5, 3}, {7.5, 3.6}},
+                                                       {{7.5, 3.6}, {7, 3.6}},
+                                                       {{7, 3.6}, {7, 3}}});
+    return sim::SimulateDemoWalk(plan.plan,
+                                 {{1.5, 1.5}, {2.5, 4.8}, {6.0, 4.8}, {8.8, 2.0}, {6, 1.0}}, o);
+  }
+
+  fs::path dir_;
+  std::string plan_path_;
+  uint32_t domain_ = 0;
+  std::unique_ptr<tools::ChildProcess> daemon_;
+  std::unique_ptr<tools::HeadsetLink> link_;
+};
+
+TEST_F(DaemonTest, EveryPoseGivesAPlanPoseAndThePickSetsTheTransform) {
+  StartDaemon();
+  const sim::DemoWalk walk = Walk(/*pick_error_m=*/0.0, 1);
+  ASSERT_GE(walk.steps.size(), 30u);
+  ASSERT_TRUE(WaitForStatus([](const v1::DaemonStatus& s) {
+    return s.state() == v1::DaemonStatus::WAITING_FOR_ALIGNMENT;
+  }));
+
+  // Before the pick: plan poses still come, flagged unreliable with version 0.
+  const size_t before = 10;
+  for (size_t k = 0; k < before; ++k)
+    link_->Send(Topic::kHeadsetPose,
+                tools::ToHeadsetPose(walk.steps[k].slam, kFrame, walk.steps[k].stamp_ns), 0);
+  ASSERT_TRUE(link_->WaitUntil([&] { return link_->plan_poses.size() == before; }, seconds(10)));
+  for (const v1::PlanPose& p : link_->plan_poses) {
+    EXPECT_EQ(p.alignment_version(), 0u);
+    EXPECT_EQ(p.reliability().flag(), v1::Reliability::UNRELIABLE);
+  }
+
+  link_->Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 7), 0);
+  ASSERT_TRUE(link_->WaitUntil([&] { return !link_->alignments.empty(); }, seconds(10)));
+  EXPECT_EQ(link_->alignments.back().source(), v1::Alignment::WALL_PICK);
+  // Equation 6.2 with an exact pick recovers the true T_plan_slam = T_slam_plan^-1.
+  const Se2 truth = walk.T_slam_plan_initial.Inverse();
+  EXPECT_NEAR(link_->alignments.back().t_plan_slam().theta(), truth.theta, 1e-9);
+  EXPECT_NEAR(link_->alignments.back().t_plan_slam().x(), truth.t.x(), 1e-6);
+  EXPECT_NEAR(link_->alignments.back().t_plan_slam().y(), truth.t.y(), 1e-6);
+
+  // After the pick, poses only (no meshes, so no registration): each is the truth.
+  for (size_t k = before; k < walk.steps.size(); ++k)
+    link_->Send(Topic::kHeadsetPose,
+                tools::ToHeadsetPose(walk.steps[k].slam, kFrame, walk.steps[k].stamp_ns), 0);
+  ASSERT_TRUE(
+      link_->WaitUntil([&] { return link_->plan_poses.size() == walk.steps.size(); }, seconds(10)))
+      << link_->plan_poses.size() << " of " << walk.steps.size();
+  for (size_t k = before; k < walk.steps.size(); ++k) {
+    const v1::PlanPose& p = link_->plan_poses[k];
+    const sim::SimStep& step = walk.steps[k];
+    ASSERT_EQ(p.source_stamp_ns(), step.stamp_ns);
+    EXPECT_NEAR(p.x(), step.true_plan.position.x(), 1e-5) << "pose " << k;
+    EXPECT_NEAR(p.y(), step.true_plan.position.y(), 1e-5) << "pose " << k;
+    EXPECT_NEAR(WrapAngle(p.heading() - step.true_plan.heading), 0.0, 1e-6) << "pose " << k;
+    EXPECT_GE(p.alignment_version(), 1u);
+  }
+}
+
+TEST_F(DaemonTest, AddedUpdatedAndRemovedDeltasChangeTheStore) {
+  StartDaemon();
+  // Expected point counts come from the same extraction the daemon runs (default config).
+  v1::FloorposedConfig defaults;
+  const WallExtractionOptions wall_options = platform::ToWallExtractionOptions(defaults);
+  auto count = [&](const sim::SimMesh& m) {
+    return ExtractWallPoints({&m.vertices_slam, &m.triangles}, m.id, wall_options).size();
+  };
+  auto wall = [](uint64_t id, sim::MeshChange change, float x0, float x1) {
+    sim::SimMesh m;
+    m.id = id;
+    m.change = change;
+    m.vertices_slam = {{x0, 0, 0},  {x1, 0, 0}, {x1, 0, 2.5f}, {x0, 0, 2.5f},
+                       {x0, -1, 0}, {x1, -1, 0}};  // the last two make a floor triangle
+    m.triangles = {0, 1, 2, 0, 2, 3, 0, 1, 5};
+    return m;
+  };
+  const sim::SimMesh a = wall(1, sim::MeshChange::kAdded, 0, 4);
+  const sim::SimMesh b = wall(2, sim::MeshChange::kAdded, 5, 6);
+  const sim::SimMesh a2 = wall(1, sim::MeshChange::kUpdated, 0, 2);
+  ASSERT_GT(count(a), count(a2));
+
+  link_->Send(Topic::kMeshDelta, tools::ToMeshDelta(a, kFrame, 1), 1);
+  link_->Send(Topic::kMeshDelta, tools::ToMeshDelta(b, kFrame, 2), 2);
+  ASSERT_TRUE(WaitForStatus([&](const v1::DaemonStatus& s) {
+    return s.live_meshes() == 2 && s.wall_points() == count(a) + count(b);
+  })) << "status: "
+      << link_->status->ShortDebugString();
+
+  link_->Send(Topic::kMeshDelta, tools::ToMeshDelta(a2, kFrame, 3), 3);
+  ASSERT_TRUE(WaitForStatus([&](const v1::DaemonStatus& s) {
+    return s.live_meshes() == 2 && s.wall_points() == count(a2) + count(b) &&
+           s.counters().meshes_updated() == 1;
+  })) << "status: "
+      << link_->status->ShortDebugString();
+
+  sim::SimMesh remove_b;
+  remove_b.id = 2;
+  remove_b.change = sim::MeshChange::kRemoved;
+  link_->Send(Topic::kMeshDelta, tools::ToMeshDelta(remove_b, kFrame, 4), 4);
+  ASSERT_TRUE(WaitForStatus([&](const v1::DaemonStatus& s) {
+    return s.live_meshes() == 1 && s.wall_points() == count(a2) &&
+           s.counters().meshes_removed() == 1;
+  })) << "status: "
+      << link_->status->ShortDebugString();
+
+  // Bad input: a REMOVED for an unknown id and garbage bytes are counted, not fatal, and
+  // the store keeps what it had.
+  remove_b.id = 99;
+  link_->Send(Topic::kMeshDelta, tools::ToMeshDelta(remove_b, kFrame, 5), 5);
+  platform::Writer raw(link_->participant(), Topic::kMeshDelta);
+  ASSERT_TRUE(link_->WaitUntil([&] { return raw.MatchedReaders() > 0; }, seconds(10)));
+  raw.Write({"hl-test", 1, 6, std::string("\xff\xff\xff\xff not protobuf", 17)});
+  ASSERT_TRUE(WaitForStatus([&](const v1::DaemonStatus& s) {
+    return s.counters().unknown_mesh_ids() == 1 && s.counters().rejected_messages() == 1 &&
+           s.live_meshes() == 1 && s.wall_points() == count(a2);
+  })) << "status: "
+      << link_->status->ShortDebugString();
+  EXPECT_TRUE(daemon_->Running());
+}
+
+TEST_F(DaemonTest, RegistrationCorrectsAnImpreciseWallPick) {
+  StartDaemon();
+  const sim::DemoWalk walk = Walk(/*pick_error_m=*/0.3, 3);
+  ASSERT_TRUE(WaitForStatus([](const v1::DaemonStatus& s) {
+    return s.state() == v1::DaemonStatus::WAITING_FOR_ALIGNMENT;
+  }));
+  link_->Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
+  ASSERT_TRUE(link_->WaitUntil([&] { return !link_->alignments.empty(); }, seconds(10)));
+  for (const sim::SimStep& step : walk.steps) {
+    for (const sim::SimMesh& m : step.meshes)
+      link_->Send(Topic::kMeshDelta, tools::ToMeshDelta(m, kFrame, step.stamp_ns), step.stamp_ns);
+    link_->Send(Topic::kHeadsetPose, tools::ToHeadsetPose(step.slam, kFrame, step.stamp_ns),
+                step.stamp_ns);
+    // Paced like a fast replay, so that registrations run while the walk goes on.
+    link_->WaitUntil([] { return false; }, std::chrono::milliseconds(15));
+  }
+  ASSERT_TRUE(
+      link_->WaitUntil([&] { return link_->plan_poses.size() == walk.steps.size(); }, seconds(10)));
+  ASSERT_TRUE(WaitForStatus([](const v1::DaemonStatus& s) {
+    return s.counters().registrations_accepted() >= 1;
+  })) << "status: "
+      << link_->status->ShortDebugString();
+  // The pick alone puts the wearer off by more than 5 cm; the registered last pose is not.
+  const v1::Se2& pick = link_->alignments.front().t_plan_slam();
+  const Pose2 picked = Apply(Se2{pick.theta(), {pick.x(), pick.y()}}, walk.steps.back().slam);
+  const Pose2& truth = walk.steps.back().true_plan;
+  EXPECT_GT((picked.position - truth.position).norm(), 0.05);
+  const v1::PlanPose& last = link_->plan_poses.back();
+  EXPECT_LT(std::hypot(last.x() - truth.position.x(), last.y() - truth.position.y()), 0.05);
+  EXPECT_EQ(link_->plan_poses.back().reliability().flag(), v1::Reliability::RELIABLE);
+}
+
+TEST_F(DaemonTest, RefusesBadCommandsWithAReason) {
+  StartDaemon();
+  v1::Command flip;
+  flip.set_request_id(3);
+  flip.mutable_flip();
+  link_->Send(Topic::kCommand, flip, 0);
+  v1::Command load;
+  load.set_request_id(4);
+  load.mutable_load_plan()->set_path((dir_ / "missing.geojson").string());
+  link_->Send(Topic::kCommand, load, 0);
+  ASSERT_TRUE(WaitForStatus(
+      [](const v1::DaemonStatus& s) { return s.counters().commands_refused() == 2; }));
+  bool saw_flip = false, saw_load = false;
+  for (const std::string& m : link_->status_messages) {
+    saw_flip |= m.rfind("request 3: refused", 0) == 0;
+    saw_load |=
+        m.rfind("request 4: refused", 0) == 0 && m.find("missing.geojson") != std::string::npos;
+  }
+  EXPECT_TRUE(saw_flip);
+  EXPECT_TRUE(saw_load);
+  // The plan it had is still loaded.
+  EXPECT_EQ(link_->status->state(), v1::DaemonStatus::WAITING_FOR_ALIGNMENT);
+  EXPECT_EQ(link_->status->plan_id(), "room");
+}
+
+TEST(FloorposedProcess, PrintConfigRoundTrips) {
+  const fs::path out =
+      fs::path(::testing::TempDir()) / ("print-config-" + std::to_string(getpid()));
+  tools::ChildProcess p({FLOORPOSED_PATH, "--print-config"}, out.string());
+  // It exits on its own; Terminate only waits (SIGTERM to an exited process is harmless).
+  for (int i = 0; i < 200 && p.Running(); ++i) usleep(10000);
+  ASSERT_EQ(p.Terminate(seconds(2)), 0);
+  std::ifstream in(out);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  v1::FloorposedConfig parsed;
+  std::string error;
+  ASSERT_TRUE(platform::ParseConfig(text, &parsed, &error)) << error;
+  EXPECT_EQ(parsed.walls().density_per_m2(), 50.0);
+  EXPECT_EQ(platform::ResolvedConfigText(parsed), text);
+}
+
+}  // namespace
+}  // namespace floorpose
