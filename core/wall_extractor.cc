@@ -22,6 +22,14 @@ std::vector<WallPoint> ExtractWallPoints(const SlamMesh& mesh, uint64_t mesh_id,
   const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
   const double max_edge2 = options.max_edge_m * options.max_edge_m;
 
+  // Pass 1 finds the vertical triangles and their areas; pass 2 samples them, once the
+  // total is known to fit.
+  struct Face {
+    Eigen::Vector3d v0, v1, v2;
+    Eigen::Vector2f n2;
+    double area;
+  };
+  std::vector<Face> faces;
   for (size_t t = 0; t + 2 < F.size(); t += 3) {
     ++r.triangles;
     if (F[t] >= V.size() || F[t + 1] >= V.size() || F[t + 2] >= V.size()) {
@@ -44,16 +52,24 @@ std::vector<WallPoint> ExtractWallPoints(const SlamMesh& mesh, uint64_t mesh_id,
     ++r.vertical_triangles;
     const double area = 0.5 * norm;  // line 8
     r.wall_area_m2 += area;
-    const double expected = area * options.density_per_m2;  // line 9
+    faces.push_back({v0, v1, v2, normal.head<2>().normalized().cast<float>(), area});
+  }
+  if (options.max_points > 0 &&
+      r.wall_area_m2 * options.density_per_m2 > static_cast<double>(options.max_points)) {
+    r.over_limit = true;
+    return out;
+  }
+  out.reserve(static_cast<size_t>(r.wall_area_m2 * options.density_per_m2) + faces.size());
+  for (const Face& f : faces) {
+    const double expected = f.area * options.density_per_m2;  // line 9
     size_t count = static_cast<size_t>(expected);
     if (rng.Uniform() < expected - static_cast<double>(count)) ++count;
-    const Eigen::Vector2f n2 = normal.head<2>().normalized().cast<float>();
     for (size_t j = 0; j < count; ++j) {
       // Uniform barycentric sample (Osada et al. 2002).
       const double s = std::sqrt(rng.Uniform());
       const double u = rng.Uniform();
-      const Eigen::Vector3d p = (1.0 - s) * v0 + s * (1.0 - u) * v1 + s * u * v2;
-      out.push_back({p.head<2>().cast<float>(), n2});  // drop z (section 4.1.1)
+      const Eigen::Vector3d p = (1.0 - s) * f.v0 + s * (1.0 - u) * f.v1 + s * u * f.v2;
+      out.push_back({p.head<2>().cast<float>(), f.n2});  // drop z (section 4.1.1)
     }
   }
   return out;

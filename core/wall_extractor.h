@@ -18,6 +18,9 @@ struct WallExtractionOptions {
   double density_per_m2 = 50.0;  // points per square metre of wall face
   uint64_t seed = 1;
   double max_edge_m = 10.0;  // longer edges are corrupt input
+  // A mesh that would give more points than this gives none (report.over_limit): memory
+  // stays bounded whatever the triangles claim. 0 = no limit.
+  size_t max_points = 200000;
 };
 
 // A mesh already in the slam frame (right-handed, Z up, world coordinates).
@@ -32,6 +35,7 @@ struct WallExtractionReport {
   size_t degenerate_triangles = 0;  // zero area, non-finite or too long
   size_t bad_indices = 0;
   double wall_area_m2 = 0.0;
+  bool over_limit = false;  // the expected point count exceeded max_points
 };
 
 // Samples points on the vertical triangles, their number proportional to area: each

@@ -191,6 +191,11 @@ void Daemon::HandleMeshDelta(const platform::Envelope& e) {
   WallExtractionReport report;
   std::vector<WallPoint> points =
       ExtractWallPoints({&mesh.vertices, &mesh.triangles}, mesh.mesh_id, wall_options_, &report);
+  if (report.over_limit) {
+    return Reject("mesh " + std::to_string(mesh.mesh_id) + ": " +
+                  std::to_string(report.wall_area_m2) + " m2 of wall would give more than " +
+                  std::to_string(wall_options_.max_points) + " points");
+  }
   if (report.bad_indices || report.degenerate_triangles || mesh.unusable_vertices) {
     spdlog::warn(
         "mesh {}: dropped {} triangles with bad indices, {} degenerate; {} unusable vertices",
@@ -299,7 +304,8 @@ void Daemon::HandleCommand(const platform::Envelope& e) {
     return;
   }
   spdlog::info("command: {}{}", prefix, done);
-  if (tracker_.has_alignment()) PublishAlignment();
+  // Always: after a reset or a new plan, version 0 tells late joiners the old one is void.
+  PublishAlignment();
   PublishStatus(prefix + done);
 }
 

@@ -154,6 +154,7 @@ WallExtractionOptions ToWallExtractionOptions(const v1::FloorposedConfig& c) {
   w.density_per_m2 = c.walls().density_per_m2();
   w.seed = c.walls().seed();
   w.max_edge_m = c.walls().max_edge_m();
+  w.max_points = c.limits().max_wall_points_per_mesh();
   return w;
 }
 

@@ -233,5 +233,29 @@ TEST(WallExtractorTest, MissingArraysGiveNothing) {
   EXPECT_TRUE(ExtractWallPoints({&V, &none}, 1, {}).empty());
 }
 
+// Ten 10 m x 10 m walls claim 50,000 points at the default density: over a limit of
+// 10,000 the mesh gives none (and allocates nothing), under it all of them.
+TEST(WallExtractorTest, MeshOverThePointLimitGivesNone) {
+  std::vector<Eigen::Vector3f> V;
+  std::vector<uint32_t> F;
+  for (uint32_t i = 0; i < 10; ++i) {
+    const float x = static_cast<float>(i);
+    const uint32_t b = static_cast<uint32_t>(V.size());
+    V.insert(V.end(), {{x, 0, 0}, {x, 10, 0}, {x, 10, 10}, {x, 0, 10}});
+    F.insert(F.end(), {b, b + 1, b + 2, b, b + 2, b + 3});
+  }
+  WallExtractionOptions options;
+  options.max_edge_m = 20;  // the diagonals are 14 m
+  options.max_points = 10000;
+  WallExtractionReport report;
+  EXPECT_TRUE(ExtractWallPoints({&V, &F}, 1, options, &report).empty());
+  EXPECT_TRUE(report.over_limit);
+  EXPECT_NEAR(report.wall_area_m2, 1000.0, 1e-6);
+  options.max_points = 60000;
+  EXPECT_NEAR(static_cast<double>(ExtractWallPoints({&V, &F}, 1, options, &report).size()), 50000,
+              500);
+  EXPECT_FALSE(report.over_limit);
+}
+
 }  // namespace
 }  // namespace floorpose
