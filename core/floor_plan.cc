@@ -55,6 +55,42 @@ FloorPlanParse MakeFloorPlan(std::string id, std::vector<Segment> raw) {
   return out;
 }
 
+FloorPlan ClipFloorPlan(const FloorPlan& plan, const Eigen::Vector2d& lo,
+                        const Eigen::Vector2d& hi) {
+  FloorPlan out;
+  out.id = plan.id;
+  for (const Segment& s : plan.segments) {
+    const Eigen::Vector2d d = s.b - s.a;
+    double t0 = 0, t1 = 1;
+    bool inside = true;
+    // Liang-Barsky: clip the parameter range against each of the four edges.
+    for (int axis = 0; axis < 2 && inside; ++axis) {
+      for (const double sign : {-1.0, 1.0}) {
+        const double p = sign * d(axis);
+        const double q = sign > 0 ? hi(axis) - s.a(axis) : s.a(axis) - lo(axis);
+        if (p == 0) {
+          if (q < 0) inside = false;
+        } else if (p < 0) {
+          t0 = std::max(t0, q / p);
+        } else {
+          t1 = std::min(t1, q / p);
+        }
+      }
+    }
+    if (!inside || t0 >= t1) continue;
+    out.segments.push_back({s.a + t0 * d, s.a + t1 * d});
+  }
+  if (!out.segments.empty()) {
+    out.min = out.segments[0].a;
+    out.max = out.min;
+    for (const Segment& s : out.segments) {
+      out.min = out.min.cwiseMin(s.a).cwiseMin(s.b);
+      out.max = out.max.cwiseMax(s.a).cwiseMax(s.b);
+    }
+  }
+  return out;
+}
+
 namespace {
 
 // A forgiving tokenizer: whitespace-separated numbers, with line numbers for errors.

@@ -39,6 +39,11 @@ struct FloorPlanParse {
 // segments, computes the bounds. Fails on an empty result.
 FloorPlanParse MakeFloorPlan(std::string id, std::vector<Segment> raw);
 
+// The segments of a plan inside a box, cut at its border (Liang-Barsky), for the thesis'
+// "floor plan clipped to the points' box + 2 m" (section 6.4.3). May be empty.
+FloorPlan ClipFloorPlan(const FloorPlan& plan, const Eigen::Vector2d& min,
+                        const Eigen::Vector2d& max);
+
 // The thesis' text format: the segment count, then `x1 y1 x2 y2` per line (section 6.4.2).
 FloorPlanParse ParseTextFloorPlan(std::string_view text, std::string id);
 

@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace floorpose {
 
@@ -449,11 +450,33 @@ RegistrationResult Register(const std::vector<Eigen::Vector2d>& points,
     use_points = &kept_points;
     use_normals = &kept_normals;
   }
+  const ClosestWallIndex* use_index = &index;
+  std::optional<ClosestWallIndex> clipped;
+  if (options.clip_margin_m > 0 && !use_points->empty()) {
+    Eigen::Vector2d lo = initial * use_points->front(), hi = lo;
+    for (const Eigen::Vector2d& p : *use_points) {
+      lo = lo.cwiseMin(initial * p);
+      hi = hi.cwiseMax(initial * p);
+    }
+    const Eigen::Vector2d margin = Eigen::Vector2d::Constant(options.clip_margin_m);
+    FloorPlan plan = ClipFloorPlan(index.plan(), lo - margin, hi + margin);
+    if (plan.segments.empty()) {
+      RegistrationResult r;
+      r.method = ToString(options.method);
+      r.T_plan_slam = initial;
+      r.points = static_cast<uint32_t>(use_points->size());
+      r.reason = "no plan walls near the points";
+      return r;
+    }
+    clipped.emplace(plan);
+    use_index = &*clipped;
+  }
   switch (options.method) {
-    case RegistrationMethod::kIcp: return RegisterIcp(*use_points, index, initial, options.icp);
-    case RegistrationMethod::kIk: return RegisterIk(*use_points, index, initial, options.icp);
+    case RegistrationMethod::kIcp: return RegisterIcp(*use_points, *use_index, initial, options.icp);
+    case RegistrationMethod::kIk: return RegisterIk(*use_points, *use_index, initial, options.icp);
     case RegistrationMethod::kHough:
-      return RegisterHough(*use_points, *use_normals, index, initial, options.icp, options.hough);
+      return RegisterHough(*use_points, *use_normals, *use_index, initial, options.icp,
+                           options.hough);
   }
   return {};
 }

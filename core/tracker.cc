@@ -25,6 +25,7 @@ RegistrationOptions ToRegistrationOptions(const TrackerOptions& t) {
   r.icp = t.icp;
   r.hough = t.hough;
   r.wall_buffer_m = t.wall_buffer_m;
+  r.clip_margin_m = t.clip_margin_m;
   return r;
 }
 

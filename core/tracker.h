@@ -21,6 +21,7 @@ struct TrackerOptions {
   RegistrationMethod method = RegistrationMethod::kIcp;
   HoughOptions hough;
   double wall_buffer_m = 0.0;     // see RegistrationOptions
+  double clip_margin_m = 0.0;     // see RegistrationOptions
   bool local_meshes = false;      // register only meshes new since the last run (thesis "local")
   uint32_t min_new_points = 500;  // register after this many new wall points...
   double max_interval_s = 3.0;    // ...or after this long with any new points

@@ -104,6 +104,7 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (!(c.registration().hough_bin_deg() > 0 && c.registration().hough_bin_deg() <= 5))
     return "registration.hough_bin_deg must be in (0, 5]";
   if (!(c.registration().wall_buffer_m() >= 0)) return "registration.wall_buffer_m must be >= 0";
+  if (!(c.registration().clip_margin_m() >= 0)) return "registration.clip_margin_m must be >= 0";
   if (!(c.icp().degeneracy_ratio() >= 0 && c.icp().degeneracy_ratio() < 1))
     return "icp.degeneracy_ratio must be in [0, 1)";
   const std::string& l = c.log_level();
@@ -136,6 +137,7 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   const auto& r = c.registration();
   ParseRegistrationMethod(r.method(), &t.method);  // validated by ValidateConfig
   t.wall_buffer_m = r.wall_buffer_m();
+  t.clip_margin_m = r.clip_margin_m();
   t.local_meshes = r.meshes() == "local";
   t.hough.max_rotation_rad = r.hough_max_rotation_deg() * M_PI / 180.0;
   t.hough.bin_rad = r.hough_bin_deg() * M_PI / 180.0;
