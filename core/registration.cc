@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 
 namespace floorpose {
@@ -70,6 +71,8 @@ struct Row {
   double d;           // distance to the closest point on the segment
 };
 
+constexpr double kFreeEndM = 0.1;  // see MakeRows
+
 // Closest-wall pairs of the transformed points (every stride-th), within max_corr. With
 // point_to_point_at_ends, a closest point at a segment's end gives two rows (x and y), as
 // the squared distance to a point is isotropic there (Pottmann et al. 2004, section 3).
@@ -84,9 +87,15 @@ void MakeRows(const std::vector<Eigen::Vector2d>& points, size_t stride, const S
     const auto hit = index.Query(p);
     if (!hit || hit->distance > max_corr) continue;
     const Segment& s = segments[hit->segment];
-    const bool at_end =
-        point_to_point_at_ends && hit->distance > 1e-9 &&
-        ((hit->point - s.a).squaredNorm() < 1e-18 || (hit->point - s.b).squaredNorm() < 1e-18);
+    // Only well beyond a free end: points in the joint between two collinear pieces of
+    // a wall (digitised plans are full of them) still see a line, not a corner.
+    bool at_end = false;
+    if (point_to_point_at_ends && hit->distance > 1e-9) {
+      const Eigen::Vector2d d = s.b - s.a;
+      const double len = d.norm();
+      const double along = (p - s.a).dot(d) / len;  // metres from a towards b
+      at_end = along < -kFreeEndM || along > len + kFreeEndM;
+    }
     if (at_end) {
       const Eigen::Vector2d e = p - hit->point;
       rows->push_back({p, Eigen::Vector2d::UnitX(), e.x(), hit->distance});
@@ -431,6 +440,63 @@ RegistrationResult RegisterHough(const std::vector<Eigen::Vector2d>& points,
   return result;
 }
 
+std::vector<Se2> CorrelativeSearch(const std::vector<Eigen::Vector2d>& points,
+                                   const ClosestWallIndex& index, const Se2& initial,
+                                   const RegistrationOptions& options) {
+  constexpr size_t kSample = 200;
+  constexpr double kStepM = 0.4;  // translation grid
+  constexpr double kStepRad = 1.5 * M_PI / 180;
+  constexpr double kSigma = 0.4;  // score kernel: 1 - d^2 / sigma^2, clipped at 0
+  if (points.empty()) return {};
+  const size_t stride = std::max<size_t>(1, points.size() / kSample);
+  std::vector<Eigen::Vector2d> sample;
+  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < points.size(); i += stride) {
+    sample.push_back(initial * points[i]);
+    centroid += sample.back();
+  }
+  centroid /= static_cast<double>(sample.size());
+  const int nt = static_cast<int>(std::floor(options.search_window_m / kStepM));
+  const int nr = static_cast<int>(std::floor(options.search_window_rad / kStepRad));
+  struct Candidate {
+    double score;
+    Se2 T;  // correction in the plan frame, applied after `initial`
+  };
+  std::vector<Candidate> all;
+  std::vector<Eigen::Vector2d> rotated(sample.size());
+  for (int ir = -nr; ir <= nr; ++ir) {
+    const Se2 rotation = AboutCentre(ir * kStepRad, centroid, Eigen::Vector2d::Zero());
+    for (size_t i = 0; i < sample.size(); ++i) rotated[i] = rotation * sample[i];
+    for (int ix = -nt; ix <= nt; ++ix) {
+      for (int iy = -nt; iy <= nt; ++iy) {
+        const Eigen::Vector2d t(ix * kStepM, iy * kStepM);
+        double score = 0;
+        for (const Eigen::Vector2d& p : rotated) {
+          const auto hit = index.Query(p + t);
+          if (hit && hit->distance < kSigma)
+            score += 1.0 - hit->distance * hit->distance / (kSigma * kSigma);
+        }
+        all.push_back({score, Se2{0.0, t} * rotation});
+      }
+    }
+  }
+  std::sort(all.begin(), all.end(),
+            [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
+  // The best few that are not neighbours of a better one.
+  std::vector<Se2> corrections;
+  for (const Candidate& c : all) {
+    if (corrections.size() >= options.search_candidates) break;
+    bool near = false;
+    for (const Se2& o : corrections)
+      near = near || (std::abs(WrapAngle(o.theta - c.T.theta)) < 2.5 * kStepRad &&
+                      (o * centroid - c.T * centroid).norm() < 2.5 * kStepM);
+    if (!near) corrections.push_back(c.T);
+  }
+  std::vector<Se2> out;
+  for (const Se2& c : corrections) out.push_back(c * initial);
+  return out;
+}
+
 RegistrationResult Register(const std::vector<Eigen::Vector2d>& points,
                             const std::vector<Eigen::Vector2d>& normals,
                             const ClosestWallIndex& index, const Se2& initial,
@@ -471,14 +537,36 @@ RegistrationResult Register(const std::vector<Eigen::Vector2d>& points,
     clipped.emplace(plan);
     use_index = &*clipped;
   }
-  switch (options.method) {
-    case RegistrationMethod::kIcp: return RegisterIcp(*use_points, *use_index, initial, options.icp);
-    case RegistrationMethod::kIk: return RegisterIk(*use_points, *use_index, initial, options.icp);
-    case RegistrationMethod::kHough:
-      return RegisterHough(*use_points, *use_normals, *use_index, initial, options.icp,
-                           options.hough);
+  auto refine = [&](const Se2& start) -> RegistrationResult {
+    switch (options.method) {
+      case RegistrationMethod::kIcp:
+        return RegisterIcp(*use_points, *use_index, start, options.icp);
+      case RegistrationMethod::kIk: return RegisterIk(*use_points, *use_index, start, options.icp);
+      case RegistrationMethod::kHough:
+        return RegisterHough(*use_points, *use_normals, *use_index, start, options.icp,
+                             options.hough);
+    }
+    return {};
+  };
+  if (options.search_window_m <= 0 && options.search_window_rad <= 0) return refine(initial);
+  std::vector<Se2> starts = CorrelativeSearch(*use_points, *use_index, initial, options);
+  starts.insert(starts.begin(), initial);
+  RegistrationResult best;
+  double best_score = std::numeric_limits<double>::infinity();
+  uint32_t iterations = 0;
+  for (const Se2& start : starts) {
+    RegistrationResult r = refine(start);
+    iterations += r.iterations;
+    double score = 0;
+    EvaluateFit(*use_points, *use_index, r.T_plan_slam, options.icp.max_correspondence_m,
+                options.icp.inlier_threshold_m, nullptr, &score);
+    if (score < best_score) {
+      best_score = score;
+      best = std::move(r);
+    }
   }
-  return {};
+  best.iterations = iterations;
+  return best;
 }
 
 }  // namespace floorpose

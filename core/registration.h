@@ -79,6 +79,14 @@ struct RegistrationOptions {
   // margin before registering (the thesis' 2 m); 0 registers against the whole plan.
   // With the O(1) index this buys no speed; it is here to reproduce the thesis.
   double clip_margin_m = 0.0;
+  // Correlative search before refining (as real-time correlative scan matching in
+  // Cartographer, Hess et al. 2016): translations within +-search_window_m and rotations
+  // within +-search_window_rad of the initial guess are scored on a point subset, and
+  // the method refines the best few (and the initial guess); the best fit wins. Needed
+  // when the guess can be metres off (a wall pick); 0 skips it.
+  double search_window_m = 0.0;
+  double search_window_rad = 0.0;
+  uint32_t search_candidates = 4;
 };
 
 // Point-to-line ICP after thesis Algorithm 4.2: multi-resolution (level h uses every
@@ -106,6 +114,12 @@ RegistrationResult RegisterHough(const std::vector<Eigen::Vector2d>& points_slam
                                  const std::vector<Eigen::Vector2d>& normals_slam,
                                  const ClosestWallIndex& index, const Se2& T_plan_slam_initial,
                                  const IcpOptions& icp, const HoughOptions& hough);
+
+// The correlative search of RegistrationOptions::search_window_*: the best few starting
+// transforms (T_plan_slam) around the initial guess, best first.
+std::vector<Se2> CorrelativeSearch(const std::vector<Eigen::Vector2d>& points_slam,
+                                   const ClosestWallIndex& index, const Se2& T_plan_slam_initial,
+                                   const RegistrationOptions& options);
 
 // Runs the chosen method, after the wall buffer. normals_slam may be empty except for
 // Hough.

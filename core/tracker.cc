@@ -19,13 +19,17 @@ std::optional<Se2> AlignFromWallPick(const WallPick& pick) {
   return T;
 }
 
-RegistrationOptions ToRegistrationOptions(const TrackerOptions& t) {
+RegistrationOptions ToRegistrationOptions(const TrackerOptions& t, AlignmentSource from) {
   RegistrationOptions r;
   r.method = t.method;
   r.icp = t.icp;
   r.hough = t.hough;
   r.wall_buffer_m = t.wall_buffer_m;
   r.clip_margin_m = t.clip_margin_m;
+  if (from == AlignmentSource::kWallPick || from == AlignmentSource::kFlip) {
+    r.search_window_m = t.pick_search_m;
+    r.search_window_rad = t.pick_search_rad;
+  }
   return r;
 }
 

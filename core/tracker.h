@@ -20,17 +20,17 @@ struct TrackerOptions {
   IcpOptions icp;
   RegistrationMethod method = RegistrationMethod::kIcp;
   HoughOptions hough;
-  double wall_buffer_m = 0.0;     // see RegistrationOptions
-  double clip_margin_m = 0.0;     // see RegistrationOptions
-  bool local_meshes = false;      // register only meshes new since the last run (thesis "local")
-  uint32_t min_new_points = 500;  // register after this many new wall points...
-  double max_interval_s = 3.0;    // ...or after this long with any new points
-  uint32_t min_points = 200;      // no registration on fewer points
+  double wall_buffer_m = 0.0;      // see RegistrationOptions
+  double clip_margin_m = 0.0;      // see RegistrationOptions
+  double pick_search_m = 2.5;      // correlative search after a pick or flip, metres
+  double pick_search_rad = 0.175;  // ...and radians
+  bool local_meshes = false;       // register only meshes new since the last run (thesis "local")
+  uint32_t min_new_points = 500;   // register after this many new wall points...
+  double max_interval_s = 3.0;     // ...or after this long with any new points
+  uint32_t min_points = 200;       // no registration on fewer points
   double reliable_rmse_m = 0.15;
   double reliable_inlier_ratio = 0.5;
 };
-
-RegistrationOptions ToRegistrationOptions(const TrackerOptions& options);
 
 // Thesis section 6.3.4: one wall point with its normal, seen by the headset (slam
 // frame, horizontal part) and chosen on the plan.
@@ -46,6 +46,10 @@ std::optional<Se2> AlignFromWallPick(const WallPick& pick);
 enum class ReliabilityFlag { kReliable, kDegraded, kUnreliable };
 enum class TrackState { kWaitingForPlan, kWaitingForAlignment, kTracking, kDegraded, kLost };
 enum class AlignmentSource { kNone, kWallPick, kFlip, kRegistration };
+
+// The registration options for a run starting from an alignment of the given source:
+// after a pick or flip, with the correlative search.
+RegistrationOptions ToRegistrationOptions(const TrackerOptions& options, AlignmentSource from);
 
 struct Reliability {
   ReliabilityFlag flag = ReliabilityFlag::kUnreliable;

@@ -138,6 +138,8 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   ParseRegistrationMethod(r.method(), &t.method);  // validated by ValidateConfig
   t.wall_buffer_m = r.wall_buffer_m();
   t.clip_margin_m = r.clip_margin_m();
+  t.pick_search_m = r.pick_search_m();
+  t.pick_search_rad = r.pick_search_deg() * M_PI / 180.0;
   t.local_meshes = r.meshes() == "local";
   t.hough.max_rotation_rad = r.hough_max_rotation_deg() * M_PI / 180.0;
   t.hough.bin_rad = r.hough_bin_deg() * M_PI / 180.0;

@@ -12,5 +12,6 @@ using Run = std::function<int()>;
 Run AddDemoCommand(CLI::App& app);
 Run AddReplayCommand(CLI::App& app);
 Run AddRecordCommand(CLI::App& app);
+Run AddSimulateCommand(CLI::App& app);
 
 }  // namespace floorpose::tools

@@ -18,6 +18,8 @@ int main(int argc, char** argv) {
       floorpose::tools::AddDemoCommand);
   add("replay", "publish a recording over DDS", floorpose::tools::AddReplayCommand);
   add("record", "write every floorpose topic to a recording", floorpose::tools::AddRecordCommand);
+  add("simulate", "write a simulated walk over a floor plan, with ground truth, as a recording",
+      floorpose::tools::AddSimulateCommand);
   CLI11_PARSE(app, argc, argv);
   floorpose::platform::SetUpLogging("floorpose", log_level);
   for (auto& [sub, run] : commands)

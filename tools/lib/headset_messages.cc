@@ -54,25 +54,30 @@ v1::HeadsetPose ToHeadsetPose(const Pose2& pose, HeadsetFrame frame, int64_t sta
   return out;
 }
 
-v1::Command ToWallPickCommand(const sim::DemoWalk& walk, HeadsetFrame frame, uint64_t request_id) {
+v1::Command ToWallPickCommand(const WallPick& wall_pick, double height_m, HeadsetFrame frame,
+                              uint64_t request_id) {
   v1::Command cmd;
   cmd.set_request_id(request_id);
   auto* pick = cmd.mutable_wall_pick();
   const Eigen::Vector3d p =
-      ToHeadset(frame, {walk.pick.slam_point.x(), walk.pick.slam_point.y(), walk.pick_height_m});
+      ToHeadset(frame, {wall_pick.slam_point.x(), wall_pick.slam_point.y(), height_m});
   const Eigen::Vector3d n =
-      ToHeadset(frame, {walk.pick.slam_normal.x(), walk.pick.slam_normal.y(), 0.0});
+      ToHeadset(frame, {wall_pick.slam_normal.x(), wall_pick.slam_normal.y(), 0.0});
   pick->mutable_headset_point()->set_x(p.x());
   pick->mutable_headset_point()->set_y(p.y());
   pick->mutable_headset_point()->set_z(p.z());
   pick->mutable_headset_normal()->set_x(n.x());
   pick->mutable_headset_normal()->set_y(n.y());
   pick->mutable_headset_normal()->set_z(n.z());
-  pick->set_plan_x(walk.pick.plan_point.x());
-  pick->set_plan_y(walk.pick.plan_point.y());
-  pick->set_plan_normal_x(walk.pick.plan_normal.x());
-  pick->set_plan_normal_y(walk.pick.plan_normal.y());
+  pick->set_plan_x(wall_pick.plan_point.x());
+  pick->set_plan_y(wall_pick.plan_point.y());
+  pick->set_plan_normal_x(wall_pick.plan_normal.x());
+  pick->set_plan_normal_y(wall_pick.plan_normal.y());
   return cmd;
+}
+
+v1::Command ToWallPickCommand(const sim::DemoWalk& walk, HeadsetFrame frame, uint64_t request_id) {
+  return ToWallPickCommand(walk.pick, walk.pick_height_m, frame, request_id);
 }
 
 }  // namespace floorpose::tools

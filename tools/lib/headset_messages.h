@@ -13,6 +13,10 @@ namespace floorpose::tools {
 v1::MeshDelta ToMeshDelta(const sim::SimMesh& mesh, HeadsetFrame frame, int64_t stamp_ns);
 // A horizontal slam pose (heading = viewing direction) as a HeadsetPose.
 v1::HeadsetPose ToHeadsetPose(const Pose2& pose_slam, HeadsetFrame frame, int64_t stamp_ns);
+// A wall pick (slam / plan frames) as a Command, in the headset's convention; the headset
+// point at slam height height_m.
+v1::Command ToWallPickCommand(const WallPick& pick, double height_m, HeadsetFrame frame,
+                              uint64_t request_id);
 // The walk's wall pick as a Command, in the headset's convention.
 v1::Command ToWallPickCommand(const sim::DemoWalk& walk, HeadsetFrame frame, uint64_t request_id);
 

@@ -1,0 +1,887 @@
+#include "core/sim/simulator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <tuple>
+#include <utility>
+
+#include "core/random.h"
+#include "core/sim/free_space.h"
+
+namespace floorpose::sim {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+// One random stream per concern (reality, walk, drift, sensor, mesh, pick), so that, e.g.,
+// turning the mesh off leaves the walk and the drift as they were.
+SplitMix64 Stream(uint64_t seed, uint64_t salt) {
+  SplitMix64 mix(seed ^ (0xd1b54a32d192ed03ULL * (salt + 1)));
+  return SplitMix64(mix.Next());
+}
+
+// A planar rectangle of reality: origin + a u + b v for a in [0, u_len], b in [0, v_len],
+// with u, v unit and orthogonal. Seen in nu x nv patches.
+struct Surface {
+  Eigen::Vector3d origin, u, v, normal;
+  double u_len = 0.0, v_len = 0.0;
+  int nu = 1, nv = 1;
+  Eigen::Vector2d centre;  // horizontal bounding circle, to skip far surfaces quickly
+  double radius = 0.0;
+};
+
+Surface MakeSurface(const Eigen::Vector3d& origin, const Eigen::Vector3d& u_edge,
+                    const Eigen::Vector3d& v_edge, double patch_m) {
+  Surface s;
+  s.origin = origin;
+  s.u_len = u_edge.norm();
+  s.v_len = v_edge.norm();
+  s.u = u_edge / s.u_len;
+  s.v = v_edge / s.v_len;
+  s.normal = s.u.cross(s.v).normalized();
+  s.nu = std::max(1, static_cast<int>(std::ceil(s.u_len / patch_m - 1e-9)));
+  s.nv = std::max(1, static_cast<int>(std::ceil(s.v_len / patch_m - 1e-9)));
+  const Eigen::Vector3d c = origin + 0.5 * (u_edge + v_edge);
+  s.centre = c.head<2>();
+  s.radius = 0.5 * (u_edge + v_edge).head<2>().norm() + 0.5 * (u_edge - v_edge).head<2>().norm();
+  return s;
+}
+
+// Patches: of a surface (surface >= 0, iu, iv), of the floor (-1) or the ceiling (-2)
+// (iu, iv = cell indices).
+constexpr int kFloor = -1, kCeiling = -2;
+using PatchKey = std::tuple<int, int, int>;
+using ChunkKey = std::pair<int, int>;
+
+double Cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+bool SegmentsIntersect(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                       const Eigen::Vector2d& c, const Eigen::Vector2d& d) {
+  const double d1 = Cross(b - a, c - a), d2 = Cross(b - a, d - a);
+  const double d3 = Cross(d - c, a - c), d4 = Cross(d - c, b - c);
+  return ((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0));
+}
+
+bool InsidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
+  bool inside = false;
+  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+    const Eigen::Vector2d& a = poly[i];
+    const Eigen::Vector2d& b = poly[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) &&
+        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x())
+      inside = !inside;
+  }
+  return inside;
+}
+
+double DistanceToPolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
+  if (InsidePolygon(poly, p)) return 0.0;
+  double best = 1e300;
+  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++)
+    best = std::min(best, (ClosestPointOnSegment({poly[j], poly[i]}, p) - p).norm());
+  return best;
+}
+
+bool PolygonsOverlap(const std::vector<Eigen::Vector2d>& p, const std::vector<Eigen::Vector2d>& q) {
+  for (size_t i = 0, j = p.size() - 1; i < p.size(); j = i++)
+    for (size_t k = 0, l = q.size() - 1; k < q.size(); l = k++)
+      if (SegmentsIntersect(p[j], p[i], q[l], q[k])) return true;
+  return InsidePolygon(p, q[0]) || InsidePolygon(q, p[0]);
+}
+
+// A rectangle centred at c, `length` along yaw and `width` across.
+std::vector<Eigen::Vector2d> Rectangle(const Eigen::Vector2d& c, double yaw, double length,
+                                       double width) {
+  const Eigen::Vector2d u(std::cos(yaw), std::sin(yaw)), v(-u.y(), u.x());
+  const Eigen::Vector2d a = 0.5 * length * u, b = 0.5 * width * v;
+  return {c - a - b, c + a - b, c + a + b, c - a + b};
+}
+
+// The segments drawing the same physical wall as segment i: i itself, the other face of a
+// thick wall (parallel, within 0.5 m, overlapping) and the short caps joining the faces.
+// Absent or glass walls lose both faces, as they would in a building.
+std::vector<size_t> WallGroup(const FloorPlan& plan, size_t i) {
+  const Segment& s = plan.segments[i];
+  const Eigen::Vector2d dir = (s.b - s.a).normalized();
+  std::vector<size_t> group{i};
+  for (size_t j = 0; j < plan.segments.size(); ++j) {
+    const Segment& o = plan.segments[j];
+    if (j == i || o.Length() < 1e-6) continue;
+    const Eigen::Vector2d odir = (o.b - o.a).normalized();
+    if (std::abs(Cross(dir, odir)) > std::sin(5 * kDeg)) continue;
+    if (std::abs(Cross(dir, 0.5 * (o.a + o.b) - s.a)) > 0.5) continue;
+    const double t0 = (o.a - s.a).dot(dir), t1 = (o.b - s.a).dot(dir);
+    const double overlap = std::min(std::max(t0, t1), s.Length()) - std::max(std::min(t0, t1), 0.0);
+    if (overlap > 0.5 * std::min(s.Length(), o.Length())) group.push_back(j);
+  }
+  const size_t faces = group.size();
+  for (size_t j = 0; j < plan.segments.size(); ++j) {
+    const Segment& o = plan.segments[j];
+    if (o.Length() > 0.5 || std::find(group.begin(), group.end(), j) != group.end()) continue;
+    auto near_end = [&](const Eigen::Vector2d& p) {
+      for (size_t k = 0; k < faces; ++k) {
+        const Segment& f = plan.segments[group[k]];
+        if ((f.a - p).norm() < 0.05 || (f.b - p).norm() < 0.05) return true;
+      }
+      return false;
+    };
+    if (near_end(o.a) && near_end(o.b)) group.push_back(j);
+  }
+  return group;
+}
+
+// Random order of 0..n-1 (Fisher-Yates).
+std::vector<size_t> Shuffled(size_t n, SplitMix64& rng) {
+  std::vector<size_t> order(n);
+  for (size_t i = 0; i < n; ++i) order[i] = i;
+  for (size_t i = n; i > 1; --i) std::swap(order[i - 1], order[rng.Next() % i]);
+  return order;
+}
+
+double NearestWallDirection(const FloorPlan& plan, const Eigen::Vector2d& p) {
+  double best = 1e300, yaw = 0.0;
+  for (const Segment& s : plan.segments) {
+    const double d = (ClosestPointOnSegment(s, p) - p).norm();
+    if (d < best && s.Length() > 0.3) best = d, yaw = std::atan2(s.b.y() - s.a.y(), s.b.x() - s.a.x());
+  }
+  return yaw;
+}
+
+std::string Format(const char* format, double a = 0, double b = 0, double c = 0, double d = 0) {
+  char text[256];
+  std::snprintf(text, sizeof(text), format, a, b, c, d);
+  return text;
+}
+
+// ---------------------------------------------------------------------------------------
+// Reality: the plan's walls as they are in the scenario, plus what the plan does not show.
+
+class RealityBuilder {
+ public:
+  RealityBuilder(const FloorPlan& plan, FreeSpace& free_space,
+                 const std::vector<Eigen::Vector2d>& keep_clear, SplitMix64& rng)
+      : plan_(plan), free_space_(free_space), keep_clear_(keep_clear), rng_(rng) {
+    reality.plan_wall_present.assign(plan.segments.size(), 1);
+    reality.plan_wall_glass.assign(plan.segments.size(), 0);
+  }
+
+  double TotalWallLength() const {
+    double total = 0.0;
+    for (const Segment& s : plan_.segments) total += s.Length();
+    return total;
+  }
+
+  // Marks whole walls (both faces) among those of length [min_m, max_m], in random order,
+  // until `share` of the total wall length is marked. Returns the marked length.
+  double MarkWalls(std::vector<uint8_t>* marks, double share, double min_m, double max_m) {
+    const double goal = share * TotalWallLength();
+    double marked = 0.0;
+    for (size_t i : Shuffled(plan_.segments.size(), rng_)) {
+      if (marked >= goal) break;
+      const double length = plan_.segments[i].Length();
+      if ((*marks)[i] || length < min_m || length > max_m) continue;
+      for (size_t j : WallGroup(plan_, i)) {
+        if ((*marks)[j]) continue;
+        (*marks)[j] = 1;
+        marked += plan_.segments[j].Length();
+      }
+    }
+    return marked;
+  }
+
+  // Puts an object (or wall) not on the plan on the floor, unless it would stand in a plan
+  // wall or another object, on the given trajectory, or cut the walkable region apart.
+  bool Place(std::vector<Eigen::Vector2d> footprint, double height, const char* kind) {
+    for (const Segment& s : plan_.segments) {
+      if (InsidePolygon(footprint, s.a) || InsidePolygon(footprint, s.b)) return false;
+      for (size_t i = 0, j = footprint.size() - 1; i < footprint.size(); j = i++)
+        if (SegmentsIntersect(footprint[j], footprint[i], s.a, s.b)) return false;
+    }
+    for (const Reality::Prism& e : reality.extras)
+      if (PolygonsOverlap(footprint, e.footprint)) return false;
+    for (const Eigen::Vector2d& p : keep_clear_)
+      if (DistanceToPolygon(footprint, p) < free_space_.options().body_radius_m) return false;
+    if (!free_space_.BlockIfConnected(footprint)) return false;
+    reality.extras.push_back({std::move(footprint), height, kind});
+    return true;
+  }
+
+  // A random walkable point with at least this clearance (or the last one tried).
+  Eigen::Vector2d RandomFreePoint(double min_clearance_m) {
+    const std::vector<int>& cells = free_space_.cells();
+    Eigen::Vector2d p = free_space_.CellCentre(cells[rng_.Next() % cells.size()]);
+    for (int i = 0; i < 20 && free_space_.Clearance(p) < min_clearance_m; ++i)
+      p = free_space_.CellCentre(cells[rng_.Next() % cells.size()]);
+    return p;
+  }
+
+  // Placed count of `count` objects made by `make`, a few tries each.
+  template <typename Make>
+  int PlaceMany(int count, Make make) {
+    int placed = 0;
+    for (int i = 0; i < count; ++i)
+      for (int attempt = 0; attempt < 6 && !free_space_.empty(); ++attempt)
+        if (make()) {
+          ++placed;
+          break;
+        }
+    return placed;
+  }
+
+  double AlignedYaw(const Eigen::Vector2d& p) {
+    return NearestWallDirection(plan_, p) + 0.5 * M_PI * static_cast<double>(rng_.Next() % 4);
+  }
+
+  // Office furniture and people (thesis section 7.7: the hall "filled with tables").
+  std::string Furnish() {
+    const double area = free_space_.walkable_area_m2();
+    const int desks = PlaceMany(std::min(200, static_cast<int>(area / 15)), [&] {
+      const Eigen::Vector2d c = RandomFreePoint(0.9);
+      return Place(Rectangle(c, AlignedYaw(c), 1.6, 0.8), 0.75, "desk");
+    });
+    // Cabinets: their back against a wall, on the side of the wall one can walk on.
+    std::vector<double> cumulative;
+    double total = 0.0;
+    for (const Segment& s : plan_.segments) cumulative.push_back(total += s.Length());
+    const int cabinets = PlaceMany(std::min(120, static_cast<int>(area / 25)), [&] {
+      const double pick = rng_.Uniform(0.0, total);
+      const size_t i = std::lower_bound(cumulative.begin(), cumulative.end(), pick) -
+                       cumulative.begin();
+      const Segment& s = plan_.segments[std::min(i, plan_.segments.size() - 1)];
+      if (s.Length() < 1.4) return false;
+      const Eigen::Vector2d dir = (s.b - s.a).normalized();
+      Eigen::Vector2d n = s.Normal();
+      const Eigen::Vector2d at = s.a + dir * rng_.Uniform(0.7, s.Length() - 0.7);
+      if (free_space_.Clearance(at + 0.8 * n) < free_space_.Clearance(at - 0.8 * n)) n = -n;
+      return Place(Rectangle(at + n * 0.28, std::atan2(dir.y(), dir.x()), 1.2, 0.5), 2.0,
+                   "cabinet");
+    });
+    const int people = PlaceMany(std::min(60, static_cast<int>(area / 40)), [&] {
+      const Eigen::Vector2d c = RandomFreePoint(0.5);
+      return Place(Rectangle(c, rng_.Uniform(0, M_PI), 0.4, 0.4), 1.8, "person");
+    });
+    return Format("office: %.0f desks (1.6x0.8x0.75 m), %.0f cabinets (1.2x0.5x2.0 m, against "
+                  "walls), %.0f people (0.4x0.4x1.8 m), none on the plan",
+                  desks, cabinets, people);
+  }
+
+  // Thesis section 7.7: walls on the plan that are not there (fire doors), a round object
+  // in the middle of a space, walls that are not on the plan.
+  std::string Mismatch(double share, double ceiling) {
+    const double absent = MarkWalls(&absent_marks_, share, 1.0, 15.0);
+    for (size_t i = 0; i < absent_marks_.size(); ++i)
+      if (absent_marks_[i]) reality.plan_wall_present[i] = 0;
+    const double area = free_space_.walkable_area_m2();
+    const int walls = PlaceMany(std::min(40, static_cast<int>(area / 60)), [&] {
+      const Eigen::Vector2d c = RandomFreePoint(0.6);
+      return Place(Rectangle(c, AlignedYaw(c), rng_.Uniform(1.5, 4.0), 0.12), ceiling, "wall");
+    });
+    const int pillars = PlaceMany(std::min(10, static_cast<int>(area / 200)), [&] {
+      const Eigen::Vector2d c = RandomFreePoint(1.2);
+      const double r = rng_.Uniform(0.3, 0.8);
+      std::vector<Eigen::Vector2d> octagon;
+      for (int k = 0; k < 8; ++k)
+        octagon.push_back(c + r * Eigen::Vector2d(std::cos(k * M_PI / 4), std::sin(k * M_PI / 4)));
+      return Place(octagon, ceiling, "pillar");
+    });
+    const int boxes = PlaceMany(std::min(20, static_cast<int>(area / 100)), [&] {
+      const Eigen::Vector2d c = RandomFreePoint(0.9);
+      return Place(Rectangle(c, AlignedYaw(c), rng_.Uniform(0.6, 2.0), rng_.Uniform(0.6, 1.5)),
+                   rng_.Uniform(0.8, 2.0), "box");
+    });
+    return Format("mismatch: %.0f%% of the wall length on the plan is absent; not on the plan: "
+                  "%.0f walls (1.5-4 m), %.0f round pillars, %.0f boxes",
+                  100.0 * absent / TotalWallLength(), walls, pillars, boxes);
+  }
+
+  std::string Glass(double share) {
+    const double glass = MarkWalls(&reality.plan_wall_glass, share, 2.0, 1e9);
+    return Format("glass: %.0f%% of the wall length (walls of 2 m or more) is glass, invisible to "
+                  "the sensor",
+                  100.0 * glass / TotalWallLength());
+  }
+
+  Reality reality;
+
+ private:
+  const FloorPlan& plan_;
+  FreeSpace& free_space_;
+  const std::vector<Eigen::Vector2d>& keep_clear_;
+  SplitMix64& rng_;
+  std::vector<uint8_t> absent_marks_ = std::vector<uint8_t>(plan_.segments.size(), 0);
+};
+
+std::vector<Surface> RealSurfaces(const FloorPlan& plan, const Reality& reality, double patch_m) {
+  std::vector<Surface> out;
+  const Eigen::Vector3d up(0, 0, reality.ceiling_m);
+  for (size_t i = 0; i < plan.segments.size(); ++i) {
+    const Segment& s = plan.segments[i];
+    if (!reality.plan_wall_present[i] || reality.plan_wall_glass[i] || s.Length() < 1e-3)
+      continue;
+    out.push_back(MakeSurface({s.a.x(), s.a.y(), 0.0},
+                              {s.b.x() - s.a.x(), s.b.y() - s.a.y(), 0.0}, up, patch_m));
+  }
+  for (const Reality::Prism& p : reality.extras) {
+    const auto& f = p.footprint;
+    for (size_t i = 0; i < f.size(); ++i) {
+      const Eigen::Vector2d& a = f[i];
+      const Eigen::Vector2d& b = f[(i + 1) % f.size()];
+      out.push_back(MakeSurface({a.x(), a.y(), 0.0}, {b.x() - a.x(), b.y() - a.y(), 0.0},
+                                {0, 0, p.height_m}, patch_m));
+    }
+    if (f.size() == 4 && p.height_m < reality.ceiling_m - 0.05)  // the top of a box
+      out.push_back(MakeSurface({f[0].x(), f[0].y(), p.height_m},
+                                {f[1].x() - f[0].x(), f[1].y() - f[0].y(), 0.0},
+                                {f[3].x() - f[0].x(), f[3].y() - f[0].y(), 0.0}, patch_m));
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------
+// The walk.
+
+struct HeadSample {
+  Eigen::Vector2d position;
+  double yaw = 0.0;    // viewing direction
+  double pitch = 0.0;  // up positive
+};
+
+// A polyline walked at constant speed.
+struct Leg {
+  std::vector<Eigen::Vector2d> points;
+  std::vector<double> along;  // cumulative length at each point
+  double speed = 1.0;
+  double Length() const { return along.back(); }
+  Eigen::Vector2d At(double s) const {
+    s = std::clamp(s, 0.0, Length());
+    size_t i = std::upper_bound(along.begin(), along.end(), s) - along.begin();
+    i = std::clamp<size_t>(i, 1, points.size() - 1);
+    const double span = along[i] - along[i - 1];
+    const double f = span > 0 ? (s - along[i - 1]) / span : 1.0;
+    return points[i - 1] + f * (points[i] - points[i - 1]);
+  }
+};
+
+Leg MakeLeg(std::vector<Eigen::Vector2d> points, double speed) {
+  Leg leg;
+  leg.points = std::move(points);
+  leg.speed = speed;
+  leg.along.push_back(0.0);
+  for (size_t i = 1; i < leg.points.size(); ++i)
+    leg.along.push_back(leg.along.back() + (leg.points[i] - leg.points[i - 1]).norm());
+  return leg;
+}
+
+std::vector<HeadSample> GenerateWalk(const FreeSpace& fs, Scenario scenario,
+                                     const SimulatorOptions& o, SplitMix64& rng) {
+  const std::vector<int>& cells = fs.cells();
+  auto random_point = [&](double min_clearance) {
+    Eigen::Vector2d p = fs.CellCentre(cells[rng.Next() % cells.size()]);
+    for (int i = 0; i < 20 && fs.Clearance(p) < min_clearance; ++i)
+      p = fs.CellCentre(cells[rng.Next() % cells.size()]);
+    return p;
+  };
+  // Goals: random places, not too close; for the corridor scenario the farthest of a few,
+  // so that the walk strings long hallways together.
+  auto choose_goal = [&](const Eigen::Vector2d& from) {
+    Eigen::Vector2d best = random_point(0.5);
+    const int candidates = scenario == Scenario::kCorridor ? 8 : 1;
+    for (int tries = 0, found = 0; tries < 40 && found < candidates; ++tries) {
+      const Eigen::Vector2d p = random_point(0.5);
+      if ((p - from).norm() < o.min_goal_distance_m) continue;
+      if (found == 0 || (p - from).norm() > (best - from).norm()) best = p;
+      ++found;
+    }
+    return best;
+  };
+
+  const double dt = o.pose_period_s;
+  const double phase1 = rng.Uniform(0, 2 * M_PI), phase2 = rng.Uniform(0, 2 * M_PI);
+  const double phase3 = rng.Uniform(0, 2 * M_PI);
+  Eigen::Vector2d position = random_point(0.5);
+  double body = rng.Uniform(-M_PI, M_PI);
+  // Stopped: scanning the room, the head swinging scan_amplitude to either side once.
+  bool stopped = true;
+  double stop_total = o.first_stop_s, stop_elapsed = 0.0;
+  double scan_amplitude = std::min(o.max_scan_rad, 0.25 * stop_total) * (rng.Next() % 2 ? 1 : -1);
+  Leg leg;
+  double along = 0.0, walked = 0.0;
+  std::vector<HeadSample> out;
+  for (double t = 0.0; t <= o.max_duration_s; t += dt) {
+    // The head: looking around while walking, the scan when stopped, pitch swinging.
+    const double look = o.look_around_rad * (0.7 * std::sin(2 * M_PI * t / 5.3 + phase1) +
+                                             0.3 * std::sin(2 * M_PI * t / 2.1 + phase2));
+    const double scan = stopped ? scan_amplitude * std::sin(2 * M_PI * stop_elapsed / stop_total)
+                                : 0.0;
+    out.push_back({position, WrapAngle(body + look + scan),
+                   o.head_pitch_rad + o.head_pitch_swing_rad * std::sin(2 * M_PI * t / 7.7 + phase3)});
+    if (walked >= o.target_length_m) break;
+
+    if (stopped) {
+      stop_elapsed += dt;
+      if (stop_elapsed < stop_total) continue;
+      std::vector<Eigen::Vector2d> path;
+      for (int tries = 0; tries < 20 && path.size() < 2; ++tries)
+        path = fs.Path(position, choose_goal(position));
+      if (path.size() < 2) break;  // nowhere to go: the walk ends here
+      leg = MakeLeg(std::move(path), rng.Uniform(o.min_speed_mps, o.max_speed_mps));
+      along = 0.0;
+      stopped = false;
+    }
+    along = std::min(along + leg.speed * dt, leg.Length());
+    const Eigen::Vector2d next = leg.At(along);
+    walked += (next - position).norm();
+    position = next;
+    // The body turns (at a human rate) towards the path a metre ahead.
+    const Eigen::Vector2d ahead = leg.At(along + 1.0) - position;
+    if (ahead.norm() > 1e-6) {
+      const double turn = WrapAngle(std::atan2(ahead.y(), ahead.x()) - body);
+      const double max_turn = o.max_turn_rate_rad_s * dt;
+      body = WrapAngle(body + std::clamp(turn, -max_turn, max_turn));
+    }
+    if (along >= leg.Length()) {
+      stopped = true;
+      stop_elapsed = 0.0;
+      stop_total = rng.Uniform(o.min_stop_s, o.max_stop_s);
+      // Swinging faster than about 1.6 rad/s at the peak is not looking any more.
+      scan_amplitude = std::min(o.max_scan_rad * rng.Uniform(0.5, 1.0), 0.25 * stop_total) *
+                       (rng.Next() % 2 ? 1 : -1);
+    }
+  }
+  return out;
+}
+
+// The given trajectory at the pose period (linear in position and angles).
+std::vector<HeadSample> Resample(const std::vector<TimedPose>& trajectory, double dt) {
+  std::vector<HeadSample> out;
+  if (trajectory.empty()) return out;
+  const double t0 = trajectory.front().t_s, t1 = trajectory.back().t_s;
+  size_t i = 0;
+  for (int k = 0; t0 + k * dt <= t1 + 1e-9; ++k) {
+    const double t = t0 + k * dt;
+    while (i + 1 < trajectory.size() && trajectory[i + 1].t_s < t) ++i;
+    const TimedPose& a = trajectory[i];
+    const TimedPose& b = trajectory[std::min(i + 1, trajectory.size() - 1)];
+    const double span = b.t_s - a.t_s;
+    const double f = span > 0 ? std::clamp((t - a.t_s) / span, 0.0, 1.0) : 0.0;
+    out.push_back({a.position + f * (b.position - a.position),
+                   WrapAngle(a.heading + f * WrapAngle(b.heading - a.heading)),
+                   a.pitch + f * (b.pitch - a.pitch)});
+  }
+  return out;
+}
+
+Se2 ToSe2(const Pose2& p) { return {p.heading, p.position}; }
+
+}  // namespace
+
+std::optional<Scenario> ParseScenario(std::string_view name) {
+  if (name == "corridor") return Scenario::kCorridor;
+  if (name == "office") return Scenario::kOffice;
+  if (name == "glass") return Scenario::kGlass;
+  if (name == "hall") return Scenario::kHall;
+  if (name == "mismatch") return Scenario::kMismatch;
+  return std::nullopt;
+}
+
+const char* ToString(Scenario scenario) {
+  switch (scenario) {
+    case Scenario::kCorridor: return "corridor";
+    case Scenario::kOffice: return "office";
+    case Scenario::kGlass: return "glass";
+    case Scenario::kHall: return "hall";
+    case Scenario::kMismatch: return "mismatch";
+  }
+  return "?";
+}
+
+Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
+                    const std::vector<TimedPose>* trajectory) {
+  Simulation sim;
+  if (plan.segments.empty()) {
+    sim.error = "the plan has no walls";
+    return sim;
+  }
+  if (!(o.pose_period_s > 0) || o.rays_h < 1 || o.rays_v < 1 || o.poses_per_mesh_tick < 1 ||
+      !(o.chunk_m > 0) || !(o.patch_m > 0) || !(o.floor_cell_m > 0) || o.max_subdivisions < 1) {
+    sim.error = "invalid simulator options";
+    return sim;
+  }
+  SplitMix64 reality_rng = Stream(o.seed, 1), walk_rng = Stream(o.seed, 2);
+  SplitMix64 drift_rng = Stream(o.seed, 3), sensor_rng = Stream(o.seed, 4);
+  SplitMix64 mesh_rng = Stream(o.seed, 5), pick_rng = Stream(o.seed, 6);
+  const double dt = o.pose_period_s;
+
+  // Where one can walk: the plan's walls, all of them (so the walk never crosses one, even
+  // where reality lacks it).
+  FreeSpaceOptions fso;
+  fso.body_radius_m = o.body_radius_m;
+  FreeSpace free_space(plan.segments, plan.min, plan.max, fso);
+  std::vector<HeadSample> head;
+  std::vector<Eigen::Vector2d> keep_clear;  // a given trajectory: no objects on it
+  if (trajectory) {
+    head = Resample(*trajectory, dt);
+    if (head.size() < 2) {
+      sim.error = "the trajectory needs at least two poses spanning one pose period";
+      return sim;
+    }
+    for (const HeadSample& h : head) keep_clear.push_back(h.position);
+  } else if (free_space.empty()) {
+    sim.error = "no walkable region on the plan";
+    return sim;
+  }
+
+  // Reality.
+  RealityBuilder builder(plan, free_space, keep_clear, reality_rng);
+  builder.reality.ceiling_m = o.scenario == Scenario::kHall ? o.hall_ceiling_m : o.ceiling_m;
+  std::string scenario_text;
+  switch (o.scenario) {
+    case Scenario::kCorridor:
+      scenario_text = "corridor: reality equals the plan; goals far apart (long hallways)";
+      break;
+    case Scenario::kOffice: scenario_text = builder.Furnish(); break;
+    case Scenario::kGlass: scenario_text = builder.Glass(o.glass_share); break;
+    case Scenario::kMismatch:
+      scenario_text = builder.Mismatch(o.absent_share, builder.reality.ceiling_m);
+      break;
+    case Scenario::kHall: {
+      // The most open area: cells far from every wall, around the most open one. A space
+      // of 10 x 10 m has 5 m of clearance in its middle.
+      const int centre = free_space.MostOpenCell();
+      const double most = free_space.Clearance(free_space.CellCentre(centre));
+      const double keep = std::min(3.0, 0.6 * most);
+      if (!trajectory) free_space.RestrictTo(centre, keep);
+      scenario_text =
+          most >= 5.0
+              ? Format("hall: the walk stays in the plan's largest open area, at least %.1f m "
+                       "from walls (%.0f m2); ceiling %.1f m",
+                       keep, free_space.walkable_area_m2(), builder.reality.ceiling_m)
+              : Format("hall: the plan has no open area of 10 x 10 m; the walk stays in its most "
+                       "open area instead, at least %.1f m from walls (%.0f m2); ceiling %.1f m",
+                       keep, free_space.walkable_area_m2(), builder.reality.ceiling_m);
+      break;
+    }
+  }
+  sim.reality = builder.reality;
+  const Reality& reality = sim.reality;
+  const std::vector<Surface> surfaces = RealSurfaces(plan, reality, o.patch_m);
+
+  if (!trajectory) head = GenerateWalk(free_space, o.scenario, o, walk_rng);
+  if (head.size() < 2) {
+    sim.error = "the walk is too short";
+    return sim;
+  }
+  const size_t n = head.size();
+
+  // Ground truth and the SLAM drift: the true motion between poses, integrated with a scale
+  // error, a heading bias and random walks. The SLAM frame starts at the head, looking
+  // along +y (Unity's +z), as HoloLens sets it up.
+  const double k = o.drift_scale;
+  const double scale = 1.0 + k * o.scale_error_sigma * drift_rng.Gaussian();
+  const double bias = k * o.heading_bias_rad_per_m * drift_rng.Uniform(0.5, 1.5) *
+                      (drift_rng.Next() % 2 ? 1.0 : -1.0);
+  const double yaw_scale = 1.0 + k * o.yaw_scale_error_sigma * drift_rng.Gaussian();
+  Se2 slam{M_PI / 2, Eigen::Vector2d::Zero()};
+  sim.steps.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    SimulatedStep& step = sim.steps[i];
+    step.stamp_ns = static_cast<int64_t>(std::llround((o.start_s + i * dt) * 1e9));
+    step.true_plan = {head[i].position, head[i].yaw, o.eye_height_m};
+    if (i > 0) {
+      const Se2 motion = ToSe2(sim.steps[i - 1].true_plan).Inverse() * ToSe2(step.true_plan);
+      const double d = motion.t.norm();
+      sim.length_m += d;
+      const double heading_error =
+          bias * d + k * o.heading_walk_rad_per_sqrt_m * std::sqrt(d) * drift_rng.Gaussian() +
+          k * o.heading_walk_rad_per_sqrt_s * std::sqrt(dt) * drift_rng.Gaussian() +
+          (yaw_scale - 1.0) * motion.theta;
+      const Eigen::Vector2d position_error =
+          k * o.position_walk_m_per_sqrt_m * std::sqrt(d) *
+          Eigen::Vector2d(drift_rng.Gaussian(), drift_rng.Gaussian());
+      slam = slam * Se2{motion.theta + heading_error, scale * motion.t + position_error};
+    }
+    step.T_slam_plan = slam * ToSe2(step.true_plan).Inverse();
+    const double jitter_rad = k * o.jitter_rad * drift_rng.Gaussian();
+    const Eigen::Vector2d jitter_m =
+        k * o.jitter_m * Eigen::Vector2d(drift_rng.Gaussian(), drift_rng.Gaussian());
+    step.slam = {slam.t + jitter_m, WrapAngle(slam.theta + jitter_rad), 0.0};
+  }
+  sim.T_slam_plan_initial = sim.steps[0].T_slam_plan;
+  sim.duration_s = (n - 1) * dt;
+
+  // The sensor and the mesh.
+  struct Chunk {
+    std::set<PatchKey> seen;
+    bool live = false, dirty = false;
+    double emitted_s = 0.0;
+    uint64_t id = 0;
+  };
+  std::map<ChunkKey, Chunk> chunks;
+  auto chunk_of = [&](const Eigen::Vector2d& p) -> ChunkKey {
+    return {static_cast<int>(std::floor(p.x() / o.chunk_m)),
+            static_cast<int>(std::floor(p.y() / o.chunk_m))};
+  };
+  const double ceiling = reality.ceiling_m;
+  const double eye = o.eye_height_m;
+  std::vector<size_t> near;
+  for (size_t i = 0; i < n && o.mesh; ++i) {
+    SimulatedStep& step = sim.steps[i];
+    const Eigen::Vector3d eye_at(head[i].position.x(), head[i].position.y(), eye);
+    near.clear();
+    for (size_t s = 0; s < surfaces.size(); ++s)
+      if ((surfaces[s].centre - head[i].position).norm() <= o.max_range_m + surfaces[s].radius)
+        near.push_back(s);
+    for (int r = 0; r < o.rays_h * o.rays_v; ++r) {
+      const double yaw = head[i].yaw - 0.5 * o.fov_h_rad +
+                         (r % o.rays_h + sensor_rng.Uniform()) * o.fov_h_rad / o.rays_h;
+      const double pitch = head[i].pitch - 0.5 * o.fov_v_rad +
+                           (r / o.rays_h + sensor_rng.Uniform()) * o.fov_v_rad / o.rays_v;
+      const Eigen::Vector3d d(std::cos(pitch) * std::cos(yaw), std::cos(pitch) * std::sin(yaw),
+                              std::sin(pitch));
+      double best = o.max_range_m;
+      int hit = 0;  // a surface index, kFloor, kCeiling, or none (0 with best unchanged)
+      bool any = false;
+      if (d.z() < -1e-9 && -eye / d.z() < best) best = -eye / d.z(), hit = kFloor, any = true;
+      if (d.z() > 1e-9 && (ceiling - eye) / d.z() < best)
+        best = (ceiling - eye) / d.z(), hit = kCeiling, any = true;
+      for (size_t s : near) {
+        const Surface& f = surfaces[s];
+        const double dn = d.dot(f.normal);
+        if (std::abs(dn) < 1e-9) continue;
+        const double t = (f.origin - eye_at).dot(f.normal) / dn;
+        if (t <= 0 || t >= best) continue;
+        const Eigen::Vector3d q = eye_at + t * d - f.origin;
+        const double a = q.dot(f.u), b = q.dot(f.v);
+        if (a < 0 || b < 0 || a > f.u_len || b > f.v_len) continue;
+        best = t, hit = static_cast<int>(s), any = true;
+      }
+      // Nearer than the minimum range: seen, but the spatial mapping keeps none of it.
+      if (!any || best < o.min_range_m) continue;
+      const Eigen::Vector3d p = eye_at + best * d;
+      PatchKey key;
+      Eigen::Vector2d centre;
+      if (hit < 0) {
+        const int ix = static_cast<int>(std::floor(p.x() / o.floor_cell_m));
+        const int iy = static_cast<int>(std::floor(p.y() / o.floor_cell_m));
+        key = {hit, ix, iy};
+        centre = o.floor_cell_m * Eigen::Vector2d(ix + 0.5, iy + 0.5);
+      } else {
+        const Surface& f = surfaces[hit];
+        const Eigen::Vector3d q = p - f.origin;
+        const int iu = std::clamp(static_cast<int>(q.dot(f.u) / f.u_len * f.nu), 0, f.nu - 1);
+        const int iv = std::clamp(static_cast<int>(q.dot(f.v) / f.v_len * f.nv), 0, f.nv - 1);
+        key = {hit, iu, iv};
+        centre = (f.origin + (iu + 0.5) * f.u_len / f.nu * f.u + (iv + 0.5) * f.v_len / f.nv * f.v)
+                     .head<2>();
+      }
+      Chunk& chunk = chunks[chunk_of(centre)];
+      if (chunk.seen.insert(key).second) chunk.dirty = true;
+    }
+
+    if (i % o.poses_per_mesh_tick != 0) continue;
+    const double now_s = i * dt;
+    const Se2& T = step.T_slam_plan;
+    for (auto& [key, chunk] : chunks) {
+      if (chunk.id == 0)  // from the chunk's place, like a spatial-mapping volume's id
+        chunk.id = (static_cast<uint64_t>(key.first + (1 << 20)) << 21) +
+                   static_cast<uint64_t>(key.second + (1 << 20)) + 1;
+      const Eigen::Vector2d middle = o.chunk_m * Eigen::Vector2d(key.first + 0.5, key.second + 0.5);
+      if (!chunk.dirty) {
+        // Far behind: the headset sometimes drops a surface; seen again, it comes back.
+        if (chunk.live && (middle - head[i].position).norm() >= o.remove_min_distance_m &&
+            mesh_rng.Uniform() < o.remove_rate_per_s * dt * o.poses_per_mesh_tick) {
+          step.meshes.push_back({chunk.id, MeshChange::kRemoved, {}, {}});
+          ++sim.counts.removed;
+          chunk.live = false;
+          chunk.seen.clear();
+        }
+        continue;
+      }
+      if (chunk.live && now_s - chunk.emitted_s < o.update_after_s) continue;
+      SimMesh mesh;
+      mesh.id = chunk.id;
+      mesh.change = chunk.live ? MeshChange::kUpdated : MeshChange::kAdded;
+      ++(chunk.live ? sim.counts.updated : sim.counts.added);
+      chunk.live = true;
+      chunk.dirty = false;
+      chunk.emitted_s = now_s;
+      // Every patch seen so far, re-meshed with fresh noise in today's SLAM frame.
+      auto vertex = [&](const Eigen::Vector3d& p) {
+        const Eigen::Vector3d noisy =
+            p + o.vertex_noise_m *
+                    Eigen::Vector3d(mesh_rng.Gaussian(), mesh_rng.Gaussian(), mesh_rng.Gaussian());
+        const Eigen::Vector2d xy = T * noisy.head<2>();
+        mesh.vertices_slam.emplace_back(static_cast<float>(xy.x()), static_cast<float>(xy.y()),
+                                        static_cast<float>(noisy.z() - eye));
+      };
+      auto quads = [&](uint32_t first, int su, int sv) {
+        for (int b = 0; b < sv; ++b)
+          for (int a = 0; a < su; ++a) {
+            const uint32_t v00 = first + b * (su + 1) + a, v10 = v00 + 1;
+            const uint32_t v01 = v00 + su + 1, v11 = v01 + 1;
+            for (uint32_t t : {v00, v10, v11, v00, v11, v01}) mesh.triangles.push_back(t);
+          }
+      };
+      for (const auto& [surface, iu, iv] : chunk.seen) {
+        const auto first = static_cast<uint32_t>(mesh.vertices_slam.size());
+        if (surface < 0) {
+          const double z = surface == kFloor ? 0.0 : ceiling;
+          const double offset = o.patch_noise_m * mesh_rng.Gaussian();
+          for (int b = 0; b <= 1; ++b)
+            for (int a = 0; a <= 1; ++a)
+              vertex({(iu + a) * o.floor_cell_m, (iv + b) * o.floor_cell_m, z + offset});
+          quads(first, 1, 1);
+          continue;
+        }
+        const Surface& f = surfaces[surface];
+        const int su = 1 + static_cast<int>(mesh_rng.Next() % o.max_subdivisions);
+        const int sv = 1 + static_cast<int>(mesh_rng.Next() % o.max_subdivisions);
+        const double pu = f.u_len / f.nu, pv = f.v_len / f.nv;
+        const Eigen::Vector3d offset = o.patch_noise_m * mesh_rng.Gaussian() * f.normal;
+        for (int b = 0; b <= sv; ++b)
+          for (int a = 0; a <= su; ++a)
+            vertex(f.origin + offset + (iu + static_cast<double>(a) / su) * pu * f.u +
+                   (iv + static_cast<double>(b) / sv) * pv * f.v);
+        quads(first, su, sv);
+      }
+      sim.counts.vertices += mesh.vertices_slam.size();
+      sim.counts.triangles += mesh.triangles.size() / 3;
+      step.meshes.push_back(std::move(mesh));
+    }
+  }
+
+  // The wall pick (thesis section 6.3.4), made while scanning at the start: the plan side is
+  // the true nearest visible wall; the headset side is chosen so that AlignFromWallPick
+  // gives the truth composed with a random error of up to 9 degrees and 2.5 m about the
+  // wearer (thesis table 7.1), an error of the pick as a whole.
+  sim.pick_step = std::min(n - 1, static_cast<size_t>(std::llround(o.pick_time_s / dt)));
+  {
+    const SimulatedStep& at = sim.steps[sim.pick_step];
+    const Eigen::Vector2d wearer = at.true_plan.position;
+    double nearest = 1e300;
+    for (size_t i = 0; i < plan.segments.size(); ++i) {
+      if (!reality.plan_wall_present[i] || reality.plan_wall_glass[i]) continue;
+      const Eigen::Vector2d c = ClosestPointOnSegment(plan.segments[i], wearer);
+      if ((c - wearer).norm() >= nearest) continue;
+      nearest = (c - wearer).norm();
+      sim.pick.plan_point = c;
+      sim.pick.plan_normal = plan.segments[i].Normal();
+      if (sim.pick.plan_normal.dot(wearer - c) < 0) sim.pick.plan_normal *= -1.0;
+    }
+    if (nearest > 1e299) {  // every wall is glass or absent: pick the nearest plan wall
+      for (const Segment& s : plan.segments) {
+        const Eigen::Vector2d c = ClosestPointOnSegment(s, wearer);
+        if ((c - wearer).norm() >= nearest) continue;
+        nearest = (c - wearer).norm();
+        sim.pick.plan_point = c;
+        sim.pick.plan_normal = s.Normal();
+      }
+    }
+    const double angle = pick_rng.Uniform(-o.max_pick_error_rad, o.max_pick_error_rad);
+    const double offset = pick_rng.Uniform(0.0, o.max_pick_offset_m);
+    const double direction = pick_rng.Uniform(-M_PI, M_PI);
+    // About the wearer: E = Trans(wearer + offset) Rot(angle) Trans(-wearer).
+    sim.pick_error = Se2{0.0, wearer + offset * Eigen::Vector2d(std::cos(direction),
+                                                                std::sin(direction))} *
+                     Se2{angle, Eigen::Vector2d::Zero()} * Se2{0.0, -wearer};
+    const Se2 T_plan_slam = sim.pick_error * at.T_slam_plan.Inverse();
+    sim.pick.slam_point = T_plan_slam.Inverse() * sim.pick.plan_point;
+    sim.pick.slam_normal = Se2{-T_plan_slam.theta, {0, 0}}.R() * sim.pick.plan_normal;
+    sim.pick_height_m = o.pick_height_m - eye;
+  }
+
+  // Ten markers at equal distances along the walk, the first at the start and the last at
+  // the end (thesis section 5.1), each on the nearest pose.
+  {
+    std::vector<double> along(n, 0.0);
+    for (size_t i = 1; i < n; ++i)
+      along[i] = along[i - 1] +
+                 (sim.steps[i].true_plan.position - sim.steps[i - 1].true_plan.position).norm();
+    for (uint32_t m = 1; m <= 10; ++m) {
+      const double target = along.back() * (m - 1) / 9.0;
+      size_t i = std::lower_bound(along.begin(), along.end(), target) - along.begin();
+      i = std::min(i, n - 1);
+      if (i > 0 && target - along[i - 1] < along[i] - target) --i;
+      sim.steps[i].marker = m;
+    }
+  }
+
+  // The description, for SimulationInfo.
+  const double angle_deg = sim.pick_error.theta / kDeg;
+  std::string& text = sim.description;
+  text = std::string("scenario ") + scenario_text + ". ";
+  text += "Walkable region: " + free_space.region() + ". ";
+  text += trajectory ? Format("Walk: the given trajectory, %.0f m in %.0f s. ", sim.length_m,
+                              sim.duration_s)
+                     : Format("Walk: random goals joined by A* paths, %.1f-%.1f m/s, stops of "
+                              "%.0f-%.0f s; ",
+                              o.min_speed_mps, o.max_speed_mps, o.min_stop_s, o.max_stop_s) +
+                           Format("%.0f m in %.0f s (target %.0f m). ", sim.length_m,
+                                  sim.duration_s, o.target_length_m);
+  text += Format("Headset: poses every %.2f s, eye height %.2f m; sensor %.1f-%.1f m, ",
+                 o.pose_period_s, o.eye_height_m, o.min_range_m, o.max_range_m) +
+          Format("field of view %.0f x %.0f deg. ", o.fov_h_rad / kDeg, o.fov_v_rad / kDeg);
+  text += o.mesh ? Format("Mesh: %.0f m chunks, patches of %.2f m, noise %.3f m per patch and "
+                          "%.3f m per vertex; ",
+                          o.chunk_m, o.patch_m, o.patch_noise_m, o.vertex_noise_m) +
+                       Format("updated at most every %.0f s; walls and ceiling %.1f m. ",
+                              o.update_after_s, ceiling)
+                 : std::string("Mesh: off. ");
+  text += Format("SLAM drift: scale error %+.2f%%, heading bias %+.4f deg/m, ",
+                 100.0 * (scale - 1.0), bias / kDeg) +
+          Format("heading walk %.4f rad/sqrt(m), yaw scale error %+.2f%%. ",
+                 k * o.heading_walk_rad_per_sqrt_m, 100.0 * (yaw_scale - 1.0));
+  text += Format("Wall pick error: %.1f deg, %.2f m about the wearer.", angle_deg,
+                 (sim.pick_error * sim.steps[sim.pick_step].true_plan.position -
+                  sim.steps[sim.pick_step].true_plan.position)
+                     .norm());
+  return sim;
+}
+
+Se2 FitSe2(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to) {
+  const size_t n = std::min(from.size(), to.size());
+  if (n < 2) return Se2::Identity();
+  Eigen::Vector2d mf = Eigen::Vector2d::Zero(), mt = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < n; ++i) mf += from[i], mt += to[i];
+  mf /= static_cast<double>(n);
+  mt /= static_cast<double>(n);
+  // In 2D the SVD of the cross-covariance reduces to one angle: the rotation maximising
+  // sum (t_i - mt) . R (f_i - mf).
+  double dot = 0.0, cross = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d a = from[i] - mf, b = to[i] - mt;
+    dot += a.dot(b);
+    cross += Cross(a, b);
+  }
+  Se2 T{std::atan2(cross, dot), Eigen::Vector2d::Zero()};
+  T.t = mt - T.R() * mf;
+  return T;
+}
+
+DriftStats MeasureDrift(const Simulation& sim) {
+  DriftStats stats;
+  if (sim.steps.empty()) return stats;
+  stats.length_m = sim.length_m;
+  std::vector<Eigen::Vector2d> slam, truth;
+  for (const SimulatedStep& s : sim.steps) {
+    slam.push_back(s.slam.position);
+    truth.push_back(s.true_plan.position);
+  }
+  stats.end_error_m = (sim.T_slam_plan_initial.Inverse() * slam.back() - truth.back()).norm();
+  stats.best_fit = FitSe2(slam, truth);
+  double sum = 0.0;
+  for (size_t i = 0; i < slam.size(); ++i) {
+    const double e = (stats.best_fit * slam[i] - truth[i]).norm();
+    sum += e;
+    stats.best_fit_max_m = std::max(stats.best_fit_max_m, e);
+  }
+  stats.best_fit_mean_m = sum / static_cast<double>(slam.size());
+  return stats;
+}
+
+}  // namespace floorpose::sim

@@ -1,0 +1,327 @@
+#include "platform/engine.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+
+#include "platform/codec.h"
+#include "platform/config.h"
+#include "platform/floor_plan_io.h"
+
+namespace floorpose::platform {
+namespace {
+
+v1::RegistrationStats ToProto(const RegistrationResult& r) {
+  v1::RegistrationStats s;
+  s.set_method(r.method);
+  s.set_converged(r.converged);
+  s.set_iterations(r.iterations);
+  s.set_points(r.points);
+  s.set_inliers(r.inliers);
+  s.set_inlier_rmse_m(r.inlier_rmse);
+  s.set_rmse_m(r.rmse);
+  for (int i = 0; i < 3; ++i) s.add_normal_eigenvalues(r.eigenvalues(i));
+  s.set_time_ms(r.time_ms);
+  s.set_reason(r.reason);
+  return s;
+}
+
+v1::Reliability::Flag ToProto(ReliabilityFlag f) {
+  switch (f) {
+    case ReliabilityFlag::kReliable: return v1::Reliability::RELIABLE;
+    case ReliabilityFlag::kDegraded: return v1::Reliability::DEGRADED;
+    case ReliabilityFlag::kUnreliable: return v1::Reliability::UNRELIABLE;
+  }
+  return v1::Reliability::FLAG_UNSPECIFIED;
+}
+
+v1::DaemonStatus::State ToProto(TrackState s) {
+  switch (s) {
+    case TrackState::kWaitingForPlan: return v1::DaemonStatus::WAITING_FOR_PLAN;
+    case TrackState::kWaitingForAlignment: return v1::DaemonStatus::WAITING_FOR_ALIGNMENT;
+    case TrackState::kTracking: return v1::DaemonStatus::TRACKING;
+    case TrackState::kDegraded: return v1::DaemonStatus::DEGRADED;
+    case TrackState::kLost: return v1::DaemonStatus::LOST;
+  }
+  return v1::DaemonStatus::STATE_UNSPECIFIED;
+}
+
+v1::Alignment::Source ToProto(AlignmentSource s) {
+  switch (s) {
+    case AlignmentSource::kWallPick: return v1::Alignment::WALL_PICK;
+    case AlignmentSource::kFlip: return v1::Alignment::FLIP;
+    case AlignmentSource::kRegistration: return v1::Alignment::REGISTRATION;
+    case AlignmentSource::kNone: break;
+  }
+  return v1::Alignment::SOURCE_UNSPECIFIED;
+}
+
+}  // namespace
+
+Engine::Engine(v1::FloorposedConfig config, Publish publish, std::function<int64_t()> now_ns)
+    : config_(std::move(config)),
+      publish_(std::move(publish)),
+      now_ns_(std::move(now_ns)),
+      frame_(
+          ParseHeadsetFrame(config_.headset_frame()).value_or(HeadsetFrame::kUnityLeftHandedYUp)),
+      wall_options_(ToWallExtractionOptions(config_)),
+      tracker_(ToTrackerOptions(config_)),
+      store_(config_.tracking().snapshot_voxel_m()),
+      floor_(config_.floor()) {}
+
+std::string Engine::Start() {
+  if (config_.plan_path().empty()) return {};
+  const std::string e = LoadPlan(config_.plan_path(), config_.floor());
+  if (!e.empty()) spdlog::error("{}; waiting for a LoadPlan command", e);
+  return e;
+}
+
+Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
+  Done done;
+  if (job.index) {
+    const int64_t t0 = now_ns();
+    done.result = Register(job.cloud, job.normals, *job.index, job.initial, job.options);
+    done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
+  } else {
+    done.result.reason = "no floor plan";
+  }
+  done.job = std::move(job);
+  return done;
+}
+
+std::string Engine::LoadPlan(const std::string& path, const std::string& floor) {
+  FloorPlanParse parsed = LoadFloorPlan(path);
+  if (!parsed.ok()) return parsed.error;
+  ClosestWallIndex::Options index_options;
+  index_options.max_distance_m = std::max(3.0, config_.icp().max_correspondence_m());
+  auto index = std::make_shared<const ClosestWallIndex>(parsed.plan, index_options);
+  spdlog::info("floor plan {}: {} segments ({} dropped), {:.1f} x {:.1f} m, index {:.1f} MB", path,
+               parsed.plan.segments.size(), parsed.dropped_segments,
+               parsed.plan.max.x() - parsed.plan.min.x(), parsed.plan.max.y() - parsed.plan.min.y(),
+               static_cast<double>(index->MemoryBytes()) / 1e6);
+  tracker_.SetPlan(std::move(index));
+  floor_ = floor;
+  return {};
+}
+
+void Engine::Reject(const std::string& why) {
+  counters_.set_rejected_messages(counters_.rejected_messages() + 1);
+  spdlog::warn("rejected: {}", why);
+}
+
+void Engine::OnMeshDelta(const Envelope& e) {
+  if (!Mine(e)) return;  // another wearer's daemon takes it
+  counters_.set_mesh_deltas_in(counters_.mesh_deltas_in() + 1);
+  DecodedMesh mesh;
+  const std::string error = DecodeMeshDelta(e.payload, frame_, config_.limits(), &mesh);
+  if (!error.empty()) return Reject(error);
+  latest_stamp_ns_ = std::max(latest_stamp_ns_, mesh.stamp_ns);
+  if (mesh.change == v1::MeshDelta::REMOVED) {
+    if (store_.Remove(mesh.mesh_id)) {
+      counters_.set_meshes_removed(counters_.meshes_removed() + 1);
+    } else {
+      counters_.set_unknown_mesh_ids(counters_.unknown_mesh_ids() + 1);
+      spdlog::warn("REMOVED for unknown mesh {}: ignored", mesh.mesh_id);
+    }
+    return;
+  }
+  WallExtractionReport report;
+  std::vector<WallPoint> points =
+      ExtractWallPoints({&mesh.vertices, &mesh.triangles}, mesh.mesh_id, wall_options_, &report);
+  if (report.over_limit) {
+    return Reject("mesh " + std::to_string(mesh.mesh_id) + ": " +
+                  std::to_string(report.wall_area_m2) + " m2 of wall would give more than " +
+                  std::to_string(wall_options_.max_points) + " points");
+  }
+  if (report.bad_indices || report.degenerate_triangles || mesh.unusable_vertices) {
+    spdlog::warn(
+        "mesh {}: dropped {} triangles with bad indices, {} degenerate; {} unusable vertices",
+        mesh.mesh_id, report.bad_indices, report.degenerate_triangles, mesh.unusable_vertices);
+  }
+  const bool known = store_.Contains(mesh.mesh_id);
+  if (mesh.change == v1::MeshDelta::UPDATED && !known) {
+    // Keep the data: an UPDATED whose ADDED was lost is still a good mesh.
+    counters_.set_unknown_mesh_ids(counters_.unknown_mesh_ids() + 1);
+    spdlog::warn("UPDATED for unknown mesh {}: stored as new", mesh.mesh_id);
+  }
+  const size_t replaced = known ? store_.MeshPoints(mesh.mesh_id) : 0;
+  if (store_.points() - replaced + points.size() > config_.limits().max_wall_points()) {
+    return Reject("mesh " + std::to_string(mesh.mesh_id) + ": wall-point store full (" +
+                  std::to_string(store_.points()) + " points)");
+  }
+  store_.Upsert(mesh.mesh_id, std::move(points));
+  if (mesh.change == v1::MeshDelta::ADDED && !known)
+    counters_.set_meshes_added(counters_.meshes_added() + 1);
+  else
+    counters_.set_meshes_updated(counters_.meshes_updated() + 1);
+  spdlog::debug("mesh {} {}: {} wall points of {} triangles; store {} points in {} meshes",
+                mesh.mesh_id, v1::MeshDelta::Change_Name(mesh.change), report.vertical_triangles,
+                report.triangles, store_.points(), store_.meshes());
+}
+
+void Engine::OnHeadsetPose(const Envelope& e) {
+  if (!Mine(e)) return;
+  counters_.set_poses_in(counters_.poses_in() + 1);
+  DecodedPose pose;
+  const std::string error = DecodeHeadsetPose(e.payload, frame_, config_.limits(), &pose);
+  if (!error.empty()) return Reject(error);
+  latest_stamp_ns_ = std::max(latest_stamp_ns_, pose.stamp_ns);
+  PlanPoseEstimate est = tracker_.Correct(pose.pose_slam);
+  if (pose.tracking == v1::HeadsetPose::TRACKING_LOST) {
+    // The headset itself does not know where it is: neither do we.
+    est.reliability.flag = ReliabilityFlag::kUnreliable;
+    est.reliability.probability = 0.0;
+    est.reliability.reason = "headset tracking lost";
+  }
+  v1::PlanPose out;
+  out.set_source_stamp_ns(pose.stamp_ns);
+  out.set_x(est.pose.position.x());
+  out.set_y(est.pose.position.y());
+  out.set_heading(est.pose.heading);
+  out.set_height(est.pose.z);
+  out.set_floor(floor_);
+  out.set_alignment_version(est.alignment_version);
+  auto* rel = out.mutable_reliability();
+  rel->set_flag(ToProto(est.reliability.flag));
+  rel->set_probability(est.reliability.probability);
+  rel->set_rmse_m(est.reliability.rmse_m);
+  rel->set_reason(est.reliability.reason);
+  publish_(Topic::kPlanPose, out);
+  counters_.set_plan_poses_out(counters_.plan_poses_out() + 1);
+}
+
+void Engine::OnCommand(const Envelope& e) {
+  if (!Mine(e)) return;
+  counters_.set_commands_in(counters_.commands_in() + 1);
+  v1::Command cmd;
+  std::string error = DecodeCommand(e.payload, &cmd);
+  std::string done;
+  if (error.empty()) {
+    switch (cmd.command_case()) {
+      case v1::Command::kLoadPlan:
+        error =
+            LoadPlan(cmd.load_plan().path(),
+                     cmd.load_plan().floor().empty() ? config_.floor() : cmd.load_plan().floor());
+        if (error.empty()) {
+          store_.TakeNewPoints();  // the store is kept: the walls are the same walls
+          done = "plan loaded: " + cmd.load_plan().path();
+        }
+        break;
+      case v1::Command::kWallPick: {
+        const auto& p = cmd.wall_pick();
+        const Eigen::Vector3d point = PointToSlam(
+            frame_, {p.headset_point().x(), p.headset_point().y(), p.headset_point().z()});
+        const Eigen::Vector3d normal = PointToSlam(
+            frame_, {p.headset_normal().x(), p.headset_normal().y(), p.headset_normal().z()});
+        WallPick pick{point.head<2>(),
+                      normal.head<2>(),
+                      {p.plan_x(), p.plan_y()},
+                      {p.plan_normal_x(), p.plan_normal_y()}};
+        error = tracker_.ApplyWallPick(pick, latest_stamp_ns_);
+        if (error.empty()) done = "wall pick applied";
+        break;
+      }
+      case v1::Command::kFlip:
+        error = tracker_.Flip(latest_stamp_ns_);
+        if (error.empty()) done = "flipped";
+        break;
+      case v1::Command::kReset:
+        tracker_.Reset();
+        store_.Clear();
+        done = "reset: alignment and wall store cleared";
+        break;
+      case v1::Command::COMMAND_NOT_SET: break;
+    }
+  }
+  const std::string prefix = "request " + std::to_string(cmd.request_id()) + ": ";
+  if (!error.empty()) {
+    counters_.set_commands_refused(counters_.commands_refused() + 1);
+    spdlog::warn("command refused: {}{}", prefix, error);
+    PublishStatus(prefix + "refused: " + error);
+    return;
+  }
+  spdlog::info("command: {}{}", prefix, done);
+  // Always: after a reset or a new plan, version 0 tells late joiners the old one is void.
+  PublishAlignment();
+  PublishStatus(prefix + done);
+}
+
+std::optional<Engine::Job> Engine::TakeDueJob() {
+  if (running_) return std::nullopt;
+  if (!tracker_.RegistrationDue(latest_stamp_ns_, store_.points(), store_.new_points()))
+    return std::nullopt;
+  store_.TakeNewPoints();
+  tracker_.MarkRegistrationStarted(latest_stamp_ns_);
+  Job job;
+  const TrackerOptions& options = tracker_.options();
+  job.cloud = store_.Snapshot(config_.tracking().max_points(), &job.normals,
+                              options.local_meshes ? last_run_generation_ : 0);
+  last_run_generation_ = store_.generation();
+  job.index = tracker_.index();
+  job.options = ToRegistrationOptions(options, tracker_.alignment().source);
+  job.initial = tracker_.alignment().T_plan_slam;
+  job.version = tracker_.alignment().version;
+  job.stamp_ns = latest_stamp_ns_;
+  running_ = true;
+  return job;
+}
+
+void Engine::OnRegistrationDone(Done done) {
+  running_ = false;
+  const RegistrationResult& r = done.result;
+  counters_.set_registrations(counters_.registrations() + 1);
+  const Tracker::Decision d =
+      tracker_.Offer(r, done.job.cloud, done.job.version, done.job.stamp_ns);
+  last_registration_ = {r, d.accepted, d.reason};
+  spdlog::info(
+      "registration: {} points, {} inliers, inlier RMSE {:.3f} m, {} iterations, {:.1f} ms: {}{}",
+      r.points, r.inliers, r.inlier_rmse, r.iterations, r.time_ms,
+      d.accepted ? "accepted" : "rejected: ", d.reason);
+  if (d.accepted) {
+    counters_.set_registrations_accepted(counters_.registrations_accepted() + 1);
+    PublishAlignment();
+  }
+}
+
+void Engine::PublishAlignment() {
+  const AlignmentState& a = tracker_.alignment();
+  v1::Alignment out;
+  out.mutable_t_plan_slam()->set_theta(a.T_plan_slam.theta);
+  out.mutable_t_plan_slam()->set_x(a.T_plan_slam.t.x());
+  out.mutable_t_plan_slam()->set_y(a.T_plan_slam.t.y());
+  out.set_version(a.version);
+  out.set_source(ToProto(a.source));
+  out.set_floor(floor_);
+  out.set_stamp_ns(a.stamp_ns);
+  if (a.registration) {
+    *out.mutable_stats() = ToProto(*a.registration);
+    out.mutable_stats()->set_accepted(true);
+  }
+  publish_(Topic::kAlignment, out);
+}
+
+void Engine::PublishStatus(const std::string& message) {
+  v1::DaemonStatus s;
+  s.set_state(ToProto(tracker_.state()));
+  s.set_plan_id(tracker_.has_plan() ? tracker_.index()->plan().id : "");
+  s.set_live_meshes(store_.meshes());
+  s.set_wall_points(store_.points());
+  *s.mutable_counters() = counters_;
+  if (last_registration_) {
+    *s.mutable_last_registration() = ToProto(last_registration_->result);
+    s.mutable_last_registration()->set_accepted(last_registration_->accepted);
+    if (!last_registration_->accepted)
+      s.mutable_last_registration()->set_reason(last_registration_->why);
+  }
+  s.set_alignment_version(tracker_.alignment().version);
+  s.set_stamp_ns(now_ns_());
+  s.set_message(message);
+  publish_(Topic::kStatus, s);
+}
+
+std::string Engine::StatusLine() const {
+  return std::string(ToString(tracker_.state())) + ", " + std::to_string(store_.points()) +
+         " wall points, " + std::to_string(counters_.plan_poses_out()) + " plan poses";
+}
+
+}  // namespace floorpose::platform

@@ -1,0 +1,97 @@
+// The daemon's decisions without its threads or DDS: decode and validate inputs, keep the
+// wall store, correct poses, schedule and accept registrations, and say what to publish.
+// floorposed drives it from its io thread (registrations on a worker); `floorpose eval`
+// drives it from a recording on a virtual clock, registrations inline. Same code, so
+// the two give the same plan poses.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/frames.h"
+#include "core/registration.h"
+#include "core/tracker.h"
+#include "core/wall_store.h"
+#include "floorpose/v1/config.pb.h"
+#include "floorpose/v1/floorpose.pb.h"
+#include "platform/dds.h"
+
+namespace floorpose::platform {
+
+class Engine {
+ public:
+  // Receives every message to publish, with its topic.
+  using Publish = std::function<void(Topic, const google::protobuf::Message&)>;
+
+  // A registration to run: everything it needs, copied, so it can run on any thread.
+  struct Job {
+    std::vector<Eigen::Vector2d> cloud, normals;
+    std::shared_ptr<const ClosestWallIndex> index;
+    RegistrationOptions options;
+    Se2 initial;
+    uint64_t version = 0;
+    int64_t stamp_ns = 0;
+  };
+  struct Done {
+    Job job;
+    RegistrationResult result;
+  };
+  // Runs a job; now_ns() is read before and after to fill result.time_ms.
+  static Done Run(Job job, const std::function<int64_t()>& now_ns);
+
+  // now_ns stamps statuses: the daemon's monotonic clock, or a virtual one.
+  Engine(v1::FloorposedConfig config, Publish publish, std::function<int64_t()> now_ns);
+
+  // Loads the configured plan, if any; returns the error (the engine then waits for a
+  // LoadPlan command).
+  std::string Start();
+
+  // Inputs. Envelopes of other devices are ignored (another daemon serves them).
+  void OnMeshDelta(const Envelope& e);
+  void OnHeadsetPose(const Envelope& e);
+  void OnCommand(const Envelope& e);
+
+  // Registration: a job when one is due and none is running, and its result.
+  std::optional<Job> TakeDueJob();
+  void OnRegistrationDone(Done done);
+  bool registration_running() const { return running_; }
+
+  // Publishes a status (message: a command's result, or empty).
+  void PublishStatus(const std::string& message);
+  std::string StatusLine() const;
+
+  const v1::DaemonStatus::Counters& counters() const { return counters_; }
+  const Tracker& tracker() const { return tracker_; }
+  const WallStore& store() const { return store_; }
+  const v1::FloorposedConfig& config() const { return config_; }
+
+ private:
+  std::string LoadPlan(const std::string& path, const std::string& floor);
+  void PublishAlignment();
+  void Reject(const std::string& why);
+  bool Mine(const Envelope& e) const { return e.device_id == config_.dds().device_id(); }
+
+  v1::FloorposedConfig config_;
+  Publish publish_;
+  std::function<int64_t()> now_ns_;
+  HeadsetFrame frame_;
+  WallExtractionOptions wall_options_;
+  Tracker tracker_;
+  WallStore store_;
+  std::string floor_;
+  v1::DaemonStatus::Counters counters_;
+  struct LastRegistration {
+    RegistrationResult result;
+    bool accepted = false;
+    std::string why;
+  };
+  std::optional<LastRegistration> last_registration_;
+  int64_t latest_stamp_ns_ = 0;  // newest headset stamp seen: the scheduling clock
+  bool running_ = false;
+  uint64_t last_run_generation_ = 0;
+};
+
+}  // namespace floorpose::platform

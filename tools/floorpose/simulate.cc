@@ -1,0 +1,103 @@
+// `floorpose simulate`: a simulated walk over a floor plan, written as a recording of what
+// the headset would send (mesh deltas, poses, the wall pick) plus ground truth. Replay it
+// with `floorpose replay`; the ground truth topics are skipped there.
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cstdio>
+#include <memory>
+
+#include "platform/floor_plan_io.h"
+#include "tools/floorpose/commands.h"
+#include "tools/lib/simulate_recording.h"
+
+namespace floorpose::tools {
+namespace {
+
+struct SimulateOptions {
+  std::string plan;
+  std::string scenario = "office";
+  std::string trajectory;
+  std::string out;
+  std::string frame = "unity";
+  bool no_mesh = false;
+  sim::SimulatorOptions sim;
+  SimulateRecordingOptions recording;
+};
+
+int RunSimulate(SimulateOptions o) {
+  const auto start = std::chrono::steady_clock::now();
+  const FloorPlanParse plan = platform::LoadFloorPlan(o.plan);
+  if (!plan.ok()) {
+    spdlog::error("{}", plan.error);
+    return 1;
+  }
+  o.sim.scenario = *sim::ParseScenario(o.scenario);  // checked by CLI11
+  o.sim.mesh = !o.no_mesh;
+  o.recording.frame = *ParseHeadsetFrame(o.frame);
+  std::vector<sim::TimedPose> trajectory;
+  if (!o.trajectory.empty()) {
+    std::string text, error;
+    if (!platform::ReadFile(o.trajectory, 256 << 20, &text, &error) ||
+        !ParseTumTrajectory(text, &trajectory, &error)) {
+      spdlog::error("{}: {}", o.trajectory, error);
+      return 1;
+    }
+  }
+  SimulateRecordingResult result;
+  std::string error;
+  if (!SimulateToRecording(plan.plan, o.sim, o.trajectory.empty() ? nullptr : &trajectory,
+                           o.recording, o.out, &result, &error)) {
+    spdlog::error("{}", error);
+    return 1;
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const sim::Simulation& s = result.simulation;
+  const sim::DriftStats& d = result.drift;
+  std::printf("floorpose simulate: %s, scenario %s, seed %lu -> %s\n", plan.plan.id.c_str(),
+              o.scenario.c_str(), static_cast<unsigned long>(o.sim.seed), o.out.c_str());
+  std::printf("  %s\n", s.description.c_str());
+  std::printf("  walk                       %.0f m in %.0f s, %zu poses\n", s.length_m,
+              s.duration_s, s.steps.size());
+  std::printf("  meshes added/updated/removed  %zu / %zu / %zu (%zu vertices, %zu triangles)\n",
+              s.counts.added, s.counts.updated, s.counts.removed, s.counts.vertices,
+              s.counts.triangles);
+  std::printf("  SLAM drift                 %.2f m at the end (%.2f%% of the walk); best fit "
+              "mean %.2f m, max %.2f m\n",
+              d.end_error_m, d.length_m > 0 ? 100.0 * d.end_error_m / d.length_m : 0.0,
+              d.best_fit_mean_m, d.best_fit_max_m);
+  std::printf("  recording                  %zu records, %.1f MB, in %.1f s\n", result.records,
+              static_cast<double>(result.bytes) / 1e6, seconds);
+  return 0;
+}
+
+}  // namespace
+
+Run AddSimulateCommand(CLI::App& app) {
+  auto o = std::make_shared<SimulateOptions>();
+  app.add_option("--plan", o->plan, "floor plan (.geojson or .txt)")->required();
+  app.add_option("--seed", o->sim.seed, "simulation seed")->capture_default_str();
+  app.add_option("--scenario", o->scenario, "corridor, office, glass, hall or mismatch")
+      ->check(CLI::IsMember({"corridor", "office", "glass", "hall", "mismatch"}))
+      ->capture_default_str();
+  app.add_option("--trajectory", o->trajectory,
+                 "walk this TUM trajectory on the plan ('timestamp x y z qx qy qz qw')");
+  app.add_option("--out", o->out, "recording file to write")->required();
+  app.add_option("--length", o->sim.target_length_m, "walk length, metres")
+      ->capture_default_str();
+  app.add_option("--max-duration", o->sim.max_duration_s, "walk at most this long, seconds")
+      ->capture_default_str();
+  app.add_option("--drift-scale", o->sim.drift_scale, "SLAM drift, times the nominal")
+      ->capture_default_str();
+  app.add_option("--device", o->recording.device_id, "envelope device id")->capture_default_str();
+  app.add_option("--floor", o->recording.floor, "floor id of the ground truth")
+      ->capture_default_str();
+  app.add_option("--frame", o->frame, "headset convention: unity (Y up, left-handed) or zup")
+      ->check(CLI::IsMember({"unity", "zup"}))
+      ->capture_default_str();
+  app.add_flag("--no-mesh", o->no_mesh, "poses and ground truth only");
+  return [o] { return RunSimulate(*o); };
+}
+
+}  // namespace floorpose::tools

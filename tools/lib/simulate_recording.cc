@@ -1,0 +1,164 @@
+#include "tools/lib/simulate_recording.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#include "platform/recording.h"
+#include "tools/lib/headset_messages.h"
+
+namespace floorpose::tools {
+namespace {
+
+// Appends envelopes, one seq counter per topic.
+class SimRecorder {
+ public:
+  SimRecorder(const std::string& path, std::string device_id)
+      : writer_(path), device_id_(std::move(device_id)) {}
+  bool ok() const { return writer_.ok(); }
+  const std::string& error() const { return writer_.error(); }
+  size_t records() const { return records_; }
+
+  bool Append(const std::string& topic, int64_t stamp_ns, const google::protobuf::Message& msg) {
+    v1::RecordingRecord r;
+    r.set_receive_stamp_ns(stamp_ns);
+    r.set_topic(topic);
+    v1::Envelope* e = r.mutable_envelope();
+    e->set_device_id(device_id_);
+    e->set_seq(++seq_[topic]);
+    e->set_stamp_ns(stamp_ns);
+    if (!msg.SerializeToString(e->mutable_payload())) return false;
+    ++records_;
+    return writer_.Append(r);
+  }
+  bool Flush() { return writer_.Flush(); }
+
+ private:
+  platform::RecordingWriter writer_;
+  std::string device_id_;
+  std::map<std::string, uint64_t> seq_;
+  size_t records_ = 0;
+};
+
+}  // namespace
+
+bool WriteSimulationRecording(const sim::Simulation& simulation, const std::string& plan_id,
+                              const sim::SimulatorOptions& options,
+                              const SimulateRecordingOptions& recording, const std::string& path,
+                              size_t* records, std::string* error) {
+  if (!simulation.ok() || simulation.steps.empty()) {
+    *error = "nothing to write: " + simulation.error;
+    return false;
+  }
+  SimRecorder out(path, recording.device_id);
+  if (!out.ok()) {
+    *error = out.error();
+    return false;
+  }
+  const std::string mesh_topic = platform::TopicName(platform::Topic::kMeshDelta);
+  const std::string pose_topic = platform::TopicName(platform::Topic::kHeadsetPose);
+  const std::string command_topic = platform::TopicName(platform::Topic::kCommand);
+
+  v1::SimulationInfo info;
+  info.set_plan_id(plan_id);
+  info.set_scenario(sim::ToString(options.scenario));
+  info.set_seed(options.seed);
+  info.mutable_t_slam_plan_initial()->set_theta(simulation.T_slam_plan_initial.theta);
+  info.mutable_t_slam_plan_initial()->set_x(simulation.T_slam_plan_initial.t.x());
+  info.mutable_t_slam_plan_initial()->set_y(simulation.T_slam_plan_initial.t.y());
+  info.set_length_m(simulation.length_m);
+  info.set_duration_s(simulation.duration_s);
+  info.set_device_id(recording.device_id);
+  info.set_floor(recording.floor);
+  info.set_description(simulation.description);
+  bool ok = out.Append(kSimInfoTopic, simulation.steps.front().stamp_ns, info);
+
+  for (size_t i = 0; i < simulation.steps.size() && ok; ++i) {
+    const sim::SimulatedStep& step = simulation.steps[i];
+    for (const sim::SimMesh& mesh : step.meshes)
+      ok = ok && out.Append(mesh_topic, step.stamp_ns,
+                            ToMeshDelta(mesh, recording.frame, step.stamp_ns));
+    ok = ok && out.Append(pose_topic, step.stamp_ns,
+                          ToHeadsetPose(step.slam, recording.frame, step.stamp_ns));
+    v1::GroundTruthPose truth;
+    truth.set_stamp_ns(step.stamp_ns);
+    truth.set_x(step.true_plan.position.x());
+    truth.set_y(step.true_plan.position.y());
+    truth.set_heading(step.true_plan.heading);
+    truth.set_floor(recording.floor);
+    truth.set_marker(step.marker);
+    ok = ok && out.Append(kGroundTruthTopic, step.stamp_ns, truth);
+    if (i == simulation.pick_step)
+      ok = ok && out.Append(command_topic, step.stamp_ns,
+                            ToWallPickCommand(simulation.pick, simulation.pick_height_m,
+                                              recording.frame, 1));
+  }
+  ok = ok && out.Flush();
+  if (!ok) {
+    *error = path + ": write failed" + (out.error().empty() ? "" : ": " + out.error());
+    return false;
+  }
+  if (records) *records = out.records();
+  return true;
+}
+
+bool SimulateToRecording(const FloorPlan& plan, const sim::SimulatorOptions& options,
+                         const std::vector<sim::TimedPose>* trajectory,
+                         const SimulateRecordingOptions& recording, const std::string& path,
+                         SimulateRecordingResult* result, std::string* error) {
+  result->simulation = sim::Simulate(plan, options, trajectory);
+  if (!result->simulation.ok()) {
+    *error = plan.id + ": " + result->simulation.error;
+    return false;
+  }
+  result->drift = sim::MeasureDrift(result->simulation);
+  if (!WriteSimulationRecording(result->simulation, plan.id, options, recording, path,
+                                &result->records, error))
+    return false;
+  std::error_code ec;
+  result->bytes = std::filesystem::file_size(path, ec);
+  return true;
+}
+
+bool ParseTumTrajectory(std::string_view text, std::vector<sim::TimedPose>* out,
+                        std::string* error) {
+  std::istringstream in{std::string(text)};
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+    std::istringstream ls(line);
+    double v[8];
+    int got = 0;
+    while (got < 8 && (ls >> v[got])) ++got;
+    if (got == 0) continue;
+    bool finite = true;
+    for (int i = 0; i < got; ++i) finite = finite && std::isfinite(v[i]);
+    const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
+    if (got != 8 || !finite || q.norm() < 1e-6) {
+      *error = "line " + std::to_string(n) + ": expected 'timestamp x y z qx qy qz qw'";
+      return false;
+    }
+    if (!out->empty() && !(v[0] > out->back().t_s)) {
+      *error = "line " + std::to_string(n) + ": timestamps must increase";
+      return false;
+    }
+    const Eigen::Vector3d forward = q.normalized() * Eigen::Vector3d::UnitX();
+    sim::TimedPose pose;
+    pose.t_s = v[0];
+    pose.position = {v[1], v[2]};
+    pose.heading = std::atan2(forward.y(), forward.x());
+    pose.pitch = std::asin(std::clamp(forward.z(), -1.0, 1.0));
+    out->push_back(pose);
+  }
+  if (out->size() < 2) {
+    *error = "a trajectory needs at least two poses";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace floorpose::tools

@@ -1,0 +1,54 @@
+// `floorpose simulate` as functions: a simulated walk (core/sim/simulator.h) written as a
+// recording of the envelopes the daemon would receive, plus ground truth on topics that
+// never exist on DDS (replay skips them). Used by the command line and the tests.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/floor_plan.h"
+#include "core/frames.h"
+#include "core/sim/simulator.h"
+
+namespace floorpose::tools {
+
+inline constexpr char kSimInfoTopic[] = "floorpose/sim/info";
+inline constexpr char kGroundTruthTopic[] = "floorpose/sim/ground_truth";
+
+struct SimulateRecordingOptions {
+  std::string device_id = "sim-headset";
+  std::string floor = "0";  // floor id of the ground truth
+  HeadsetFrame frame = HeadsetFrame::kUnityLeftHandedYUp;
+};
+
+struct SimulateRecordingResult {
+  sim::Simulation simulation;
+  sim::DriftStats drift;
+  size_t records = 0;
+  uint64_t bytes = 0;
+};
+
+// Writes a recording: SimulationInfo first, then in time order per pose its mesh deltas,
+// the HeadsetPose and its GroundTruthPose, and the wall-pick Command right after the pick
+// step's pose. Every stamp (envelope, message and receive stamp) is the virtual time, so
+// the file depends on the simulation only. Envelope seq counts per topic from 1.
+bool WriteSimulationRecording(const sim::Simulation& simulation, const std::string& plan_id,
+                              const sim::SimulatorOptions& options,
+                              const SimulateRecordingOptions& recording, const std::string& path,
+                              size_t* records, std::string* error);
+
+// Simulate, then WriteSimulationRecording; `trajectory` may be null (a generated walk).
+bool SimulateToRecording(const FloorPlan& plan, const sim::SimulatorOptions& options,
+                         const std::vector<sim::TimedPose>* trajectory,
+                         const SimulateRecordingOptions& recording, const std::string& path,
+                         SimulateRecordingResult* result, std::string* error);
+
+// A TUM trajectory on the plan: `timestamp x y z qx qy qz qw` per line (seconds, metres;
+// '#' starts a comment), times increasing. The viewing direction is the rotated x axis
+// (heading and pitch from it); z is not used (the simulator's eye height applies).
+bool ParseTumTrajectory(std::string_view text, std::vector<sim::TimedPose>* out,
+                        std::string* error);
+
+}  // namespace floorpose::tools
