@@ -69,6 +69,10 @@ std::vector<WallPoint> ExtractWallPoints(const SlamMesh& mesh, uint64_t mesh_id,
       const double s = std::sqrt(rng.Uniform());
       const double u = rng.Uniform();
       const Eigen::Vector3d p = (1.0 - s) * f.v0 + s * (1.0 - u) * f.v1 + s * u * f.v2;
+      if (p.z() < options.min_z || p.z() > options.max_z) {
+        ++r.outside_band;
+        continue;
+      }
       out.push_back({p.head<2>().cast<float>(), f.n2});  // drop z (section 4.1.1)
     }
   }

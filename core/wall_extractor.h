@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,11 @@ struct WallExtractionOptions {
   // A mesh that would give more points than this gives none (report.over_limit): memory
   // stays bounded whatever the triangles claim. 0 = no limit.
   size_t max_points = 200000;
+  // Keep only points in this height band (slam z, metres): above the furniture, desks and
+  // people that are not on the plan, below the ceiling. The daemon sets it from the
+  // wearer's eye height; the default keeps everything.
+  double min_z = -std::numeric_limits<double>::infinity();
+  double max_z = std::numeric_limits<double>::infinity();
 };
 
 // A mesh already in the slam frame (right-handed, Z up, world coordinates).
@@ -36,6 +42,7 @@ struct WallExtractionReport {
   size_t bad_indices = 0;
   double wall_area_m2 = 0.0;
   bool over_limit = false;  // the expected point count exceeded max_points
+  size_t outside_band = 0;  // sampled points dropped by the height band
 };
 
 // Samples points on the vertical triangles, their number proportional to area: each

@@ -104,6 +104,16 @@ std::string Engine::LoadPlan(const std::string& path, const std::string& floor) 
   return {};
 }
 
+WallExtractionOptions Engine::BandedWallOptions() const {
+  WallExtractionOptions o = wall_options_;
+  const double lo = config_.walls().min_height_above_eye_m();
+  if (eye_z_ && lo > -10) {
+    o.min_z = *eye_z_ + lo;
+    o.max_z = *eye_z_ + config_.walls().max_height_above_eye_m();
+  }
+  return o;
+}
+
 void Engine::Reject(const std::string& why) {
   counters_.set_rejected_messages(counters_.rejected_messages() + 1);
   spdlog::warn("rejected: {}", why);
@@ -126,8 +136,8 @@ void Engine::OnMeshDelta(const Envelope& e) {
     return;
   }
   WallExtractionReport report;
-  std::vector<WallPoint> points =
-      ExtractWallPoints({&mesh.vertices, &mesh.triangles}, mesh.mesh_id, wall_options_, &report);
+  std::vector<WallPoint> points = ExtractWallPoints({&mesh.vertices, &mesh.triangles}, mesh.mesh_id,
+                                                    BandedWallOptions(), &report);
   if (report.over_limit) {
     return Reject("mesh " + std::to_string(mesh.mesh_id) + ": " +
                   std::to_string(report.wall_area_m2) + " m2 of wall would give more than " +
@@ -166,6 +176,7 @@ void Engine::OnHeadsetPose(const Envelope& e) {
   const std::string error = DecodeHeadsetPose(e.payload, frame_, config_.limits(), &pose);
   if (!error.empty()) return Reject(error);
   latest_stamp_ns_ = std::max(latest_stamp_ns_, pose.stamp_ns);
+  eye_z_ = pose.pose_slam.z;
   PlanPoseEstimate est = tracker_.Correct(pose.pose_slam);
   if (pose.tracking == v1::HeadsetPose::TRACKING_LOST) {
     // The headset itself does not know where it is: neither do we.

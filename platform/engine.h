@@ -72,6 +72,8 @@ class Engine {
   std::string LoadPlan(const std::string& path, const std::string& floor);
   void PublishAlignment();
   void Reject(const std::string& why);
+  // The wall options with the height band about the wearer's eyes, once a pose is known.
+  WallExtractionOptions BandedWallOptions() const;
   bool Mine(const Envelope& e) const { return e.device_id == config_.dds().device_id(); }
 
   v1::FloorposedConfig config_;
@@ -90,6 +92,7 @@ class Engine {
   };
   std::optional<LastRegistration> last_registration_;
   int64_t latest_stamp_ns_ = 0;  // newest headset stamp seen: the scheduling clock
+  std::optional<double> eye_z_;  // slam height of the latest pose
   bool running_ = false;
   uint64_t last_run_generation_ = 0;
 };

@@ -1,5 +1,6 @@
 #include "core/sim/simulator.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -257,7 +258,8 @@ class RealityBuilder {
       const Eigen::Vector2d dir = (s.b - s.a).normalized();
       Eigen::Vector2d n = s.Normal();
       const Eigen::Vector2d at = s.a + dir * rng_.Uniform(0.7, s.Length() - 0.7);
-      if (free_space_.Clearance(at + 0.8 * n) < free_space_.Clearance(at - 0.8 * n)) n = -n;
+      if (!free_space_.Walkable(at + 0.8 * n)) n = -n;
+      if (!free_space_.Walkable(at + 0.8 * n)) return false;  // not a wall of a room we walk
       return Place(Rectangle(at + n * 0.28, std::atan2(dir.y(), dir.x()), 1.2, 0.5), 2.0,
                    "cabinet");
     });
@@ -386,17 +388,27 @@ std::vector<HeadSample> GenerateWalk(const FreeSpace& fs, Scenario scenario,
       p = fs.CellCentre(cells[rng.Next() % cells.size()]);
     return p;
   };
-  // Goals: random places, not too close; for the corridor scenario the farthest of a few,
-  // so that the walk strings long hallways together.
+  // Goals: random places, not too close. Of a few candidates, the corridor scenario takes
+  // the farthest from here, so that the walk strings long hallways together; the others
+  // the farthest from every goal so far, so that the walk explores the building (uniform
+  // goals alone would keep returning to its largest room).
+  std::vector<Eigen::Vector2d> visited;
   auto choose_goal = [&](const Eigen::Vector2d& from) {
+    auto score = [&](const Eigen::Vector2d& p) {
+      if (scenario == Scenario::kCorridor) return (p - from).norm();
+      double nearest = 1e300;
+      for (const Eigen::Vector2d& v : visited) nearest = std::min(nearest, (p - v).norm());
+      return nearest;
+    };
     Eigen::Vector2d best = random_point(0.5);
-    const int candidates = scenario == Scenario::kCorridor ? 8 : 1;
+    const int candidates = scenario == Scenario::kCorridor ? 8 : 4;
     for (int tries = 0, found = 0; tries < 40 && found < candidates; ++tries) {
       const Eigen::Vector2d p = random_point(0.5);
       if ((p - from).norm() < o.min_goal_distance_m) continue;
-      if (found == 0 || (p - from).norm() > (best - from).norm()) best = p;
+      if (found == 0 || score(p) > score(best)) best = p;
       ++found;
     }
+    visited.push_back(best);
     return best;
   };
 
@@ -404,6 +416,7 @@ std::vector<HeadSample> GenerateWalk(const FreeSpace& fs, Scenario scenario,
   const double phase1 = rng.Uniform(0, 2 * M_PI), phase2 = rng.Uniform(0, 2 * M_PI);
   const double phase3 = rng.Uniform(0, 2 * M_PI);
   Eigen::Vector2d position = random_point(0.5);
+  visited.push_back(position);
   double body = rng.Uniform(-M_PI, M_PI);
   // Stopped: scanning the room, the head swinging scan_amplitude to either side once.
   bool stopped = true;

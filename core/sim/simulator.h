@@ -14,7 +14,7 @@
 //   ceiling; hits within 0.8-3.5 m mark surface patches as seen, so the mesh grows only
 //   where the head looks.
 // - The mesh: 2 m columns (one mesh id each) re-meshed from every patch seen in them, in
-//   the SLAM frame of that moment, with 3.5 cm of noise per patch and 2 cm per vertex:
+//   the SLAM frame of that moment, with 3.5 cm of noise per patch and 2.5 cm per vertex:
 //   ADDED, then UPDATED when more was seen, sometimes REMOVED when far behind.
 // - The SLAM drift: odometry scale error, heading bias and random walk, calibrated so that
 //   a few hundred metres end about 1% of the distance off and the best SE(2) fit of the
@@ -90,7 +90,7 @@ struct SimulatorOptions {
   double floor_cell_m = 0.5;   // floor and ceiling patches
   int max_subdivisions = 3;    // a wall patch is 1..this many quads along each side
   double patch_noise_m = 0.035;  // per patch, along its normal (depth error of a surface)
-  double vertex_noise_m = 0.02;  // per vertex and axis
+  double vertex_noise_m = 0.025;  // per vertex and axis
   int poses_per_mesh_tick = 4;   // the mesh is updated every this many poses...
   double update_after_s = 4.0;   // ...and a chunk at most this often
   double remove_rate_per_s = 5e-4;   // chance per second that a far chunk is REMOVED
@@ -100,12 +100,12 @@ struct SimulatorOptions {
   // walk per metre and per second, a position random walk, and pose jitter that does not
   // accumulate. drift_scale multiplies all of them.
   double drift_scale = 1.0;
-  double scale_error_sigma = 0.004;
-  double heading_bias_rad_per_m = 6e-5;   // magnitude, times a uniform 0.5..1.5
-  double heading_walk_rad_per_sqrt_m = 1.2e-3;
-  double heading_walk_rad_per_sqrt_s = 2e-4;
-  double yaw_scale_error_sigma = 0.002;  // of the head's turning
-  double position_walk_m_per_sqrt_m = 0.01;
+  double scale_error_sigma = 0.01;
+  double heading_bias_rad_per_m = 3.5e-4;  // magnitude, times a uniform 0.5..1.5
+  double heading_walk_rad_per_sqrt_m = 6e-3;
+  double heading_walk_rad_per_sqrt_s = 6e-4;
+  double yaw_scale_error_sigma = 0.005;  // of the head's turning
+  double position_walk_m_per_sqrt_m = 0.03;
   double jitter_m = 0.01, jitter_rad = 0.002;
 
   // The wall pick: done at this time, off by a uniform angle up to max_pick_error_rad and

@@ -13,5 +13,7 @@ Run AddDemoCommand(CLI::App& app);
 Run AddReplayCommand(CLI::App& app);
 Run AddRecordCommand(CLI::App& app);
 Run AddSimulateCommand(CLI::App& app);
+Run AddEvalCommand(CLI::App& app);
+Run AddEvalSuiteCommand(CLI::App& app);
 
 }  // namespace floorpose::tools

@@ -20,6 +20,10 @@ int main(int argc, char** argv) {
   add("record", "write every floorpose topic to a recording", floorpose::tools::AddRecordCommand);
   add("simulate", "write a simulated walk over a floor plan, with ground truth, as a recording",
       floorpose::tools::AddSimulateCommand);
+  add("eval", "run a recording through the daemon's code and score it against ground truth",
+      floorpose::tools::AddEvalCommand);
+  add("eval-suite", "every plan x scenario x seed x method, as a table",
+      floorpose::tools::AddEvalSuiteCommand);
   CLI11_PARSE(app, argc, argv);
   floorpose::platform::SetUpLogging("floorpose", log_level);
   for (auto& [sub, run] : commands)

@@ -1,0 +1,72 @@
+// `floorpose eval`: a recording through the daemon's own code on a virtual clock, scored
+// against its ground truth with the thesis' metrics.
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <fstream>
+
+#include "platform/config.h"
+#include "platform/floor_plan_io.h"
+#include "tools/floorpose/commands.h"
+#include "tools/lib/evaluation.h"
+
+namespace floorpose::tools {
+namespace {
+
+struct EvalOptions {
+  std::string plan, recording, method = "icp", baseline = "none", config, svg;
+  bool json = false;
+};
+
+int RunEval(const EvalOptions& o) {
+  spdlog::set_level(spdlog::level::warn);  // the report is the output, not the daemon's log
+  v1::FloorposedConfig config;
+  std::string error;
+  if (!platform::LoadConfig(o.config, &config, &error)) {
+    spdlog::error("{}", error);
+    return 2;
+  }
+  config.set_plan_path(o.plan);
+  config.mutable_registration()->set_method(o.method);
+  config.set_log_level("warn");
+  if (const std::string e = platform::ValidateConfig(config); !e.empty()) {
+    spdlog::error("{}", e);
+    return 2;
+  }
+  const Baseline baseline = o.baseline == "best-fit" ? Baseline::kBestFit
+                            : o.baseline == "none"   ? Baseline::kNone
+                                                     : Baseline::kNoAlgorithm;
+  EvalReport report;
+  if (!Evaluate(config, o.recording, baseline, &report, &error)) {
+    spdlog::error("{}", error);
+    return 1;
+  }
+  if (!o.svg.empty()) {
+    const FloorPlanParse plan = platform::LoadFloorPlan(o.plan);
+    std::ofstream(o.svg) << ToSvg(plan.plan, report);
+  }
+  std::fputs((o.json ? ToJson(report) + "\n" : ToText(report)).c_str(), stdout);
+  return 0;
+}
+
+}  // namespace
+
+Run AddEvalCommand(CLI::App& app) {
+  auto o = std::make_shared<EvalOptions>();
+  app.add_option("--plan", o->plan, "floor plan (.geojson or .txt)")->required();
+  app.add_option("--recording", o->recording, "recording made by `floorpose simulate`")->required();
+  app.add_option("--method", o->method, "registration method")
+      ->check(CLI::IsMember({"icp", "ik", "hough"}))
+      ->capture_default_str();
+  app.add_option("--baseline", o->baseline,
+                 "none: register as configured; no-registration: the wall pick only; "
+                 "best-fit: one SE(2) fitted to the whole walk after the fact")
+      ->check(CLI::IsMember({"none", "no-registration", "best-fit"}))
+      ->capture_default_str();
+  app.add_option("--config", o->config, "floorposed configuration to evaluate with");
+  app.add_flag("--json", o->json, "print one JSON object");
+  app.add_option("--svg", o->svg, "draw the plan, both trajectories and the markers here");
+  return [o] { return RunEval(*o); };
+}
+
+}  // namespace floorpose::tools

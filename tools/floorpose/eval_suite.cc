@@ -1,0 +1,242 @@
+// `floorpose eval-suite`: every plan x scenario x seed simulated once, then evaluated with
+// every method and both baselines; a markdown table like thesis table 7.10 and JSON.
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "core/sim/simulator.h"
+#include "platform/config.h"
+#include "platform/floor_plan_io.h"
+#include "tools/floorpose/commands.h"
+#include "tools/lib/evaluation.h"
+#include "tools/lib/simulate_recording.h"
+
+namespace floorpose::tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct SuiteOptions {
+  std::vector<std::string> plans;  // files or directories (searched for *.geojson)
+  int seeds = 3;
+  std::string out;
+  std::vector<std::string> scenarios = {"corridor", "office", "glass", "hall", "mismatch"};
+  std::vector<std::string> methods = {"icp", "ik", "hough", "no-registration", "best-fit"};
+  double length_m = 0;  // 0: the simulator's default
+  int jobs = 0;
+};
+
+struct SuiteRun {
+  std::string plan_path, plan_id, scenario;
+  uint64_t seed;
+  std::string recording;
+};
+
+std::vector<std::string> PlanFiles(const std::vector<std::string>& inputs) {
+  std::vector<std::string> out;
+  for (const std::string& in : inputs) {
+    std::error_code ec;
+    if (fs::is_directory(in, ec)) {
+      for (const auto& e : fs::recursive_directory_iterator(in, ec))
+        if (e.is_regular_file() && e.path().extension() == ".geojson") out.push_back(e.path());
+    } else {
+      out.push_back(in);
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+int RunSuite(const SuiteOptions& o) {
+  spdlog::set_level(spdlog::level::warn);  // thousands of registrations: only problems
+  const std::vector<std::string> plans = PlanFiles(o.plans);
+  if (plans.empty()) {
+    spdlog::error("no floor plans (*.geojson) found in the given --plans");
+    return 2;
+  }
+  fs::create_directories(fs::path(o.out) / "recordings");
+  fs::create_directories(fs::path(o.out) / "svg");
+  std::vector<SuiteRun> runs;
+  for (const std::string& plan : plans)
+    for (const std::string& scenario : o.scenarios)
+      for (int seed = 1; seed <= o.seeds; ++seed) {
+        const std::string id = fs::path(plan).stem().string();
+        runs.push_back({plan, id, scenario, static_cast<uint64_t>(seed),
+                        (fs::path(o.out) / "recordings" /
+                         (id + "_" + scenario + "_" + std::to_string(seed) + ".rec"))
+                            .string()});
+      }
+  std::map<std::string, FloorPlan> loaded;
+  for (const std::string& p : plans) {
+    FloorPlanParse parse = platform::LoadFloorPlan(p);
+    if (!parse.ok()) {
+      spdlog::error("{}", parse.error);
+      return 1;
+    }
+    loaded[p] = parse.plan;
+  }
+
+  // Work items: one simulation, then its evaluations; spread over the cores.
+  std::vector<EvalReport> reports;
+  std::mutex mu;
+  std::atomic<size_t> next{0};
+  std::atomic<int> failures{0};
+  auto worker = [&] {
+    for (size_t i = next++; i < runs.size(); i = next++) {
+      const SuiteRun& run = runs[i];
+      sim::SimulatorOptions sim;
+      sim.seed = run.seed;
+      sim.scenario = *sim::ParseScenario(run.scenario);
+      if (o.length_m > 0) sim.target_length_m = o.length_m;
+      SimulateRecordingResult simulated;
+      std::string error;
+      if (!SimulateToRecording(loaded[run.plan_path], sim, nullptr, {}, run.recording, &simulated,
+                               &error)) {
+        spdlog::error("{}: {}", run.recording, error);
+        ++failures;
+        continue;
+      }
+      for (const std::string& method : o.methods) {
+        v1::FloorposedConfig config;
+        config.set_plan_path(run.plan_path);
+        config.set_log_level("warn");
+        const bool registers = method != "no-registration" && method != "best-fit";
+        config.mutable_registration()->set_method(registers ? method : "icp");
+        const Baseline baseline = method == "no-registration" ? Baseline::kNoAlgorithm
+                                  : method == "best-fit"      ? Baseline::kBestFit
+                                                              : Baseline::kNone;
+        EvalReport report;
+        if (!Evaluate(config, run.recording, baseline, &report, &error)) {
+          spdlog::error("{} {}: {}", run.recording, method, error);
+          ++failures;
+          continue;
+        }
+        report.plan_id = run.plan_id;
+        std::lock_guard lock(mu);
+        std::printf(
+            "%-12s %-9s seed %lu %-16s mean %6.2f m  max %6.2f m  reliable %3.0f%% (%3.0f%% within "
+            "1 m)\n",
+            run.plan_id.c_str(), run.scenario.c_str(), static_cast<unsigned long>(run.seed),
+            report.method.c_str(), report.mean_error_m, report.max_error_m,
+            100 * report.reliable_fraction, 100 * report.reliable_precision_1m);
+        std::fflush(stdout);
+        report.track.shrink_to_fit();
+        report.plan_poses.clear();
+        reports.push_back(std::move(report));
+      }
+    }
+  };
+  const int jobs = o.jobs > 0 ? o.jobs : std::max(1u, std::thread::hardware_concurrency());
+  std::vector<std::thread> threads;
+  for (int j = 0; j < jobs; ++j) threads.emplace_back(worker);
+  for (std::thread& t : threads) t.join();
+
+  std::sort(reports.begin(), reports.end(), [](const EvalReport& a, const EvalReport& b) {
+    return std::tie(a.plan_id, a.scenario, a.seed, a.method) <
+           std::tie(b.plan_id, b.scenario, b.seed, b.method);
+  });
+  {
+    std::ofstream json(fs::path(o.out) / "results.json");
+    for (const EvalReport& r : reports) json << ToJson(r) << "\n";
+  }
+  // Markdown: per plan and scenario, the mean error over seeds per method (table 7.10),
+  // then per method over everything.
+  std::ostringstream md;
+  md.setf(std::ios::fixed);
+  md.precision(2);
+  md << "| plan | scenario |";
+  for (const std::string& m : o.methods) md << " " << m << " |";
+  md << "\n|---|---|";
+  for (size_t i = 0; i < o.methods.size(); ++i) md << "---|";
+  md << "\n";
+  std::map<std::pair<std::string, std::string>, std::map<std::string, std::vector<double>>> cell;
+  std::map<std::string, std::vector<const EvalReport*>> by_method;
+  for (const EvalReport& r : reports) {
+    cell[{r.plan_id, r.scenario}][r.method].push_back(r.mean_error_m);
+    by_method[r.method].push_back(&r);
+  }
+  for (const auto& [key, methods] : cell) {
+    md << "| " << key.first << " | " << key.second << " |";
+    for (const std::string& m : o.methods) {
+      auto it = methods.find(m);
+      if (it == methods.end() || it->second.empty()) {
+        md << " - |";
+        continue;
+      }
+      double sum = 0;
+      for (double v : it->second) sum += v;
+      md << " " << sum / static_cast<double>(it->second.size()) << " |";
+    }
+    md << "\n";
+  }
+  md << "\nMean error in metres over " << o.seeds
+     << " seeds. Per method over all runs:\n\n"
+        "| method | runs | mean error | p95 error | max error | final error | marker error | "
+        "runs diverged (> 5 m) | reliable | reliable within 1 m | registration ms (median) |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const std::string& m : o.methods) {
+    const auto& rs = by_method[m];
+    if (rs.empty()) continue;
+    double mean = 0, p95 = 0, mx = 0, fin = 0, marker = 0, rel = 0, prec = 0, reg = 0;
+    size_t diverged = 0;
+    for (const EvalReport* r : rs) {
+      mean += r->mean_error_m;
+      p95 += r->p95_error_m;
+      mx = std::max(mx, r->max_error_m);
+      fin += r->final_error_m;
+      marker += r->marker_mean_error_m;
+      rel += r->reliable_fraction;
+      prec += r->reliable_precision_1m;
+      reg += r->reg_time_ms_median;
+      diverged += r->divergences > 0;
+    }
+    const double n = static_cast<double>(rs.size());
+    md << "| " << m << " | " << rs.size() << " | " << mean / n << " | " << p95 / n << " | " << mx
+       << " | " << fin / n << " | " << marker / n << " | " << diverged << " | " << 100 * rel / n
+       << "% | " << 100 * prec / n << "% | " << reg / n << " |\n";
+  }
+  std::ofstream(fs::path(o.out) / "results.md") << md.str();
+  // SVGs of the best and the worst registered run.
+  std::vector<const EvalReport*> registered;
+  for (const EvalReport& r : reports)
+    if (r.method == o.methods.front()) registered.push_back(&r);
+  if (!registered.empty()) {
+    auto [best, worst] = std::minmax_element(
+        registered.begin(), registered.end(),
+        [](const EvalReport* a, const EvalReport* b) { return a->mean_error_m < b->mean_error_m; });
+    for (const auto& [name, r] : {std::pair{"best", *best}, std::pair{"worst", *worst}}) {
+      for (const auto& [path, plan] : loaded)
+        if (fs::path(path).stem() == r->plan_id)
+          std::ofstream(fs::path(o.out) / "svg" / (std::string(name) + ".svg")) << ToSvg(plan, *r);
+    }
+  }
+  std::fputs(md.str().c_str(), stdout);
+  return failures ? 1 : 0;
+}
+
+}  // namespace
+
+Run AddEvalSuiteCommand(CLI::App& app) {
+  auto o = std::make_shared<SuiteOptions>();
+  app.add_option("--plans", o->plans, "floor plan files or directories (*.geojson)")->required();
+  app.add_option("--seeds", o->seeds, "seeds per plan and scenario")->capture_default_str();
+  app.add_option("--out", o->out, "output directory")->required();
+  app.add_option("--scenarios", o->scenarios, "scenarios")->delimiter(',')->capture_default_str();
+  app.add_option("--methods", o->methods, "methods and baselines")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"icp", "ik", "hough", "no-registration", "best-fit"}))
+      ->capture_default_str();
+  app.add_option("--length", o->length_m, "walk length per run, metres (0: default)");
+  app.add_option("--jobs", o->jobs, "parallel runs (0: one per core)");
+  return [o] { return RunSuite(*o); };
+}
+
+}  // namespace floorpose::tools

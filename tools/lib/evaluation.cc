@@ -1,0 +1,288 @@
+#include "tools/lib/evaluation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+#include "core/sim/simulator.h"
+#include "platform/clock.h"
+#include "platform/codec.h"
+#include "platform/engine.h"
+#include "platform/recording.h"
+#include "tools/lib/simulate_recording.h"
+
+namespace floorpose::tools {
+namespace {
+
+using platform::Topic;
+
+double Percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1,
+                    static_cast<size_t>(q * static_cast<double>(v.size() - 1) + 0.5))];
+}
+
+// Inputs in the order the daemon takes them: by stamp, and at equal stamps commands,
+// then meshes, then poses (daemon/daemon.cc sorts each batch the same way).
+int Rank(Topic t) { return t == Topic::kCommand ? 0 : t == Topic::kMeshDelta ? 1 : 2; }
+
+struct Input {
+  int64_t stamp_ns;
+  Topic topic;
+  platform::Envelope envelope;
+};
+
+}  // namespace
+
+bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& recording,
+              Baseline baseline, EvalReport* report, std::string* error) {
+  *report = {};
+  platform::RecordingReader reader(recording);
+  if (!reader.ok()) {
+    *error = reader.error();
+    return false;
+  }
+  std::vector<Input> inputs;
+  std::map<int64_t, v1::GroundTruthPose> truth;
+  std::string device_id;
+  v1::RecordingRecord record;
+  while (reader.Next(&record)) {
+    if (record.topic() == kSimInfoTopic) {
+      v1::SimulationInfo info;
+      if (info.ParseFromString(record.envelope().payload())) {
+        report->scenario = info.scenario();
+        report->seed = info.seed();
+        report->plan_id = info.plan_id();
+      }
+      continue;
+    }
+    if (record.topic() == kGroundTruthTopic) {
+      v1::GroundTruthPose gt;
+      if (gt.ParseFromString(record.envelope().payload())) truth[gt.stamp_ns()] = gt;
+      continue;
+    }
+    const auto topic = platform::TopicFromName(record.topic());
+    if (!topic ||
+        (*topic != Topic::kMeshDelta && *topic != Topic::kHeadsetPose && *topic != Topic::kCommand))
+      continue;  // daemon outputs in a recording of a live session
+    if (device_id.empty() && *topic == Topic::kHeadsetPose)
+      device_id = record.envelope().device_id();
+    inputs.push_back(
+        {record.envelope().stamp_ns(), *topic, platform::FromProto(record.envelope())});
+  }
+  if (!reader.error().empty()) {
+    *error = recording + ": " + reader.error();
+    return false;
+  }
+  if (truth.empty()) {
+    *error = recording + ": no ground truth in the recording (made by `floorpose simulate`?)";
+    return false;
+  }
+  std::stable_sort(inputs.begin(), inputs.end(), [](const Input& a, const Input& b) {
+    return a.stamp_ns != b.stamp_ns ? a.stamp_ns < b.stamp_ns : Rank(a.topic) < Rank(b.topic);
+  });
+
+  v1::FloorposedConfig config = base_config;
+  if (!device_id.empty()) config.mutable_dds()->set_device_id(device_id);
+  report->method = baseline == Baseline::kNoAlgorithm ? "none"
+                   : baseline == Baseline::kBestFit   ? "best-fit"
+                                                      : config.registration().method();
+  int64_t virtual_now = 0;
+  std::vector<v1::PlanPose>& plan_poses = report->plan_poses;
+  platform::Engine engine(
+      config,
+      [&](Topic t, const google::protobuf::Message& m) {
+        if (t == Topic::kPlanPose) plan_poses.push_back(static_cast<const v1::PlanPose&>(m));
+      },
+      [&] { return virtual_now; });
+  if (const std::string e = engine.Start(); !e.empty()) {
+    *error = e;
+    return false;
+  }
+  const HeadsetFrame frame =
+      ParseHeadsetFrame(config.headset_frame()).value_or(HeadsetFrame::kUnityLeftHandedYUp);
+  std::map<int64_t, Pose2> slam_poses;  // for the best-fit baseline
+  std::vector<double> reg_times;
+  for (const Input& in : inputs) {
+    virtual_now = in.stamp_ns;
+    switch (in.topic) {
+      case Topic::kCommand: engine.OnCommand(in.envelope); break;
+      case Topic::kMeshDelta: engine.OnMeshDelta(in.envelope); break;
+      case Topic::kHeadsetPose: {
+        engine.OnHeadsetPose(in.envelope);
+        platform::DecodedPose pose;
+        if (baseline == Baseline::kBestFit &&
+            platform::DecodeHeadsetPose(in.envelope.payload, frame, config.limits(), &pose).empty())
+          slam_poses[pose.stamp_ns] = pose.pose_slam;
+        break;
+      }
+      default: break;
+    }
+    if (baseline == Baseline::kNoAlgorithm) continue;
+    if (auto job = engine.TakeDueJob()) {
+      platform::Engine::Done done = platform::Engine::Run(std::move(*job), platform::MonotonicNs);
+      reg_times.push_back(done.result.time_ms);
+      engine.OnRegistrationDone(std::move(done));
+    }
+  }
+
+  // Score every plan pose that has ground truth.
+  std::optional<Se2> best_fit;
+  if (baseline == Baseline::kBestFit) {
+    std::vector<Eigen::Vector2d> from, to;
+    for (const auto& [stamp, pose] : slam_poses) {
+      auto it = truth.find(stamp);
+      if (it == truth.end()) continue;
+      from.push_back(pose.position);
+      to.emplace_back(it->second.x(), it->second.y());
+    }
+    best_fit = sim::FitSe2(from, to);
+  }
+  std::vector<double> errors, marker_errors;
+  size_t reliable = 0, reliable_ok = 0;
+  for (const v1::PlanPose& p : plan_poses) {
+    auto it = truth.find(p.source_stamp_ns());
+    if (it == truth.end()) continue;
+    // Before the first alignment the daemon has no plan position to give (it says so:
+    // version 0, UNRELIABLE); the thesis scores from the initial alignment on.
+    if (p.alignment_version() == 0 && !best_fit) {
+      ++report->unaligned_poses;
+      continue;
+    }
+    EvalPose e;
+    e.stamp_ns = p.source_stamp_ns();
+    e.x = p.x();
+    e.y = p.y();
+    e.heading = p.heading();
+    e.alignment_version = p.alignment_version();
+    e.reliable = p.reliability().flag() == v1::Reliability::RELIABLE;
+    if (best_fit) {
+      const auto s = slam_poses.find(e.stamp_ns);
+      if (s == slam_poses.end()) continue;
+      const Eigen::Vector2d q = *best_fit * s->second.position;
+      e.x = q.x();
+      e.y = q.y();
+      e.reliable = false;  // an after-the-fact fit flags nothing
+    }
+    e.true_x = it->second.x();
+    e.true_y = it->second.y();
+    e.marker = it->second.marker();
+    e.error_m = std::hypot(e.x - e.true_x, e.y - e.true_y);
+    errors.push_back(e.error_m);
+    if (e.marker) marker_errors.push_back(e.error_m);
+    reliable += e.reliable;
+    reliable_ok += e.reliable && e.error_m <= 1.0;
+    report->track.push_back(e);
+  }
+  report->poses = errors.size();
+  if (!errors.empty()) {
+    double sum = 0;
+    for (double x : errors) sum += x;
+    report->mean_error_m = sum / static_cast<double>(errors.size());
+    report->p95_error_m = Percentile(errors, 0.95);
+    report->max_error_m = *std::max_element(errors.begin(), errors.end());
+    report->final_error_m = errors.back();
+    report->divergences = static_cast<size_t>(
+        std::count_if(errors.begin(), errors.end(), [](double x) { return x > 5.0; }));
+    report->reliable_fraction = static_cast<double>(reliable) / static_cast<double>(errors.size());
+    report->reliable_precision_1m =
+        reliable ? static_cast<double>(reliable_ok) / static_cast<double>(reliable) : 0.0;
+  }
+  if (!marker_errors.empty()) {
+    double sum = 0;
+    for (double x : marker_errors) sum += x;
+    report->marker_mean_error_m = sum / static_cast<double>(marker_errors.size());
+  }
+  report->registrations = engine.counters().registrations();
+  report->accepted = engine.counters().registrations_accepted();
+  report->reg_time_ms_median = Percentile(reg_times, 0.5);
+  report->reg_time_ms_max =
+      reg_times.empty() ? 0.0 : *std::max_element(reg_times.begin(), reg_times.end());
+  return true;
+}
+
+std::string ToJson(const EvalReport& r) {
+  std::ostringstream s;
+  s.precision(6);
+  s << "{\"method\": \"" << r.method << "\", \"scenario\": \"" << r.scenario << "\", \"plan\": \""
+    << r.plan_id << "\", \"seed\": " << r.seed << ", \"mean_error_m\": " << r.mean_error_m
+    << ", \"p95_error_m\": " << r.p95_error_m << ", \"max_error_m\": " << r.max_error_m
+    << ", \"final_error_m\": " << r.final_error_m
+    << ", \"marker_mean_error_m\": " << r.marker_mean_error_m
+    << ", \"divergences\": " << r.divergences << ", \"registrations\": " << r.registrations
+    << ", \"accepted\": " << r.accepted << ", \"reg_time_ms_median\": " << r.reg_time_ms_median
+    << ", \"reg_time_ms_max\": " << r.reg_time_ms_max
+    << ", \"reliable_fraction\": " << r.reliable_fraction
+    << ", \"reliable_precision_1m\": " << r.reliable_precision_1m << ", \"poses\": " << r.poses
+    << ", \"unaligned_poses\": " << r.unaligned_poses << "}";
+  return s.str();
+}
+
+std::string ToText(const EvalReport& r) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(3);
+  s << "method " << r.method << ", plan " << r.plan_id << ", scenario " << r.scenario << ", seed "
+    << r.seed << ", " << r.poses << " poses scored (" << r.unaligned_poses
+    << " before the wall pick not)\n"
+    << "  error mean / p95 / max        " << r.mean_error_m << " / " << r.p95_error_m << " / "
+    << r.max_error_m << " m\n"
+    << "  final error                   " << r.final_error_m << " m\n"
+    << "  mean error at the markers     " << r.marker_mean_error_m << " m\n"
+    << "  divergences (> 5 m)           " << r.divergences << " poses\n"
+    << "  registrations run / accepted  " << r.registrations << " / " << r.accepted << "\n"
+    << "  registration time median/max  " << r.reg_time_ms_median << " / " << r.reg_time_ms_max
+    << " ms\n"
+    << "  flagged reliable              " << 100 * r.reliable_fraction << "% of poses, "
+    << 100 * r.reliable_precision_1m << "% of those within 1 m\n";
+  return s.str();
+}
+
+std::string ToSvg(const FloorPlan& plan, const EvalReport& r) {
+  // Plan metres to pixels, y up on the plan, down in SVG.
+  const double margin = 2.0, scale = 20.0;
+  Eigen::Vector2d lo = plan.min, hi = plan.max;
+  for (const EvalPose& p : r.track) {
+    lo = lo.cwiseMin(Eigen::Vector2d(p.x, p.y)).cwiseMin(Eigen::Vector2d(p.true_x, p.true_y));
+    hi = hi.cwiseMax(Eigen::Vector2d(p.x, p.y)).cwiseMax(Eigen::Vector2d(p.true_x, p.true_y));
+  }
+  lo -= Eigen::Vector2d::Constant(margin);
+  hi += Eigen::Vector2d::Constant(margin);
+  auto X = [&](double x) { return (x - lo.x()) * scale; };
+  auto Y = [&](double y) { return (hi.y() - y) * scale; };
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(2);
+  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << (hi.x() - lo.x()) * scale
+    << "\" height=\"" << (hi.y() - lo.y()) * scale << "\">\n"
+    << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
+    << "<title>" << r.plan_id << " " << r.scenario << " seed " << r.seed << " " << r.method
+    << ": mean " << r.mean_error_m << " m, max " << r.max_error_m << " m</title>\n"
+    << "<g stroke=\"black\" stroke-width=\"2\">\n";
+  for (const Segment& seg : plan.segments)
+    s << "<line x1=\"" << X(seg.a.x()) << "\" y1=\"" << Y(seg.a.y()) << "\" x2=\"" << X(seg.b.x())
+      << "\" y2=\"" << Y(seg.b.y()) << "\"/>\n";
+  s << "</g>\n";
+  auto polyline = [&](bool estimate, const char* colour) {
+    s << "<polyline fill=\"none\" stroke=\"" << colour << "\" stroke-width=\"2\" points=\"";
+    for (const EvalPose& p : r.track)
+      s << X(estimate ? p.x : p.true_x) << "," << Y(estimate ? p.y : p.true_y) << " ";
+    s << "\"/>\n";
+  };
+  polyline(false, "#2a9d2a");
+  polyline(true, "#d62728");
+  for (const EvalPose& p : r.track) {
+    if (!p.marker) continue;
+    s << "<circle cx=\"" << X(p.true_x) << "\" cy=\"" << Y(p.true_y)
+      << "\" r=\"5\" fill=\"#2a9d2a\"/><circle cx=\"" << X(p.x) << "\" cy=\"" << Y(p.y)
+      << "\" r=\"5\" fill=\"#d62728\"/><text x=\"" << X(p.true_x) + 6 << "\" y=\""
+      << Y(p.true_y) - 6 << "\" font-size=\"14\">" << p.marker << "</text>\n";
+  }
+  s << "<text x=\"10\" y=\"20\" font-size=\"16\">green: truth, red: " << r.method << " (mean "
+    << r.mean_error_m << " m)</text>\n</svg>\n";
+  return s.str();
+}
+
+}  // namespace floorpose::tools

@@ -1,0 +1,62 @@
+// `floorpose eval` as functions: a recording through the daemon's Engine on a virtual
+// clock (registrations inline, so the run is deterministic), plan poses scored against
+// the recording's ground truth with the thesis' metrics (chapter 7).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/floor_plan.h"
+#include "floorpose/v1/config.pb.h"
+#include "floorpose/v1/floorpose.pb.h"
+
+namespace floorpose::tools {
+
+enum class Baseline {
+  kNone,         // registrations as configured (no baseline)
+  kNoAlgorithm,  // the wall pick only, never registered (thesis "no algorithm" rows)
+  kBestFit,      // one SE(2) fitted after the fact to the whole walk (thesis table 7.2)
+};
+
+struct EvalPose {
+  int64_t stamp_ns = 0;
+  double x = 0, y = 0, heading = 0;  // estimate on the plan
+  double true_x = 0, true_y = 0;
+  double error_m = 0;
+  bool reliable = false;
+  uint32_t marker = 0;
+  uint64_t alignment_version = 0;
+};
+
+struct EvalReport {
+  std::string method;
+  std::string scenario, plan_id;
+  uint64_t seed = 0;
+  size_t poses = 0;            // scored: aligned plan poses with ground truth
+  size_t unaligned_poses = 0;  // before the first alignment: not scored
+  double mean_error_m = 0, p95_error_m = 0, max_error_m = 0, final_error_m = 0;
+  double marker_mean_error_m = 0;
+  size_t divergences = 0;  // poses more than 5 m off
+  uint64_t registrations = 0, accepted = 0;
+  double reg_time_ms_median = 0, reg_time_ms_max = 0;
+  double reliable_fraction = 0;      // of poses flagged RELIABLE
+  double reliable_precision_1m = 0;  // of those, the share within 1 m
+  std::vector<EvalPose> track;
+  std::vector<v1::PlanPose> plan_poses;  // as the Engine published them, in order
+};
+
+// Runs `recording` against the plan in config.plan_path() (config as the daemon's; the
+// device id is taken from the recording). False with a message on unreadable input.
+bool Evaluate(const v1::FloorposedConfig& config, const std::string& recording, Baseline baseline,
+              EvalReport* report, std::string* error);
+
+// The report as one JSON object (the keys of the issue) and as readable text.
+std::string ToJson(const EvalReport& report);
+std::string ToText(const EvalReport& report);
+
+// An SVG of the plan, the true and the estimated trajectories and the markers.
+std::string ToSvg(const FloorPlan& plan, const EvalReport& report);
+
+}  // namespace floorpose::tools
