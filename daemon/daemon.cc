@@ -2,7 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
+#include <vector>
 
 #include "platform/clock.h"
 
@@ -69,6 +71,11 @@ std::string Daemon::StatusLine() const {
 }
 
 void Daemon::IoLoop() {
+  struct Input {
+    Topic topic;
+    platform::Envelope envelope;
+  };
+  std::vector<Input> batch;
   while (true) {
     waiter_->Wait(std::chrono::milliseconds(100));
     {
@@ -76,18 +83,21 @@ void Daemon::IoLoop() {
       if (stop_) break;
     }
     io_heartbeat_ns_ = platform::MonotonicNs();
-    // Commands first (a plan or pick applies to the data that follows), then meshes, so
-    // that a pose is corrected with the walls that came before it.
-    for (const auto& e : command_reader_->Take(64)) {
-      engine_->OnCommand(e);
-      AfterInput();
-    }
-    for (const auto& e : mesh_reader_->Take(256)) {
-      engine_->OnMeshDelta(e);
-      AfterInput();
-    }
-    for (const auto& e : pose_reader_->Take(256)) {
-      engine_->OnHeadsetPose(e);
+    // One batch from all inputs, in stamp order (platform::InputBefore), the order
+    // `floorpose eval` takes a recording in: a pose is corrected with the walls and the
+    // pick that came before it.
+    batch.clear();
+    for (auto* reader : {command_reader_.get(), mesh_reader_.get(), pose_reader_.get()})
+      for (auto& e : reader->Take(256)) batch.push_back({reader->topic(), std::move(e)});
+    std::stable_sort(batch.begin(), batch.end(), [](const Input& a, const Input& b) {
+      return platform::InputBefore(a.topic, a.envelope.stamp_ns, b.topic, b.envelope.stamp_ns);
+    });
+    for (const Input& in : batch) {
+      switch (in.topic) {
+        case Topic::kCommand: engine_->OnCommand(in.envelope); break;
+        case Topic::kMeshDelta: engine_->OnMeshDelta(in.envelope); break;
+        default: engine_->OnHeadsetPose(in.envelope); break;
+      }
       AfterInput();
     }
     ApplyFinished(false);

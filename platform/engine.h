@@ -21,6 +21,14 @@
 
 namespace floorpose::platform {
 
+// The order inputs are taken in, by the daemon per batch and by `floorpose eval` over a
+// recording: by stamp, and at equal stamps meshes, then poses, then commands (a command
+// sent with a pose's stamp applies from the next pose on).
+inline bool InputBefore(Topic a, int64_t stamp_a, Topic b, int64_t stamp_b) {
+  auto rank = [](Topic t) { return t == Topic::kMeshDelta ? 0 : t == Topic::kHeadsetPose ? 1 : 2; };
+  return stamp_a != stamp_b ? stamp_a < stamp_b : rank(a) < rank(b);
+}
+
 class Engine {
  public:
   // Receives every message to publish, with its topic.

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <queue>
 #include <utility>
@@ -76,8 +77,7 @@ FreeSpace::FreeSpace(const std::vector<Segment>& walls, const Eigen::Vector2d& m
     region_ = "no walls";
     return;
   }
-  options_.cell_m =
-      std::max(options_.cell_m, std::sqrt(extent.x() * extent.y() / kMaxCells));
+  options_.cell_m = std::max(options_.cell_m, std::sqrt(extent.x() * extent.y() / kMaxCells));
   const double c = options_.cell_m;
   origin_ = min.array() - options_.margin_m;
   nx_ = static_cast<int>(std::ceil(extent.x() / c)) + 1;
@@ -120,10 +120,10 @@ FreeSpace::FreeSpace(const std::vector<Segment>& walls, const Eigen::Vector2d& m
   std::vector<uint8_t> free(n, 0);
   for (int i = 0; i < n; ++i) free[i] = clearance_[i] >= options_.body_radius_m;
 
-  // Indoors, decided per block of 4x4 cells from its walkable cell nearest the block's
+  // Indoors, decided per block of 6x6 cells from its walkable cell nearest the block's
   // centre. Rays march through the grown walls one cell at a time, so they cannot slip
   // through a wall; they do pass through doors, and then meet the next room's walls.
-  constexpr int kBlock = 4;
+  constexpr int kBlock = 6;
   std::vector<uint8_t> indoor(n, 0);
   for (int by = 0; by < ny_; by += kBlock)
     for (int bx = 0; bx < nx_; bx += kBlock) {
@@ -131,22 +131,22 @@ FreeSpace::FreeSpace(const std::vector<Segment>& walls, const Eigen::Vector2d& m
       double probe_d = 1e9;
       for (int y = by; y < std::min(by + kBlock, ny_); ++y)
         for (int x = bx; x < std::min(bx + kBlock, nx_); ++x) {
-          const double dd = std::hypot(x - bx - 1.5, y - by - 1.5);
+          const double dd = std::hypot(x - bx - 0.5 * (kBlock - 1), y - by - 0.5 * (kBlock - 1));
           if (free[y * nx_ + x] && dd < probe_d) probe = y * nx_ + x, probe_d = dd;
         }
       if (probe < 0) continue;
-      const Eigen::Vector2d p = CellCentre(probe);
       int escaped = 0;
       for (int r = 0; r < options_.indoor_rays && escaped <= options_.max_escaping_rays; ++r) {
         const double a = 2.0 * M_PI * r / options_.indoor_rays;
-        const Eigen::Vector2d step = c * Eigen::Vector2d(std::cos(a), std::sin(a));
-        for (int k = 1;; ++k) {
-          const int cell = CellOf(p + step * k);
-          if (cell < 0) {
+        const double sx = std::cos(a), sy = std::sin(a);  // one cell a step, in cells
+        double fx = probe % nx_ + 0.5, fy = probe / nx_ + 0.5;
+        while (true) {
+          fx += sx, fy += sy;
+          if (!(fx >= 0 && fy >= 0 && fx < nx_ && fy < ny_)) {
             ++escaped;
             break;
           }
-          if (!free[cell]) break;
+          if (!free[static_cast<int>(fy) * nx_ + static_cast<int>(fx)]) break;
         }
       }
       if (escaped > options_.max_escaping_rays) continue;
@@ -212,12 +212,6 @@ int FreeSpace::MostOpenCell() const {
   return best;
 }
 
-void FreeSpace::RebuildCells() {
-  cells_.clear();
-  for (int i = 0; i < nx_ * ny_; ++i)
-    if (walkable_[i]) cells_.push_back(i);
-}
-
 size_t FreeSpace::Reach(int seed, const std::vector<uint8_t>& mask, std::vector<int>* out) const {
   std::vector<uint8_t> seen(mask.size(), 0);
   std::vector<int> queue{seed};
@@ -262,19 +256,61 @@ bool FreeSpace::BlockIfConnected(const std::vector<Eigen::Vector2d>& footprint) 
     }
   if (covered.empty()) return true;
   if (covered.size() >= cells_.size()) return false;
-  std::vector<uint8_t> mask = walkable_;
-  for (int cell : covered) mask[cell] = 0;
-  int seed = -1;
-  for (int cell : cells_)
-    if (mask[cell]) {
-      seed = cell;
-      break;
-    }
+  for (int cell : covered) walkable_[cell] = 0;
   // Strictly connected: not even a pocket behind the object may be cut off, so that every
-  // walkable cell stays reachable from every other.
-  if (Reach(seed, mask, nullptr) != cells_.size() - covered.size()) return false;
-  walkable_ = std::move(mask);
-  RebuildCells();
+  // walkable cell stays reachable from every other. It is enough that the cells around the
+  // object still reach each other: every path through the object can go round it then.
+  // Usually they do nearby, so look in a window around the object first and flood the
+  // whole region only when that fails.
+  std::vector<int> ring;
+  for (int cell : covered) {
+    const int x = cell % nx_, y = cell / nx_;
+    const int next[4][2] = {{x - 1, y}, {x + 1, y}, {x, y - 1}, {x, y + 1}};
+    for (const auto& [qx, qy] : next)
+      if (InGrid(qx, qy) && walkable_[qy * nx_ + qx]) ring.push_back(qy * nx_ + qx);
+  }
+  std::sort(ring.begin(), ring.end());
+  ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+  bool connected = ring.empty() || LocallyConnected(ring, x0 - 20, y0 - 20, x1 + 20, y1 + 20);
+  if (!connected && !ring.empty())
+    connected = Reach(ring[0], walkable_, nullptr) == cells_.size() - covered.size();
+  if (!connected) {
+    for (int cell : covered) walkable_[cell] = 1;
+    return false;
+  }
+  std::vector<int> kept;
+  kept.reserve(cells_.size() - covered.size());
+  std::set_difference(cells_.begin(), cells_.end(), covered.begin(), covered.end(),
+                      std::back_inserter(kept));
+  cells_ = std::move(kept);
+  return true;
+}
+
+bool FreeSpace::LocallyConnected(const std::vector<int>& ring, int x0, int y0, int x1,
+                                 int y1) const {
+  x0 = std::max(x0, 0), y0 = std::max(y0, 0);
+  x1 = std::min(x1, nx_ - 1), y1 = std::min(y1, ny_ - 1);
+  const int w = x1 - x0 + 1;
+  std::vector<uint8_t> seen(static_cast<size_t>(w) * (y1 - y0 + 1), 0);
+  auto local = [&](int cell) { return (cell / nx_ - y0) * w + cell % nx_ - x0; };
+  std::vector<int> queue{ring[0]};
+  seen[local(ring[0])] = 1;
+  while (!queue.empty()) {
+    const int c = queue.back();
+    queue.pop_back();
+    const int x = c % nx_, y = c / nx_;
+    const int next[4][2] = {{x - 1, y}, {x + 1, y}, {x, y - 1}, {x, y + 1}};
+    for (const auto& [qx, qy] : next) {
+      if (qx < x0 || qy < y0 || qx > x1 || qy > y1) continue;
+      const int q = qy * nx_ + qx;
+      if (walkable_[q] && !seen[local(q)]) {
+        seen[local(q)] = 1;
+        queue.push_back(q);
+      }
+    }
+  }
+  for (int cell : ring)
+    if (!seen[local(cell)]) return false;
   return true;
 }
 
@@ -332,8 +368,7 @@ std::vector<Eigen::Vector2d> FreeSpace::Path(const Eigen::Vector2d& from,
         // No cutting corners: a diagonal step needs both cells beside it.
         if (dx != 0 && dy != 0 && (!walkable_[y * nx_ + x + dx] || !walkable_[(y + dy) * nx_ + x]))
           continue;
-        const double near_wall =
-            std::max(0.0, 1.0 - clearance_[q] / options_.centre_clearance_m);
+        const double near_wall = std::max(0.0, 1.0 - clearance_[q] / options_.centre_clearance_m);
         const double cost =
             (dx != 0 && dy != 0 ? M_SQRT2 : 1.0) * (1.0 + options_.centre_weight * near_wall);
         if (g[c] + cost < g[q]) {

@@ -72,9 +72,11 @@ class FreeSpace {
 
  private:
   bool InGrid(int ix, int iy) const { return ix >= 0 && iy >= 0 && ix < nx_ && iy < ny_; }
-  void RebuildCells();
   // Cells reachable from `seed` through cells where mask is set (4-connected).
   size_t Reach(int seed, const std::vector<uint8_t>& mask, std::vector<int>* out) const;
+  // Whether the walkable cells of `ring` reach each other inside the window [x0, x1] x
+  // [y0, y1] (cells; clipped to the grid).
+  bool LocallyConnected(const std::vector<int>& ring, int x0, int y0, int x1, int y1) const;
 
   FreeSpaceOptions options_;
   Eigen::Vector2d origin_;  // corner of cell (0, 0)

@@ -61,8 +61,8 @@ double Cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   return a.x() * b.y() - a.y() * b.x();
 }
 
-bool SegmentsIntersect(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
-                       const Eigen::Vector2d& c, const Eigen::Vector2d& d) {
+bool SegmentsIntersect(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
+                       const Eigen::Vector2d& d) {
   const double d1 = Cross(b - a, c - a), d2 = Cross(b - a, d - a);
   const double d3 = Cross(d - c, a - c), d4 = Cross(d - c, b - c);
   return ((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0));
@@ -148,7 +148,8 @@ double NearestWallDirection(const FloorPlan& plan, const Eigen::Vector2d& p) {
   double best = 1e300, yaw = 0.0;
   for (const Segment& s : plan.segments) {
     const double d = (ClosestPointOnSegment(s, p) - p).norm();
-    if (d < best && s.Length() > 0.3) best = d, yaw = std::atan2(s.b.y() - s.a.y(), s.b.x() - s.a.x());
+    if (d < best && s.Length() > 0.3)
+      best = d, yaw = std::atan2(s.b.y() - s.a.y(), s.b.x() - s.a.x());
   }
   return yaw;
 }
@@ -251,8 +252,8 @@ class RealityBuilder {
     for (const Segment& s : plan_.segments) cumulative.push_back(total += s.Length());
     const int cabinets = PlaceMany(std::min(120, static_cast<int>(area / 25)), [&] {
       const double pick = rng_.Uniform(0.0, total);
-      const size_t i = std::lower_bound(cumulative.begin(), cumulative.end(), pick) -
-                       cumulative.begin();
+      const size_t i =
+          std::lower_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin();
       const Segment& s = plan_.segments[std::min(i, plan_.segments.size() - 1)];
       if (s.Length() < 1.4) return false;
       const Eigen::Vector2d dir = (s.b - s.a).normalized();
@@ -267,9 +268,10 @@ class RealityBuilder {
       const Eigen::Vector2d c = RandomFreePoint(0.5);
       return Place(Rectangle(c, rng_.Uniform(0, M_PI), 0.4, 0.4), 1.8, "person");
     });
-    return Format("office: %.0f desks (1.6x0.8x0.75 m), %.0f cabinets (1.2x0.5x2.0 m, against "
-                  "walls), %.0f people (0.4x0.4x1.8 m), none on the plan",
-                  desks, cabinets, people);
+    return Format(
+        "office: %.0f desks (1.6x0.8x0.75 m), %.0f cabinets (1.2x0.5x2.0 m, against "
+        "walls), %.0f people (0.4x0.4x1.8 m), none on the plan",
+        desks, cabinets, people);
   }
 
   // Thesis section 7.7: walls on the plan that are not there (fire doors), a round object
@@ -296,16 +298,18 @@ class RealityBuilder {
       return Place(Rectangle(c, AlignedYaw(c), rng_.Uniform(0.6, 2.0), rng_.Uniform(0.6, 1.5)),
                    rng_.Uniform(0.8, 2.0), "box");
     });
-    return Format("mismatch: %.0f%% of the wall length on the plan is absent; not on the plan: "
-                  "%.0f walls (1.5-4 m), %.0f round pillars, %.0f boxes",
-                  100.0 * absent / TotalWallLength(), walls, pillars, boxes);
+    return Format(
+        "mismatch: %.0f%% of the wall length on the plan is absent; not on the plan: "
+        "%.0f walls (1.5-4 m), %.0f round pillars, %.0f boxes",
+        100.0 * absent / TotalWallLength(), walls, pillars, boxes);
   }
 
   std::string Glass(double share) {
     const double glass = MarkWalls(&reality.plan_wall_glass, share, 2.0, 1e9);
-    return Format("glass: %.0f%% of the wall length (walls of 2 m or more) is glass, invisible to "
-                  "the sensor",
-                  100.0 * glass / TotalWallLength());
+    return Format(
+        "glass: %.0f%% of the wall length (walls of 2 m or more) is glass, invisible to "
+        "the sensor",
+        100.0 * glass / TotalWallLength());
   }
 
   Reality reality;
@@ -323,10 +327,9 @@ std::vector<Surface> RealSurfaces(const FloorPlan& plan, const Reality& reality,
   const Eigen::Vector3d up(0, 0, reality.ceiling_m);
   for (size_t i = 0; i < plan.segments.size(); ++i) {
     const Segment& s = plan.segments[i];
-    if (!reality.plan_wall_present[i] || reality.plan_wall_glass[i] || s.Length() < 1e-3)
-      continue;
-    out.push_back(MakeSurface({s.a.x(), s.a.y(), 0.0},
-                              {s.b.x() - s.a.x(), s.b.y() - s.a.y(), 0.0}, up, patch_m));
+    if (!reality.plan_wall_present[i] || reality.plan_wall_glass[i] || s.Length() < 1e-3) continue;
+    out.push_back(MakeSurface({s.a.x(), s.a.y(), 0.0}, {s.b.x() - s.a.x(), s.b.y() - s.a.y(), 0.0},
+                              up, patch_m));
   }
   for (const Reality::Prism& p : reality.extras) {
     const auto& f = p.footprint;
@@ -429,10 +432,11 @@ std::vector<HeadSample> GenerateWalk(const FreeSpace& fs, Scenario scenario,
     // The head: looking around while walking, the scan when stopped, pitch swinging.
     const double look = o.look_around_rad * (0.7 * std::sin(2 * M_PI * t / 5.3 + phase1) +
                                              0.3 * std::sin(2 * M_PI * t / 2.1 + phase2));
-    const double scan = stopped ? scan_amplitude * std::sin(2 * M_PI * stop_elapsed / stop_total)
-                                : 0.0;
-    out.push_back({position, WrapAngle(body + look + scan),
-                   o.head_pitch_rad + o.head_pitch_swing_rad * std::sin(2 * M_PI * t / 7.7 + phase3)});
+    const double scan =
+        stopped ? scan_amplitude * std::sin(2 * M_PI * stop_elapsed / stop_total) : 0.0;
+    out.push_back(
+        {position, WrapAngle(body + look + scan),
+         o.head_pitch_rad + o.head_pitch_swing_rad * std::sin(2 * M_PI * t / 7.7 + phase3)});
     if (walked >= o.target_length_m) break;
 
     if (stopped) {
@@ -566,17 +570,23 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
       // The most open area: cells far from every wall, around the most open one. A space
       // of 10 x 10 m has 5 m of clearance in its middle.
       const int centre = free_space.MostOpenCell();
-      const double most = free_space.Clearance(free_space.CellCentre(centre));
+      const double most = centre < 0 ? 0.0 : free_space.Clearance(free_space.CellCentre(centre));
       const double keep = std::min(3.0, 0.6 * most);
       if (!trajectory) free_space.RestrictTo(centre, keep);
       scenario_text =
-          most >= 5.0
-              ? Format("hall: the walk stays in the plan's largest open area, at least %.1f m "
-                       "from walls (%.0f m2); ceiling %.1f m",
-                       keep, free_space.walkable_area_m2(), builder.reality.ceiling_m)
-              : Format("hall: the plan has no open area of 10 x 10 m; the walk stays in its most "
-                       "open area instead, at least %.1f m from walls (%.0f m2); ceiling %.1f m",
-                       keep, free_space.walkable_area_m2(), builder.reality.ceiling_m);
+          trajectory ? Format(
+                           "hall: ceiling %.1f m; the given trajectory decides where the walk "
+                           "goes",
+                           builder.reality.ceiling_m)
+          : most >= 5.0
+              ? Format(
+                    "hall: the walk stays in the plan's largest open area, at least %.1f m "
+                    "from walls (%.0f m2); ceiling %.1f m",
+                    keep, free_space.walkable_area_m2(), builder.reality.ceiling_m)
+              : Format(
+                    "hall: the plan has no open area of 10 x 10 m; the walk stays in its most "
+                    "open area instead, at least %.1f m from walls (%.0f m2); ceiling %.1f m",
+                    keep, free_space.walkable_area_m2(), builder.reality.ceiling_m);
       break;
     }
   }
@@ -799,9 +809,9 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
     const double offset = pick_rng.Uniform(0.0, o.max_pick_offset_m);
     const double direction = pick_rng.Uniform(-M_PI, M_PI);
     // About the wearer: E = Trans(wearer + offset) Rot(angle) Trans(-wearer).
-    sim.pick_error = Se2{0.0, wearer + offset * Eigen::Vector2d(std::cos(direction),
-                                                                std::sin(direction))} *
-                     Se2{angle, Eigen::Vector2d::Zero()} * Se2{0.0, -wearer};
+    sim.pick_error =
+        Se2{0.0, wearer + offset * Eigen::Vector2d(std::cos(direction), std::sin(direction))} *
+        Se2{angle, Eigen::Vector2d::Zero()} * Se2{0.0, -wearer};
     const Se2 T_plan_slam = sim.pick_error * at.T_slam_plan.Inverse();
     sim.pick.slam_point = T_plan_slam.Inverse() * sim.pick.plan_point;
     sim.pick.slam_normal = Se2{-T_plan_slam.theta, {0, 0}}.R() * sim.pick.plan_normal;
@@ -831,17 +841,19 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
   text += "Walkable region: " + free_space.region() + ". ";
   text += trajectory ? Format("Walk: the given trajectory, %.0f m in %.0f s. ", sim.length_m,
                               sim.duration_s)
-                     : Format("Walk: random goals joined by A* paths, %.1f-%.1f m/s, stops of "
-                              "%.0f-%.0f s; ",
-                              o.min_speed_mps, o.max_speed_mps, o.min_stop_s, o.max_stop_s) +
+                     : Format(
+                           "Walk: random goals joined by A* paths, %.1f-%.1f m/s, stops of "
+                           "%.0f-%.0f s; ",
+                           o.min_speed_mps, o.max_speed_mps, o.min_stop_s, o.max_stop_s) +
                            Format("%.0f m in %.0f s (target %.0f m). ", sim.length_m,
                                   sim.duration_s, o.target_length_m);
   text += Format("Headset: poses every %.2f s, eye height %.2f m; sensor %.1f-%.1f m, ",
                  o.pose_period_s, o.eye_height_m, o.min_range_m, o.max_range_m) +
           Format("field of view %.0f x %.0f deg. ", o.fov_h_rad / kDeg, o.fov_v_rad / kDeg);
-  text += o.mesh ? Format("Mesh: %.0f m chunks, patches of %.2f m, noise %.3f m per patch and "
-                          "%.3f m per vertex; ",
-                          o.chunk_m, o.patch_m, o.patch_noise_m, o.vertex_noise_m) +
+  text += o.mesh ? Format(
+                       "Mesh: %.0f m chunks, patches of %.2f m, noise %.3f m per patch and "
+                       "%.3f m per vertex; ",
+                       o.chunk_m, o.patch_m, o.patch_noise_m, o.vertex_noise_m) +
                        Format("updated at most every %.0f s; walls and ceiling %.1f m. ",
                               o.update_after_s, ceiling)
                  : std::string("Mesh: off. ");

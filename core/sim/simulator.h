@@ -14,7 +14,7 @@
 //   ceiling; hits within 0.8-3.5 m mark surface patches as seen, so the mesh grows only
 //   where the head looks.
 // - The mesh: 2 m columns (one mesh id each) re-meshed from every patch seen in them, in
-//   the SLAM frame of that moment, with 3.5 cm of noise per patch and 2.5 cm per vertex:
+//   the SLAM frame of that moment, with 4 cm of noise per patch and 2.5 cm per vertex:
 //   ADDED, then UPDATED when more was seen, sometimes REMOVED when far behind.
 // - The SLAM drift: odometry scale error, heading bias and random walk, calibrated so that
 //   a few hundred metres end about 1% of the distance off and the best SE(2) fit of the
@@ -56,17 +56,17 @@ struct SimulatorOptions {
   Scenario scenario = Scenario::kOffice;
 
   // The walk.
-  double target_length_m = 300.0;  // walk until this far...
-  double max_duration_s = 900.0;   // ...or this long
+  double target_length_m = 300.0;                   // walk until this far...
+  double max_duration_s = 900.0;                    // ...or this long
   double min_speed_mps = 1.0, max_speed_mps = 1.5;  // drawn per leg
   double min_stop_s = 2.0, max_stop_s = 8.0;        // at every goal, scanning the room
   double first_stop_s = 4.0;  // scanning at the start, before walking (and the wall pick)
   double min_goal_distance_m = 5.0;
   double body_radius_m = 0.3;
   double eye_height_m = 1.65;
-  double max_turn_rate_rad_s = 2.0;   // of the body, towards the path ahead
-  double look_around_rad = 0.35;      // head yaw swing while walking (amplitude)
-  double max_scan_rad = 2.6;          // head yaw swing when stopped (amplitude, at most)
+  double max_turn_rate_rad_s = 2.0;  // of the body, towards the path ahead
+  double look_around_rad = 0.35;     // head yaw swing while walking (amplitude)
+  double max_scan_rad = 2.6;         // head yaw swing when stopped (amplitude, at most)
   double pose_period_s = 0.3;
   double start_s = 1.0;  // virtual time of the first pose
 
@@ -79,32 +79,35 @@ struct SimulatorOptions {
   // The sensor.
   double min_range_m = 0.8, max_range_m = 3.5;
   double fov_h_rad = 70.0 * M_PI / 180.0, fov_v_rad = 60.0 * M_PI / 180.0;
-  int rays_h = 24, rays_v = 12;  // per pose, each jittered within its cell
-  double head_pitch_rad = -0.17;  // looking slightly down on average...
+  int rays_h = 24, rays_v = 12;        // per pose, each jittered within its cell
+  double head_pitch_rad = -0.17;       // looking slightly down on average...
   double head_pitch_swing_rad = 0.17;  // ...plus or minus this
 
   // The mesh.
-  bool mesh = true;  // false: poses and ground truth only (drift studies, fast)
-  double chunk_m = 2.0;        // one mesh id per chunk column of chunk_m x chunk_m
-  double patch_m = 0.5;        // wall and object faces are seen in patches of at most this
-  double floor_cell_m = 0.5;   // floor and ceiling patches
-  int max_subdivisions = 3;    // a wall patch is 1..this many quads along each side
-  double patch_noise_m = 0.035;  // per patch, along its normal (depth error of a surface)
-  double vertex_noise_m = 0.025;  // per vertex and axis
-  int poses_per_mesh_tick = 4;   // the mesh is updated every this many poses...
-  double update_after_s = 4.0;   // ...and a chunk at most this often
-  double remove_rate_per_s = 5e-4;   // chance per second that a far chunk is REMOVED
+  bool mesh = true;                 // false: poses and ground truth only (drift studies, fast)
+  double chunk_m = 2.0;             // one mesh id per chunk column of chunk_m x chunk_m
+  double patch_m = 0.5;             // wall and object faces are seen in patches of at most this
+  double floor_cell_m = 0.5;        // floor and ceiling patches
+  int max_subdivisions = 3;         // a wall patch is 1..this many quads along each side
+  double patch_noise_m = 0.04;      // per patch, along its normal (depth error of a surface)
+  double vertex_noise_m = 0.025;    // per vertex and axis
+  int poses_per_mesh_tick = 4;      // the mesh is updated every this many poses...
+  double update_after_s = 4.0;      // ...and a chunk at most this often
+  double remove_rate_per_s = 5e-4;  // chance per second that a far chunk is REMOVED
   double remove_min_distance_m = 8.0;
 
   // SLAM drift. A per-walk scale error and heading bias (random sign), a heading random
   // walk per metre and per second, a position random walk, and pose jitter that does not
-  // accumulate. drift_scale multiplies all of them.
+  // accumulate. drift_scale multiplies all of them. Calibrated with 300 m walks over real
+  // plans (mlstruct 848 and 1058, Heidelberg; 12 seeds each): 0.8-0.9% of the distance off
+  // at the end and 0.8-1.1 m mean error after the best fit, against 0.84% (Huebner et al.
+  // 2020) and 0.79 m (thesis table 7.2); small plans give less, walks there stay close.
   double drift_scale = 1.0;
-  double scale_error_sigma = 0.01;
+  double scale_error_sigma = 0.01;         // odometry scale error, a fraction
   double heading_bias_rad_per_m = 3.5e-4;  // magnitude, times a uniform 0.5..1.5
   double heading_walk_rad_per_sqrt_m = 6e-3;
   double heading_walk_rad_per_sqrt_s = 6e-4;
-  double yaw_scale_error_sigma = 0.005;  // of the head's turning
+  double yaw_scale_error_sigma = 0.005;  // of the head's turning, a fraction
   double position_walk_m_per_sqrt_m = 0.03;
   double jitter_m = 0.01, jitter_rad = 0.002;
 
@@ -183,7 +186,7 @@ Se2 FitSe2(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Ve
 // et al. 2020.
 struct DriftStats {
   double length_m = 0.0;
-  double end_error_m = 0.0;  // last pose, with the SLAM frame known exactly at the start
+  double end_error_m = 0.0;      // last pose, with the SLAM frame known exactly at the start
   double best_fit_mean_m = 0.0;  // after the best SE(2) fit of all slam to true positions
   double best_fit_max_m = 0.0;
   Se2 best_fit;  // T_plan_slam

@@ -55,7 +55,7 @@ bool InsidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector
   for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++)
     if ((poly[i].y() > p.y()) != (poly[j].y() > p.y()) &&
         p.x() < (poly[j].x() - poly[i].x()) * (p.y() - poly[i].y()) / (poly[j].y() - poly[i].y()) +
-                     poly[i].x())
+                    poly[i].x())
       inside = !inside;
   return inside;
 }
@@ -94,7 +94,8 @@ double DistanceToRealWalls(const FloorPlan& plan, const Reality& r, const Eigen:
   for (const Reality::Prism& e : r.extras) {
     double side = 1e300;  // horizontal distance to the side faces
     for (size_t i = 0, j = e.footprint.size() - 1; i < e.footprint.size(); j = i++)
-      side = std::min(side, (ClosestPointOnSegment({e.footprint[j], e.footprint[i]}, xy) - xy).norm());
+      side =
+          std::min(side, (ClosestPointOnSegment({e.footprint[j], e.footprint[i]}, xy) - xy).norm());
     const double above = std::max(0.0, p.z() - e.height_m);
     if (InsidePolygon(e.footprint, xy))
       best = std::min({best, std::abs(p.z() - e.height_m), p.z() > e.height_m ? 1e300 : side});
@@ -278,14 +279,15 @@ TEST(SimulatorTest, MeshIsRealityWithNoiseWithinRange) {
           out_of_range += !in_range;
           if (i == 0) {
             const Eigen::Vector2d to = v.head<2>() - sim.steps[0].true_plan.position;
-            behind += std::abs(WrapAngle(std::atan2(to.y(), to.x()) -
-                                         sim.steps[0].true_plan.heading)) > Deg(80);
+            behind +=
+                std::abs(WrapAngle(std::atan2(to.y(), to.x()) - sim.steps[0].true_plan.heading)) >
+                Deg(80);
           }
         }
         for (size_t t = 0; t + 2 < m.triangles.size(); t += 3)
           for (int e = 0; e < 3; ++e)
-            edges.push_back((vertices[m.triangles[t + e]] - vertices[m.triangles[t + (e + 1) % 3]])
-                                .norm());
+            edges.push_back(
+                (vertices[m.triangles[t + e]] - vertices[m.triangles[t + (e + 1) % 3]]).norm());
       }
     const std::string what = ToString(scenario);
     ASSERT_GT(total, 1000u) << what;
@@ -341,8 +343,8 @@ TEST(SimulatorTest, HallWalkStaysInTheOpenArea) {
   for (const SimulatedStep& s : sim.steps) {
     double nearest = 1e300;
     for (const Segment& w : plan.segments)
-      nearest = std::min(nearest, (ClosestPointOnSegment(w, s.true_plan.position) -
-                                   s.true_plan.position).norm());
+      nearest = std::min(
+          nearest, (ClosestPointOnSegment(w, s.true_plan.position) - s.true_plan.position).norm());
     ASSERT_GE(nearest, 2.8);  // the hall's open area keeps 3 m from walls
   }
   EXPECT_THAT(sim.description, ::testing::HasSubstr("largest open area"));
@@ -399,8 +401,8 @@ TEST(SimulatorTest, WallPickIsOffAsTable71Allows) {
     const std::optional<Se2> T_plan_slam = AlignFromWallPick(sim.pick);
     ASSERT_TRUE(T_plan_slam.has_value());
     // The pick's alignment is the truth with the pick error applied...
-    EXPECT_THAT(*T_plan_slam, testing::IsNearlySe2(sim.pick_error * at.T_slam_plan.Inverse(),
-                                                   1e-9, 1e-9));
+    EXPECT_THAT(*T_plan_slam,
+                testing::IsNearlySe2(sim.pick_error * at.T_slam_plan.Inverse(), 1e-9, 1e-9));
     // ...which is at most 9 degrees and 2.5 m at the wearer.
     const Eigen::Vector2d wearer = at.true_plan.position;
     const double angle = std::abs(sim.pick_error.theta);
@@ -412,8 +414,8 @@ TEST(SimulatorTest, WallPickIsOffAsTable71Allows) {
     // The plan side is a point on a plan wall, its normal facing the wearer.
     double on_wall = 1e300;
     for (const Segment& s : plan.segments)
-      on_wall = std::min(on_wall, (ClosestPointOnSegment(s, sim.pick.plan_point) -
-                                   sim.pick.plan_point).norm());
+      on_wall = std::min(
+          on_wall, (ClosestPointOnSegment(s, sim.pick.plan_point) - sim.pick.plan_point).norm());
     EXPECT_LT(on_wall, 1e-9);
     EXPECT_GT(sim.pick.plan_normal.dot(wearer - sim.pick.plan_point), 0.0);
     EXPECT_GT(sim.pick_step, 0u);
@@ -494,8 +496,9 @@ TEST(FreeSpaceTest, PlansWithoutOutlineUseTheirBoundingBox) {
   FreeSpace fs(plan.segments, plan.min, plan.max, {});
   ASSERT_FALSE(fs.empty());
   EXPECT_THAT(fs.region(), ::testing::HasSubstr("bounding box"));
-  EXPECT_TRUE(fs.Walkable({2.0, 2.5}));
-  EXPECT_FALSE(fs.Walkable({12.0, 2.5}));
+  EXPECT_TRUE(fs.Walkable({2.0, 8.0}));    // the larger part of the box, north of y = 5
+  EXPECT_FALSE(fs.Walkable({12.0, 8.0}));  // outside the box
+  EXPECT_FALSE(fs.Walkable({5.0, 10.0}));  // on a wall
 }
 
 TEST(FreeSpaceTest, ObjectsThatWouldCutTheRegionApartAreRefused) {

@@ -28,8 +28,8 @@ using testing::Condition;
 constexpr double kWindowM = 15.0;
 constexpr double kMinWallM = 50.0;
 constexpr double kMinStrength = 0.05;
-constexpr int kWindows = 6;
-constexpr int kCasesPerWindow = 4;
+constexpr int kWindows = 4;
+constexpr int kCasesPerWindow = 3;
 
 struct RealPlan {
   std::string name;

@@ -15,5 +15,6 @@ Run AddRecordCommand(CLI::App& app);
 Run AddSimulateCommand(CLI::App& app);
 Run AddEvalCommand(CLI::App& app);
 Run AddEvalSuiteCommand(CLI::App& app);
+Run AddBenchCommand(CLI::App& app);
 
 }  // namespace floorpose::tools

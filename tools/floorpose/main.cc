@@ -24,6 +24,8 @@ int main(int argc, char** argv) {
       floorpose::tools::AddEvalCommand);
   add("eval-suite", "every plan x scenario x seed x method, as a table",
       floorpose::tools::AddEvalSuiteCommand);
+  add("bench", "time the registration methods and the closest-wall index",
+      floorpose::tools::AddBenchCommand);
   CLI11_PARSE(app, argc, argv);
   floorpose::platform::SetUpLogging("floorpose", log_level);
   for (auto& [sub, run] : commands)

@@ -58,16 +58,17 @@ int RunSimulate(SimulateOptions o) {
   std::printf("floorpose simulate: %s, scenario %s, seed %lu -> %s\n", plan.plan.id.c_str(),
               o.scenario.c_str(), static_cast<unsigned long>(o.sim.seed), o.out.c_str());
   std::printf("  %s\n", s.description.c_str());
-  std::printf("  walk                       %.0f m in %.0f s, %zu poses\n", s.length_m,
+  std::printf("  walk                           %.0f m in %.0f s, %zu poses\n", s.length_m,
               s.duration_s, s.steps.size());
-  std::printf("  meshes added/updated/removed  %zu / %zu / %zu (%zu vertices, %zu triangles)\n",
+  std::printf("  meshes added/updated/removed   %zu / %zu / %zu (%zu vertices, %zu triangles)\n",
               s.counts.added, s.counts.updated, s.counts.removed, s.counts.vertices,
               s.counts.triangles);
-  std::printf("  SLAM drift                 %.2f m at the end (%.2f%% of the walk); best fit "
-              "mean %.2f m, max %.2f m\n",
-              d.end_error_m, d.length_m > 0 ? 100.0 * d.end_error_m / d.length_m : 0.0,
-              d.best_fit_mean_m, d.best_fit_max_m);
-  std::printf("  recording                  %zu records, %.1f MB, in %.1f s\n", result.records,
+  std::printf(
+      "  SLAM drift                     %.2f m at the end (%.2f%% of the walk); best fit "
+      "mean %.2f m, max %.2f m\n",
+      d.end_error_m, d.length_m > 0 ? 100.0 * d.end_error_m / d.length_m : 0.0, d.best_fit_mean_m,
+      d.best_fit_max_m);
+  std::printf("  recording                      %zu records, %.1f MB, in %.1f s\n", result.records,
               static_cast<double>(result.bytes) / 1e6, seconds);
   return 0;
 }
@@ -84,8 +85,7 @@ Run AddSimulateCommand(CLI::App& app) {
   app.add_option("--trajectory", o->trajectory,
                  "walk this TUM trajectory on the plan ('timestamp x y z qx qy qz qw')");
   app.add_option("--out", o->out, "recording file to write")->required();
-  app.add_option("--length", o->sim.target_length_m, "walk length, metres")
-      ->capture_default_str();
+  app.add_option("--length", o->sim.target_length_m, "walk length, metres")->capture_default_str();
   app.add_option("--max-duration", o->sim.max_duration_s, "walk at most this long, seconds")
       ->capture_default_str();
   app.add_option("--drift-scale", o->sim.drift_scale, "SLAM drift, times the nominal")

@@ -24,10 +24,6 @@ double Percentile(std::vector<double> v, double q) {
                     static_cast<size_t>(q * static_cast<double>(v.size() - 1) + 0.5))];
 }
 
-// Inputs in the order the daemon takes them: by stamp, and at equal stamps commands,
-// then meshes, then poses (daemon/daemon.cc sorts each batch the same way).
-int Rank(Topic t) { return t == Topic::kCommand ? 0 : t == Topic::kMeshDelta ? 1 : 2; }
-
 struct Input {
   int64_t stamp_ns;
   Topic topic;
@@ -80,8 +76,9 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     *error = recording + ": no ground truth in the recording (made by `floorpose simulate`?)";
     return false;
   }
+  // The daemon's order (it sorts each batch the same way).
   std::stable_sort(inputs.begin(), inputs.end(), [](const Input& a, const Input& b) {
-    return a.stamp_ns != b.stamp_ns ? a.stamp_ns < b.stamp_ns : Rank(a.topic) < Rank(b.topic);
+    return platform::InputBefore(a.topic, a.stamp_ns, b.topic, b.stamp_ns);
   });
 
   v1::FloorposedConfig config = base_config;

@@ -57,10 +57,18 @@ bool ChildProcess::Running() {
   return !exited_;
 }
 
+std::optional<int> ChildProcess::Wait(std::chrono::milliseconds timeout) {
+  return Stop(timeout, false);
+}
+
 std::optional<int> ChildProcess::Terminate(std::chrono::milliseconds timeout) {
+  return Stop(timeout, true);
+}
+
+std::optional<int> ChildProcess::Stop(std::chrono::milliseconds timeout, bool terminate) {
   if (pid_ <= 0) return std::nullopt;
   const auto start = std::chrono::steady_clock::now();
-  if (!exited_) kill(pid_, SIGTERM);
+  if (!exited_ && terminate) kill(pid_, SIGTERM);
   while (!exited_ && std::chrono::steady_clock::now() - start < timeout) {
     Reap(false);
     if (!exited_) std::this_thread::sleep_for(std::chrono::milliseconds(10));

@@ -23,11 +23,15 @@ class ChildProcess {
   // SIGTERM, then wait up to timeout; SIGKILL after. Returns the exit code, or nothing if
   // it had to be killed or died by a signal.
   std::optional<int> Terminate(std::chrono::milliseconds timeout);
+  // Waits up to timeout for it to exit on its own (SIGKILL after). The exit code, or
+  // nothing if it had to be killed or died by a signal.
+  std::optional<int> Wait(std::chrono::milliseconds timeout);
   // How long the last Terminate() took.
   std::chrono::milliseconds last_stop_time() const { return stop_time_; }
 
  private:
   std::optional<int> Reap(bool block);
+  std::optional<int> Stop(std::chrono::milliseconds timeout, bool terminate);
   pid_t pid_ = -1;
   std::optional<int> exit_code_;
   bool exited_ = false;

@@ -78,8 +78,8 @@ bool WriteSimulationRecording(const sim::Simulation& simulation, const std::stri
   for (size_t i = 0; i < simulation.steps.size() && ok; ++i) {
     const sim::SimulatedStep& step = simulation.steps[i];
     for (const sim::SimMesh& mesh : step.meshes)
-      ok = ok && out.Append(mesh_topic, step.stamp_ns,
-                            ToMeshDelta(mesh, recording.frame, step.stamp_ns));
+      ok = ok &&
+           out.Append(mesh_topic, step.stamp_ns, ToMeshDelta(mesh, recording.frame, step.stamp_ns));
     ok = ok && out.Append(pose_topic, step.stamp_ns,
                           ToHeadsetPose(step.slam, recording.frame, step.stamp_ns));
     v1::GroundTruthPose truth;

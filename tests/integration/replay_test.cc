@@ -1,0 +1,89 @@
+// A simulated recording replayed over DDS through a real floorposed (deterministic mode)
+// gives exactly the plan poses `floorpose eval` computes from the same file.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/sim/simulator.h"
+#include "platform/config.h"
+#include "platform/dds.h"
+#include "platform/floor_plan_io.h"
+#include "tools/lib/evaluation.h"
+#include "tools/lib/headset_link.h"
+#include "tools/lib/process.h"
+#include "tools/lib/simulate_recording.h"
+
+namespace floorpose {
+namespace {
+
+namespace fs = std::filesystem;
+using std::chrono::seconds;
+
+TEST(ReplayTest, DaemonGivesTheSamePlanPosesAsEval) {
+  const fs::path dir = fs::path(::testing::TempDir()) / ("replay-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const std::string recording = (dir / "walk.rec").string();
+  const FloorPlanParse plan = platform::LoadFloorPlan(FLOORPOSE_DEMO_PLAN);
+  ASSERT_TRUE(plan.ok()) << plan.error;
+  sim::SimulatorOptions sim;
+  sim.seed = 5;
+  sim.scenario = sim::Scenario::kOffice;
+  sim.target_length_m = 60;
+  tools::SimulateRecordingResult simulated;
+  std::string error;
+  ASSERT_TRUE(
+      tools::SimulateToRecording(plan.plan, sim, nullptr, {}, recording, &simulated, &error))
+      << error;
+
+  // The offline run.
+  v1::FloorposedConfig config;
+  config.set_plan_path(FLOORPOSE_DEMO_PLAN);
+  tools::EvalReport report;
+  ASSERT_TRUE(tools::Evaluate(config, recording, tools::Baseline::kNone, &report, &error)) << error;
+  ASSERT_GT(report.plan_poses.size(), 100u);
+  ASSERT_GT(report.accepted, 0u) << "the walk should exercise registration";
+
+  // The live run: floorposed in deterministic mode, the recording replayed over DDS.
+  const uint32_t domain = 1 + static_cast<uint32_t>((getpid() * 7 + 101) % 200);
+  const std::string config_path = (dir / "floorposed.conf").string();
+  std::ofstream(config_path) << "dds { domain_id: " << domain
+                             << " device_id: \"sim-headset\" cyclonedds_uri: '"
+                             << platform::LoopbackCycloneConfig() << "' }\n"
+                             << "plan_path: \"" << FLOORPOSE_DEMO_PLAN << "\"\n"
+                             << "tracking { deterministic: true }\nstatus_period_s: 0.2\n";
+  tools::ChildProcess daemon({FLOORPOSED_PATH, "--config", config_path},
+                             (dir / "floorposed.log").string());
+  tools::HeadsetLink link(domain, platform::LoopbackCycloneConfig(), "sim-headset");
+  ASSERT_TRUE(link.WaitUntil([&] { return link.status.has_value(); }, seconds(15)))
+      << "floorposed did not come up; log in " << dir;
+  tools::ChildProcess replay({FLOORPOSE_PATH, "replay", "--recording", recording, "--domain",
+                              std::to_string(domain), "--loopback", "--rate", "10"},
+                             (dir / "replay.log").string());
+  ASSERT_TRUE(link.WaitUntil([&] { return link.plan_poses.size() >= report.plan_poses.size(); },
+                             seconds(90)))
+      << link.plan_poses.size() << " of " << report.plan_poses.size() << " plan poses; logs in "
+      << dir;
+  EXPECT_EQ(replay.Wait(seconds(30)), 0);
+  EXPECT_EQ(daemon.Terminate(seconds(2)), 0);
+
+  ASSERT_EQ(link.plan_poses.size(), report.plan_poses.size());
+  size_t differing = 0;
+  for (size_t i = 0; i < report.plan_poses.size(); ++i) {
+    const v1::PlanPose& live = link.plan_poses[i];
+    const v1::PlanPose& offline = report.plan_poses[i];
+    ASSERT_EQ(live.source_stamp_ns(), offline.source_stamp_ns()) << "pose " << i;
+    const bool same = live.x() == offline.x() && live.y() == offline.y() &&
+                      live.heading() == offline.heading() &&
+                      live.alignment_version() == offline.alignment_version() &&
+                      live.reliability().flag() == offline.reliability().flag();
+    if (!same && differing++ < 5)
+      ADD_FAILURE() << "pose " << i << ": live " << live.ShortDebugString() << "\n  offline "
+                    << offline.ShortDebugString();
+  }
+  EXPECT_EQ(differing, 0u);
+}
+
+}  // namespace
+}  // namespace floorpose

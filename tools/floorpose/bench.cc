@@ -1,0 +1,433 @@
+// `floorpose bench registration`: the median time of one full registration per method
+// (icp, ik, hough) and of a brute-force closest-wall baseline, for 1k, 10k and 100k wall
+// points against a real floor plan of at least 500 segments; the closest-wall query time
+// (index against brute force); and the index's memory for a 230 x 100 m building.
+// docs/performance.md holds the table this prints and the command that printed it.
+//
+// Timing is a plain median of N runs with std::chrono::steady_clock: registration takes
+// milliseconds, far above the clock's resolution, and a median shrugs off the odd
+// preempted run on a shared machine.
+#include <spdlog/spdlog.h>
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/closest_wall_index.h"
+#include "core/floor_plan.h"
+#include "core/random.h"
+#include "core/registration.h"
+#include "core/se2.h"
+#include "platform/floor_plan_io.h"
+#include "tools/floorpose/commands.h"
+
+namespace floorpose::tools {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+struct BenchOptions {
+  std::string plan;  // empty: the largest plan under $FLOORPOSE_DATA/floorplans
+  bool json = false;
+  int repetitions = 7;
+  size_t min_segments = 500;
+};
+
+constexpr double kNoiseM = 0.02;      // wall points: Gaussian noise per axis
+constexpr double kErrorRad = 0.0175;  // initial guess: the truth turned by 1 degree
+constexpr double kErrorM = 0.3;    // ... and shifted by 0.3 m diagonally, about the cloud's centre
+constexpr double kTileGapM = 5.0;  // between tiled copies of the plan
+constexpr uint64_t kSeed = 20240601;  // the same clouds on every run
+
+double Ms(Clock::duration d) { return std::chrono::duration<double, std::milli>(d).count(); }
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// Times fn() `repetitions` times; the median in milliseconds.
+template <typename Fn>
+double MedianMs(int repetitions, Fn&& fn) {
+  std::vector<double> ms;
+  for (int i = 0; i < repetitions; ++i) {
+    const auto start = Clock::now();
+    fn();
+    ms.push_back(Ms(Clock::now() - start));
+  }
+  return Median(ms);
+}
+
+// The plan with the most segments among $FLOORPOSE_DATA/floorplans/*/*.{geojson,txt}
+// (MLSTRUCT 302 and 848 tie at 320; 848, the bigger building, wins on wall length).
+std::optional<std::string> LargestDataPlan(std::string* error) {
+  const char* data = std::getenv("FLOORPOSE_DATA");
+  if (!data || !*data) {
+    *error = "no --plan given and FLOORPOSE_DATA is not set (the directory holding floorplans/)";
+    return std::nullopt;
+  }
+  std::optional<std::string> best;
+  size_t best_segments = 0;
+  double best_length = 0;
+  std::error_code ec;
+  std::vector<fs::path> files;
+  for (const auto& dir : fs::directory_iterator(fs::path(data) / "floorplans", ec)) {
+    if (!dir.is_directory()) continue;
+    for (const auto& f : fs::directory_iterator(dir.path(), ec)) {
+      const std::string name = f.path().filename().string();
+      if (name.rfind("LICENSE", 0) == 0) continue;
+      if (f.path().extension() == ".geojson" || f.path().extension() == ".txt")
+        files.push_back(f.path());
+    }
+  }
+  std::sort(files.begin(), files.end());  // ties go to the first name: stable output
+  for (const fs::path& f : files) {
+    const FloorPlanParse parse = platform::LoadFloorPlan(f.string());
+    if (!parse.ok()) continue;
+    double length = 0;
+    for (const Segment& s : parse.plan.segments) length += s.Length();
+    // Most segments; on a tie, most wall length (the bigger building).
+    if (parse.plan.segments.size() > best_segments ||
+        (parse.plan.segments.size() == best_segments && length > best_length + 1e-6)) {
+      best_segments = parse.plan.segments.size();
+      best_length = length;
+      best = f.string();
+    }
+  }
+  if (!best) *error = std::string("no floor plan under ") + data + "/floorplans";
+  return best;
+}
+
+// Copies of `plan` side by side along x, kTileGapM apart, until it has min_segments.
+FloorPlan Tile(const FloorPlan& plan, size_t min_segments, int* copies) {
+  *copies = static_cast<int>(
+      std::max<size_t>(1, (min_segments + plan.segments.size() - 1) / plan.segments.size()));
+  const double step = plan.max.x() - plan.min.x() + kTileGapM;
+  std::vector<Segment> walls;
+  for (int k = 0; k < *copies; ++k)
+    for (const Segment& s : plan.segments) {
+      const Eigen::Vector2d shift(k * step, 0);
+      walls.push_back({s.a + shift, s.b + shift});
+    }
+  return MakeFloorPlan(plan.id + (*copies > 1 ? "-tiled" : ""), std::move(walls)).plan;
+}
+
+// n points drawn uniformly along all walls (by length), with their wall's normal (random
+// sign), moved to the slam frame.
+struct Cloud {
+  std::vector<Eigen::Vector2d> points, normals;
+  Eigen::Vector2d centre_plan = Eigen::Vector2d::Zero();
+};
+
+Cloud SampleWalls(const FloorPlan& plan, size_t n, const Se2& T_slam_plan, SplitMix64& rng) {
+  std::vector<double> cumulative;
+  double total = 0;
+  for (const Segment& s : plan.segments) cumulative.push_back(total += s.Length());
+  Cloud cloud;
+  for (size_t i = 0; i < n; ++i) {
+    const double at = rng.Uniform(0, total);
+    const size_t k = std::min<size_t>(
+        plan.segments.size() - 1,
+        std::upper_bound(cumulative.begin(), cumulative.end(), at) - cumulative.begin());
+    const Segment& s = plan.segments[k];
+    const double u = rng.Uniform();
+    const Eigen::Vector2d p = s.a + u * (s.b - s.a);
+    const Eigen::Vector2d noise(rng.Gaussian(), rng.Gaussian());
+    cloud.points.push_back(T_slam_plan * (p + kNoiseM * noise));
+    cloud.normals.push_back(T_slam_plan.R() * s.Normal() * (rng.Uniform() < 0.5 ? -1.0 : 1.0));
+    cloud.centre_plan += p;
+  }
+  cloud.centre_plan /= static_cast<double>(n);
+  return cloud;
+}
+
+// The baseline: plain point-to-line ICP (Gauss-Newton about the centroid, eq. 4.4; every
+// point every iteration; no levels, kernel or rejection), the closest wall of each point
+// from `closest`, for exactly `iterations` iterations.
+template <typename Closest>
+Se2 PlainIcp(const std::vector<Eigen::Vector2d>& points, const Se2& initial, int iterations,
+             double max_correspondence_m, Closest&& closest) {
+  Se2 T = initial;
+  for (int it = 0; it < iterations; ++it) {
+    const Eigen::Matrix2d R = T.R();
+    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+    struct Pair {
+      Eigen::Vector2d p, n;
+      double r;
+    };
+    std::vector<Pair> pairs;
+    pairs.reserve(points.size());
+    for (const Eigen::Vector2d& q : points) {
+      const Eigen::Vector2d p = R * q + T.t;
+      const std::optional<ClosestWall> hit = closest(p);
+      if (!hit || hit->distance > max_correspondence_m) continue;
+      pairs.push_back({p, hit->normal, hit->normal.dot(p - hit->point)});
+      centroid += p;
+    }
+    if (pairs.size() < 3) break;
+    centroid /= static_cast<double>(pairs.size());
+    for (const Pair& q : pairs) {
+      const Eigen::Vector2d p = q.p - centroid;
+      const Eigen::Vector3d a(p.x() * q.n.y() - p.y() * q.n.x(), q.n.x(), q.n.y());
+      H += a * a.transpose();
+      g += a * q.r;
+    }
+    const Eigen::Vector3d delta = -H.ldlt().solve(g);
+    if (!delta.allFinite()) break;
+    const Se2 rotation{delta(0), {0, 0}};
+    T = Se2{delta(0), centroid + delta.tail<2>() - rotation.R() * centroid} * T;
+  }
+  return T;
+}
+
+// "model name" from /proc/cpuinfo, or "unknown".
+std::string CpuModel() {
+  std::ifstream in("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("model name", 0) != 0) continue;
+    const auto colon = line.find(':');
+    if (colon != std::string::npos) return line.substr(line.find_first_not_of(' ', colon + 1));
+  }
+  return "unknown";
+}
+
+double LoadAverage() {
+  std::ifstream in("/proc/loadavg");
+  double load = -1;
+  in >> load;
+  return load;
+}
+
+// A 230 x 100 m building: a grid of 6 x 5 m rooms (38 x 20), every wall one line with a
+// 1 m door in its middle, so each room side is two segments.
+FloorPlan SyntheticBuilding() {
+  constexpr int kColumns = 38, kRows = 20;
+  constexpr double kRoomW = 6.0, kRoomH = 5.0, kDoor = 1.0;
+  std::vector<Segment> walls;
+  auto wall_with_door = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    const Eigen::Vector2d mid = 0.5 * (a + b), d = (b - a).normalized() * (0.5 * kDoor);
+    walls.push_back({a, mid - d});
+    walls.push_back({mid + d, b});
+  };
+  for (int r = 0; r <= kRows; ++r)
+    for (int c = 0; c < kColumns; ++c)
+      wall_with_door({c * kRoomW, r * kRoomH}, {(c + 1) * kRoomW, r * kRoomH});
+  for (int c = 0; c <= kColumns; ++c)
+    for (int r = 0; r < kRows; ++r)
+      wall_with_door({c * kRoomW, r * kRoomH}, {c * kRoomW, (r + 1) * kRoomH});
+  return MakeFloorPlan("synthetic-230x100", std::move(walls)).plan;
+}
+
+struct Row {
+  std::string method;
+  size_t points = 0;
+  double median_ms = 0;
+  int runs = 0;
+  std::string extra_text;  // for the table
+  std::string extra_json;  // `"key": value` pairs, comma-led
+};
+
+int RunBenchRegistration(const BenchOptions& o) {
+  if (o.repetitions < 1) {
+    spdlog::error("--repetitions must be at least 1");
+    return 2;
+  }
+  std::string plan_path = o.plan, error;
+  if (plan_path.empty()) {
+    const auto found = LargestDataPlan(&error);
+    if (!found) {
+      spdlog::error("{}", error);
+      return 2;
+    }
+    plan_path = *found;
+  }
+  const FloorPlanParse parse = platform::LoadFloorPlan(plan_path);
+  if (!parse.ok()) {
+    spdlog::error("{}", parse.error);
+    return 1;
+  }
+  int copies = 1;
+  const FloorPlan plan = Tile(parse.plan, o.min_segments, &copies);
+  const ClosestWallIndex::Options index_options;
+  const ClosestWallIndex index(plan, index_options);
+  const RegistrationOptions defaults;
+  const double max_corr = defaults.icp.max_correspondence_m;
+
+  std::vector<Row> rows;
+  auto add = [&](Row row) {
+    if (o.json) {
+      std::printf(
+          "{\"method\": \"%s\", \"points\": %zu, \"median_ms\": %.4f, "
+          "\"repetitions\": %d, \"segments\": %zu%s}\n",
+          row.method.c_str(), row.points, row.median_ms, o.repetitions, plan.segments.size(),
+          row.extra_json.c_str());
+      std::fflush(stdout);
+    }
+    rows.push_back(std::move(row));
+  };
+
+  SplitMix64 rng(kSeed);
+  const Se2 T_slam_plan{0.7, {-12.0, 31.0}};  // any transform: slam and plan differ
+  const Se2 truth = T_slam_plan.Inverse();
+  Cloud largest;
+  for (size_t n : {size_t{1000}, size_t{10000}, size_t{100000}}) {
+    const Cloud cloud = SampleWalls(plan, n, T_slam_plan, rng);
+    // The initial guess: the truth turned and shifted about the cloud's centre.
+    const Se2 turn{kErrorRad, cloud.centre_plan - Se2{kErrorRad, {0, 0}}.R() * cloud.centre_plan +
+                                  Eigen::Vector2d(kErrorM, kErrorM) / std::sqrt(2.0)};
+    const Se2 initial = turn * truth;
+    auto error_cm = [&](const Se2& T) {
+      return 100 * ((T * truth.Inverse()) * cloud.centre_plan - cloud.centre_plan).norm();
+    };
+    uint32_t icp_iterations = 0;
+    for (RegistrationMethod m :
+         {RegistrationMethod::kIcp, RegistrationMethod::kIk, RegistrationMethod::kHough}) {
+      RegistrationOptions options = defaults;
+      options.method = m;
+      RegistrationResult r;
+      const double ms = MedianMs(o.repetitions, [&] {
+        r = Register(cloud.points, cloud.normals, index, initial, options);
+      });
+      if (m == RegistrationMethod::kIcp) icp_iterations = r.iterations;
+      char text[128], json[160];
+      std::snprintf(text, sizeof text, "%4u iterations, %.2f cm off", r.iterations,
+                    error_cm(r.T_plan_slam));
+      std::snprintf(json, sizeof json, ", \"iterations\": %u, \"error_cm\": %.3f", r.iterations,
+                    error_cm(r.T_plan_slam));
+      add({ToString(m), n, ms, o.repetitions, text, json});
+    }
+    // The baseline, and the same loop on the index to separate the query's share. At
+    // 100k points brute force takes seconds a run: one run is enough to see it.
+    for (bool brute : {false, true}) {
+      Se2 T;
+      const int iterations = static_cast<int>(icp_iterations);
+      const int runs = brute && n >= 100000 ? 1 : o.repetitions;
+      const double ms = MedianMs(runs, [&] {
+        T = brute ? PlainIcp(cloud.points, initial, iterations, max_corr,
+                             [&](const Eigen::Vector2d& p) {
+                               return BruteForceClosestWall(plan, p, index_options.max_distance_m);
+                             })
+                  : PlainIcp(cloud.points, initial, iterations, max_corr,
+                             [&](const Eigen::Vector2d& p) { return index.Query(p); });
+      });
+      char text[128], json[160];
+      std::snprintf(text, sizeof text, "%4d iterations, %.2f cm off", iterations, error_cm(T));
+      std::snprintf(json, sizeof json, ", \"iterations\": %d, \"error_cm\": %.3f", iterations,
+                    error_cm(T));
+      add({brute ? "icp_loop_bruteforce" : "icp_loop_index", n, ms, runs, text, json});
+    }
+    if (n == 100000) largest = cloud;
+  }
+
+  // Closest-wall queries at the wall points of the largest cloud (where ICP asks).
+  std::vector<Eigen::Vector2d> queries;
+  for (const Eigen::Vector2d& p : largest.points) queries.push_back(truth * p);
+  for (bool brute : {false, true}) {
+    // Brute force is slow: a tenth of the queries.
+    const size_t count = brute ? queries.size() / 10 : queries.size();
+    size_t found = 0;
+    const double ms = MedianMs(o.repetitions, [&] {
+      found = 0;
+      for (size_t i = 0; i < count; ++i)
+        found += (brute ? BruteForceClosestWall(plan, queries[i], index_options.max_distance_m)
+                        : index.Query(queries[i]))
+                     .has_value();
+    });
+    char text[128], json[96];
+    const double ns = 1e6 * ms / static_cast<double>(count);
+    std::snprintf(text, sizeof text, "%.1f ns per query (%zu queries a run)", ns, count);
+    std::snprintf(json, sizeof json, ", \"ns_per_query\": %.2f", ns);
+    add({brute ? "query_bruteforce" : "query_index", count, ms, o.repetitions, text, json});
+  }
+
+  // Index memory and build time for a building of 230 x 100 m.
+  const FloorPlan building = SyntheticBuilding();
+  size_t memory = 0;
+  const int build_runs = std::max(1, o.repetitions / 2);
+  const double build_ms = MedianMs(
+      build_runs, [&] { memory = ClosestWallIndex(building, index_options).MemoryBytes(); });
+  {
+    char text[192], json[192];
+    std::snprintf(text, sizeof text,
+                  "%.1f MB for %s (%zu segments, %.0f x %.0f m), cell %.2f m, max distance %.1f m",
+                  memory / 1e6, building.id.c_str(), building.segments.size(),
+                  building.max.x() - building.min.x(), building.max.y() - building.min.y(),
+                  index_options.cell_m, index_options.max_distance_m);
+    std::snprintf(json, sizeof json,
+                  ", \"memory_bytes\": %zu, \"plan\": \"%s\", \"plan_segments\": %zu, "
+                  "\"cell_m\": %.2f, \"max_distance_m\": %.1f",
+                  memory, building.id.c_str(), building.segments.size(), index_options.cell_m,
+                  index_options.max_distance_m);
+    add({"index_build", 0, build_ms, build_runs, text, json});
+  }
+  if (o.json) return 0;
+
+  std::printf("floorpose bench registration\n");
+  std::printf("plan:     %s: %zu segments", plan_path.c_str(), parse.plan.segments.size());
+  if (copies > 1)
+    std::printf(", tiled %d copies side by side along x, %.0f m apart", copies, kTileGapM);
+  std::printf(" -> %zu segments, %.1f x %.1f m\n", plan.segments.size(),
+              plan.max.x() - plan.min.x(), plan.max.y() - plan.min.y());
+  std::printf("index:    cell %.2f m, max distance %.1f m, %.2f MB\n", index_options.cell_m,
+              index_options.max_distance_m, index.MemoryBytes() / 1e6);
+  std::printf(
+      "points:   drawn uniformly along all walls, %.0f cm noise per axis; initial guess\n"
+      "          the truth turned %.0f degree and shifted %.1f m about the cloud's "
+      "centre; default options\n",
+      100 * kNoiseM, kErrorRad * 180 / M_PI, kErrorM);
+  std::printf(
+      "baseline: icp_loop_bruteforce is a plain point-to-line ICP loop (every point every\n"
+      "          iteration; no levels, kernel or rejection) with BruteForceClosestWall,\n"
+      "          run for as many iterations as icp reported; icp_loop_index is the same\n"
+      "          loop on the index\n");
+  std::printf("machine:  %u cores (hardware_concurrency), %s, load average %.2f\n",
+              std::thread::hardware_concurrency(), CpuModel().c_str(), LoadAverage());
+  std::printf("timing:   median of the runs shown, one thread\n\n");
+  std::printf("%-20s %8s %12s %5s  %s\n", "method", "points", "median ms", "runs", "");
+  for (const Row& r : rows)
+    std::printf("%-20s %8zu %12.3f %5d  %s\n", r.method.c_str(), r.points, r.median_ms, r.runs,
+                r.extra_text.c_str());
+  return 0;
+}
+
+}  // namespace
+
+Run AddBenchCommand(CLI::App& app) {
+  app.require_subcommand(1);
+  auto o = std::make_shared<BenchOptions>();
+  CLI::App* registration = app.add_subcommand(
+      "registration", "time icp, ik, hough and a brute-force baseline at 1k, 10k, 100k points");
+  registration->add_option(
+      "--plan", o->plan,
+      "floor plan (.geojson or .txt); default: the one with the most segments under "
+      "$FLOORPOSE_DATA/floorplans");
+  registration->add_flag("--json", o->json, "one JSON object per line per method and size");
+  registration->add_option("--repetitions", o->repetitions, "runs per measurement (median)")
+      ->capture_default_str();
+  registration
+      ->add_option("--min-segments", o->min_segments,
+                   "tile the plan side by side until it has this many segments")
+      ->capture_default_str();
+  return [o, registration] {
+    if (!registration->parsed()) return 2;
+    return RunBenchRegistration(*o);
+  };
+}
+
+}  // namespace floorpose::tools
