@@ -13,7 +13,7 @@ cd "$(dirname "$0")/.."
 packages=(build-essential cmake pkg-config clang-format
   cyclonedds-dev cyclonedds-tools libprotobuf-dev protobuf-compiler libeigen3-dev
   libspdlog-dev libgtest-dev libgmock-dev libbenchmark-dev libsystemd-dev
-  libcli11-dev nlohmann-json3-dev)
+  libcli11-dev nlohmann-json3-dev systemd)
 
 missing=()
 for p in "${packages[@]}"; do
