@@ -23,8 +23,9 @@
 // - The wall pick (initial alignment) is off by up to 9 degrees and 2.5 m (thesis table
 //   7.1).
 //
-// Deterministic: the same plan, options and seed give the same output, bit for bit, with
-// any standard library (SplitMix64 only, ordered containers only).
+// Deterministic: the same plan, options and seed give the same output, bit for bit
+// (SplitMix64 only, no std distributions, ordered containers only; only the platform's
+// libm, through sin/cos/log, could make another machine differ).
 #pragma once
 
 #include <Eigen/Core>

@@ -274,8 +274,8 @@ int RunBenchRegistration(const BenchOptions& o) {
     if (o.json) {
       std::printf(
           "{\"method\": \"%s\", \"points\": %zu, \"median_ms\": %.4f, "
-          "\"repetitions\": %d, \"segments\": %zu%s}\n",
-          row.method.c_str(), row.points, row.median_ms, o.repetitions, plan.segments.size(),
+          "\"runs\": %d, \"segments\": %zu%s}\n",
+          row.method.c_str(), row.points, row.median_ms, row.runs, plan.segments.size(),
           row.extra_json.c_str());
       std::fflush(stdout);
     }
@@ -292,8 +292,12 @@ int RunBenchRegistration(const BenchOptions& o) {
     const Se2 turn{kErrorRad, cloud.centre_plan - Se2{kErrorRad, {0, 0}}.R() * cloud.centre_plan +
                                   Eigen::Vector2d(kErrorM, kErrorM) / std::sqrt(2.0)};
     const Se2 initial = turn * truth;
+    // The result's error at the cloud's centre (cm) and in rotation (degrees).
     auto error_cm = [&](const Se2& T) {
       return 100 * ((T * truth.Inverse()) * cloud.centre_plan - cloud.centre_plan).norm();
+    };
+    auto error_deg = [&](const Se2& T) {
+      return std::abs(WrapAngle(T.theta - truth.theta)) * 180 / M_PI;
     };
     uint32_t icp_iterations = 0;
     for (RegistrationMethod m :
@@ -306,10 +310,11 @@ int RunBenchRegistration(const BenchOptions& o) {
       });
       if (m == RegistrationMethod::kIcp) icp_iterations = r.iterations;
       char text[128], json[160];
-      std::snprintf(text, sizeof text, "%4u iterations, %.2f cm off", r.iterations,
-                    error_cm(r.T_plan_slam));
-      std::snprintf(json, sizeof json, ", \"iterations\": %u, \"error_cm\": %.3f", r.iterations,
-                    error_cm(r.T_plan_slam));
+      std::snprintf(text, sizeof text, "%4u iterations, %.2f cm, %.3f deg off", r.iterations,
+                    error_cm(r.T_plan_slam), error_deg(r.T_plan_slam));
+      std::snprintf(json, sizeof json,
+                    ", \"iterations\": %u, \"error_cm\": %.3f, \"error_deg\": %.4f", r.iterations,
+                    error_cm(r.T_plan_slam), error_deg(r.T_plan_slam));
       add({ToString(m), n, ms, o.repetitions, text, json});
     }
     // The baseline, and the same loop on the index to separate the query's share. At
@@ -327,9 +332,11 @@ int RunBenchRegistration(const BenchOptions& o) {
                              [&](const Eigen::Vector2d& p) { return index.Query(p); });
       });
       char text[128], json[160];
-      std::snprintf(text, sizeof text, "%4d iterations, %.2f cm off", iterations, error_cm(T));
-      std::snprintf(json, sizeof json, ", \"iterations\": %d, \"error_cm\": %.3f", iterations,
-                    error_cm(T));
+      std::snprintf(text, sizeof text, "%4d iterations, %.2f cm, %.3f deg off", iterations,
+                    error_cm(T), error_deg(T));
+      std::snprintf(json, sizeof json,
+                    ", \"iterations\": %d, \"error_cm\": %.3f, \"error_deg\": %.4f", iterations,
+                    error_cm(T), error_deg(T));
       add({brute ? "icp_loop_bruteforce" : "icp_loop_index", n, ms, runs, text, json});
     }
     if (n == 100000) largest = cloud;
