@@ -29,7 +29,7 @@ void WallStore::UnindexMesh(uint64_t mesh_id, const std::vector<WallPoint>& poin
   }
 }
 
-size_t WallStore::Upsert(uint64_t mesh_id, std::vector<WallPoint> points) {
+size_t WallStore::Upsert(uint64_t mesh_id, std::vector<WallPoint> points, int64_t stamp_ns) {
   // Non-finite points never enter the store.
   points.erase(
       std::remove_if(points.begin(), points.end(),
@@ -44,6 +44,7 @@ size_t WallStore::Upsert(uint64_t mesh_id, std::vector<WallPoint> points) {
     it = meshes_.emplace(mesh_id, Mesh{std::move(points), 0}).first;
   }
   it->second.generation = ++generation_;
+  it->second.stamp_ns = stamp_ns;
   IndexMesh(mesh_id, it->second.points);
   points_ += it->second.points.size();
   new_points_ += it->second.points.size();
@@ -68,7 +69,8 @@ void WallStore::Clear() {
 
 std::vector<Eigen::Vector2d> WallStore::Snapshot(size_t max_points,
                                                  std::vector<Eigen::Vector2d>* normals,
-                                                 uint64_t since_generation) const {
+                                                 uint64_t since_generation,
+                                                 int64_t min_stamp_ns) const {
   // Sorted voxel order makes the snapshot independent of hash-map iteration order, so
   // that the daemon and the offline evaluator register the same points.
   std::vector<std::pair<VoxelKey, const WallPoint*>> cells;
@@ -76,7 +78,9 @@ std::vector<Eigen::Vector2d> WallStore::Snapshot(size_t max_points,
   for (const auto& [key, refs] : voxels_) {
     const Ref* best = nullptr;
     for (const Ref& r : refs) {
-      if (since_generation && meshes_.at(r.mesh_id).generation <= since_generation) continue;
+      const Mesh& mesh = meshes_.at(r.mesh_id);
+      if (since_generation && mesh.generation <= since_generation) continue;
+      if (mesh.stamp_ns < min_stamp_ns) continue;
       if (!best || std::tie(r.mesh_id, r.index) < std::tie(best->mesh_id, best->index)) best = &r;
     }
     if (best) cells.emplace_back(key, &meshes_.at(best->mesh_id).points[best->index]);

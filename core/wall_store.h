@@ -18,7 +18,8 @@ class WallStore {
   explicit WallStore(double voxel_m = 0.05) : voxel_m_(voxel_m) {}
 
   // Inserts or replaces the points of a mesh. Returns the number of points now live.
-  size_t Upsert(uint64_t mesh_id, std::vector<WallPoint> points);
+  // stamp_ns: when the mesh was (re)scanned, for windowed snapshots.
+  size_t Upsert(uint64_t mesh_id, std::vector<WallPoint> points, int64_t stamp_ns = 0);
   // Returns false when the id is unknown.
   bool Remove(uint64_t mesh_id);
   bool Contains(uint64_t mesh_id) const { return meshes_.count(mesh_id) > 0; }
@@ -39,10 +40,12 @@ class WallStore {
   // voxel order), at most max_points (0 = all) spread evenly over the voxels: the
   // registration input. With `normals`, their wall normals too. With since_generation,
   // only points of meshes inserted or replaced after that generation (the thesis'
-  // "local" registration; 0 = all, its "global").
+  // "local" registration; 0 = all, its "global"). With min_stamp_ns, only meshes scanned
+  // at or after it (a window that follows the SLAM drift).
   std::vector<Eigen::Vector2d> Snapshot(size_t max_points,
                                         std::vector<Eigen::Vector2d>* normals = nullptr,
-                                        uint64_t since_generation = 0) const;
+                                        uint64_t since_generation = 0,
+                                        int64_t min_stamp_ns = INT64_MIN) const;
   // Increments on every Upsert; a mesh remembers the generation that last wrote it.
   uint64_t generation() const { return generation_; }
   // Live points within radius of a position (slam frame).
@@ -62,6 +65,7 @@ class WallStore {
   struct Mesh {
     std::vector<WallPoint> points;
     uint64_t generation = 0;
+    int64_t stamp_ns = 0;
   };
   std::unordered_map<uint64_t, Mesh> meshes_;
   std::unordered_map<VoxelKey, std::vector<Ref>> voxels_;

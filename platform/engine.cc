@@ -159,7 +159,7 @@ void Engine::OnMeshDelta(const Envelope& e) {
     return Reject("mesh " + std::to_string(mesh.mesh_id) + ": wall-point store full (" +
                   std::to_string(store_.points()) + " points)");
   }
-  store_.Upsert(mesh.mesh_id, std::move(points));
+  store_.Upsert(mesh.mesh_id, std::move(points), mesh.stamp_ns);
   if (mesh.change == v1::MeshDelta::ADDED && !known)
     counters_.set_meshes_added(counters_.meshes_added() + 1);
   else
@@ -265,8 +265,11 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
   tracker_.MarkRegistrationStarted(latest_stamp_ns_);
   Job job;
   const TrackerOptions& options = tracker_.options();
+  const double window_s = config_.tracking().window_s();
+  const int64_t min_stamp =
+      window_s > 0 ? latest_stamp_ns_ - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
   job.cloud = store_.Snapshot(config_.tracking().max_points(), &job.normals,
-                              options.local_meshes ? last_run_generation_ : 0);
+                              options.local_meshes ? last_run_generation_ : 0, min_stamp);
   last_run_generation_ = store_.generation();
   job.index = tracker_.index();
   job.options = ToRegistrationOptions(options, tracker_.alignment().source);

@@ -6,7 +6,8 @@
 // kept when they hold at least 50 m of wall and pin down all three unknowns
 // (ConstraintStrength >= 0.05; corridors have their own test). Nothing about the
 // registration enters the choice. The plans' walls are thick (MLSTRUCT: 20 cm), and
-// both faces are sampled, as a walker sees each face from its own room.
+// both faces are sampled, as a walker sees each face from its own room. 4 windows a
+// plan, 3 cases a window and condition: about 20 s for the whole file on 2 cores.
 #include <gtest/gtest.h>
 
 #include <cstdio>
