@@ -267,7 +267,12 @@ RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& points,
     for (uint32_t it = 0; it < max_iter; ++it) {
       ++result.iterations;
       MakeRows(points, stride, T, index, o.max_correspondence_m, false, &rows);
-      Step st = SolveStep(rows, o, false);
+      // Plain least squares on the coarse levels: a kernel whose scale follows the median
+      // residual collapses on clean data once half the points fit, and then ignores the
+      // points that would pull the cloud out of a wrong minimum.
+      IcpOptions level_o = o;
+      if (h > 0) level_o.cauchy_scale_factor = 0;
+      Step st = SolveStep(rows, level_o, false);
       if (!st.ok) {
         result.reason = st.reason;
         break;
@@ -304,12 +309,14 @@ RegistrationResult RegisterIk(const std::vector<Eigen::Vector2d>& points,
     // Every level may iterate to convergence: coarse iterations are cheap, and a level
     // that stops early only hands its work to a finer, dearer one.
     const uint32_t max_iter = o.max_iterations;
-    double score = TruncatedScore(points, stride, T, index, o.max_correspondence_m);
+    double score = TruncatedScore(points, stride, T, index, o.inlier_threshold_m);
     bool converged = false;
     for (uint32_t it = 0; it < max_iter; ++it) {
       ++result.iterations;
       MakeRows(points, stride, T, index, o.max_correspondence_m, true, &rows);
-      Step st = SolveStep(rows, o, false);  // Algorithm 4.4
+      IcpOptions level_o = o;  // as in ICP: plain least squares on the coarse levels
+      if (h > 0) level_o.cauchy_scale_factor = 0;
+      Step st = SolveStep(rows, level_o, false);  // Algorithm 4.4
       if (!st.ok) {
         result.reason = st.reason;
         break;
@@ -330,7 +337,7 @@ RegistrationResult RegisterIk(const std::vector<Eigen::Vector2d>& points,
         }
         const Se2 candidate = motion * T;
         const double candidate_score =
-            TruncatedScore(points, stride, candidate, index, o.max_correspondence_m);
+            TruncatedScore(points, stride, candidate, index, o.inlier_threshold_m);
         if (candidate_score <= score) {  // Algorithm 4.3 line 9: only a better fit
           T = candidate;
           score = candidate_score;
@@ -370,16 +377,28 @@ RegistrationResult RegisterHough(const std::vector<Eigen::Vector2d>& points,
   // under the initial guess, one vote a point) and of the plan (wall length).
   const int bins = std::max(8, static_cast<int>(std::lround(M_PI / h.bin_rad)));
   const double bin = M_PI / bins;
-  auto angle_bin = [&](const Eigen::Vector2d& n) {
-    double a = std::atan2(n.y(), n.x());
-    a = std::fmod(a + 2 * M_PI, M_PI);
-    return std::min(bins - 1, static_cast<int>(a / bin));
-  };
   std::vector<double> cloud_hist(bins, 0.0), plan_hist(bins, 0.0);
   const Eigen::Matrix2d R0 = initial.R();
+  auto vote = [&](std::vector<double>& hist, const Eigen::Vector2d& n, double w) {
+    double a = std::atan2(n.y(), n.x());
+    a = std::fmod(a + 2 * M_PI, M_PI) / bin - 0.5;  // in bins, centres at integers
+    const double f = std::floor(a);
+    const int i = ((static_cast<int>(f) % bins) + bins) % bins;
+    hist[i] += w * (1 - (a - f));
+    hist[(i + 1) % bins] += w * (a - f);
+  };
   for (const Eigen::Vector2d& n : normals)
-    if (n.allFinite() && n.squaredNorm() > 1e-12) cloud_hist[angle_bin(R0 * n)] += 1.0;
-  for (const Segment& s : index.plan().segments) plan_hist[angle_bin(s.Normal())] += s.Length();
+    if (n.allFinite() && n.squaredNorm() > 1e-12) vote(cloud_hist, R0 * n, 1.0);
+  // Only the walls near the cloud vote: a wing of the building turned by a few degrees
+  // must not pull the rotation of a scan taken elsewhere.
+  Eigen::Vector2d lo = initial * points.front(), hi = lo;
+  for (const Eigen::Vector2d& p : points) {
+    lo = lo.cwiseMin(initial * p);
+    hi = hi.cwiseMax(initial * p);
+  }
+  const Eigen::Vector2d margin = Eigen::Vector2d::Constant(2.0);
+  for (const Segment& s : ClipFloorPlan(index.plan(), lo - margin, hi + margin).segments)
+    vote(plan_hist, s.Normal(), s.Length());
   // Gaussian smoothing (circular) makes the correlation peak well-defined.
   const int half = std::max(1, static_cast<int>(std::ceil(3 * h.smooth_rad / bin)));
   auto smooth = [&](const std::vector<double>& in) {
@@ -558,7 +577,9 @@ RegistrationResult Register(const std::vector<Eigen::Vector2d>& points,
     RegistrationResult r = refine(start);
     iterations += r.iterations;
     double score = 0;
-    EvaluateFit(*use_points, *use_index, r.T_plan_slam, options.icp.max_correspondence_m,
+    // Capped at the inlier threshold: with a 1.5 m cap, clutter far from the walls
+    // outweighs the walls and prefers a pose 10-20 cm off.
+    EvaluateFit(*use_points, *use_index, r.T_plan_slam, options.icp.inlier_threshold_m,
                 options.icp.inlier_threshold_m, nullptr, &score);
     if (score < best_score) {
       best_score = score;
