@@ -117,7 +117,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
       }
       default: break;
     }
-    if (baseline == Baseline::kNoAlgorithm) continue;
+    if (baseline != Baseline::kNone) continue;  // baselines never register
     if (auto job = engine.TakeDueJob()) {
       platform::Engine::Done done = platform::Engine::Run(std::move(*job), platform::MonotonicNs);
       reg_times.push_back(done.result.time_ms);
