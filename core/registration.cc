@@ -208,14 +208,35 @@ Se2 AboutCentre(double theta, const Eigen::Vector2d& c, const Eigen::Vector2d& t
   return {theta, c + t - R.R() * c};
 }
 
+// Fills the result's matrices from the last step and its fit statistics: from the last
+// pass's point-to-line rows (one per point) when given, else from a fresh pass.
 void Finish(const std::vector<Eigen::Vector2d>& points, const ClosestWallIndex& index,
-            const IcpOptions& o, const Step& last, RegistrationResult* result) {
+            const IcpOptions& o, const Step& last, RegistrationResult* result,
+            const std::vector<Row>* final_rows = nullptr) {
   result->normal_matrix = last.H;
   result->eigenvalues = last.eigenvalues;
   result->eigenvectors = last.eigenvectors;
   result->degenerate_directions = last.degenerate;
-  EvaluateFit(points, index, result->T_plan_slam, o.max_correspondence_m, o.inlier_threshold_m,
-              result, nullptr);
+  if (!final_rows) {
+    EvaluateFit(points, index, result->T_plan_slam, o.max_correspondence_m, o.inlier_threshold_m,
+                result, nullptr);
+    return;
+  }
+  double sum_matched = 0, sum_inlier = 0;
+  uint32_t inliers = 0;
+  for (const Row& q : *final_rows) {
+    sum_matched += q.d * q.d;
+    if (q.d <= o.inlier_threshold_m) {
+      sum_inlier += q.d * q.d;
+      ++inliers;
+    }
+  }
+  const auto matched = static_cast<uint32_t>(final_rows->size());
+  result->points = static_cast<uint32_t>(points.size());
+  result->matched = matched;
+  result->inliers = inliers;
+  result->rmse = matched ? std::sqrt(sum_matched / matched) : 0.0;
+  result->inlier_rmse = inliers ? std::sqrt(sum_inlier / inliers) : 0.0;
 }
 
 // Algorithm 4.2's h_max, raised until the coarsest level has at most coarsest_points.
@@ -289,7 +310,13 @@ RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& points,
   result.T_plan_slam = T;
   result.converged = result.reason.empty() && converged_at_finest;
   if (result.reason.empty() && !result.converged) result.reason = "iteration limit";
-  Finish(points, index, o, last, &result);
+  if (result.converged) {
+    // The last pass paired every point (level 0) and the step after it was below the
+    // convergence threshold: its distances are the fit's, without another full pass.
+    Finish(points, index, o, last, &result, &rows);
+  } else {
+    Finish(points, index, o, last, &result);
+  }
   return result;
 }
 
