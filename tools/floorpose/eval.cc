@@ -14,7 +14,7 @@ namespace floorpose::tools {
 namespace {
 
 struct EvalOptions {
-  std::string plan, recording, method = "icp", baseline = "none", config, svg;
+  std::string plan, recording, method = "icp", baseline, config, svg;
   bool json = false;
 };
 
@@ -34,8 +34,8 @@ int RunEval(const EvalOptions& o) {
     return 2;
   }
   const Baseline baseline = o.baseline == "best-fit" ? Baseline::kBestFit
-                            : o.baseline == "none"   ? Baseline::kNone
-                                                     : Baseline::kNoAlgorithm;
+                            : o.baseline == "none"   ? Baseline::kNoAlgorithm
+                                                     : Baseline::kNone;
   EvalReport report;
   if (!Evaluate(config, o.recording, baseline, &report, &error)) {
     spdlog::error("{}", error);
@@ -59,10 +59,9 @@ Run AddEvalCommand(CLI::App& app) {
       ->check(CLI::IsMember({"icp", "ik", "hough"}))
       ->capture_default_str();
   app.add_option("--baseline", o->baseline,
-                 "none: register as configured; no-registration: the wall pick only; "
-                 "best-fit: one SE(2) fitted to the whole walk after the fact")
-      ->check(CLI::IsMember({"none", "no-registration", "best-fit"}))
-      ->capture_default_str();
+                 "instead of registering: none (the wall pick only, the thesis' \"no "
+                 "algorithm\") or best-fit (one SE(2) fitted to the whole walk after the fact)")
+      ->check(CLI::IsMember({"none", "best-fit"}));
   app.add_option("--config", o->config, "floorposed configuration to evaluate with");
   app.add_flag("--json", o->json, "print one JSON object");
   app.add_option("--svg", o->svg, "draw the plan, both trajectories and the markers here");

@@ -29,7 +29,7 @@ struct SuiteOptions {
   int seeds = 3;
   std::string out;
   std::vector<std::string> scenarios = {"corridor", "office", "glass", "hall", "mismatch"};
-  std::vector<std::string> methods = {"icp", "ik", "hough", "no-registration", "best-fit"};
+  std::vector<std::string> methods = {"icp", "ik", "hough", "none", "best-fit"};
   double length_m = 0;  // 0: the simulator's default
   int jobs = 0;
 };
@@ -108,11 +108,11 @@ int RunSuite(const SuiteOptions& o) {
         v1::FloorposedConfig config;
         config.set_plan_path(run.plan_path);
         config.set_log_level("warn");
-        const bool registers = method != "no-registration" && method != "best-fit";
+        const bool registers = method != "none" && method != "best-fit";
         config.mutable_registration()->set_method(registers ? method : "icp");
-        const Baseline baseline = method == "no-registration" ? Baseline::kNoAlgorithm
-                                  : method == "best-fit"      ? Baseline::kBestFit
-                                                              : Baseline::kNone;
+        const Baseline baseline = method == "none"       ? Baseline::kNoAlgorithm
+                                  : method == "best-fit" ? Baseline::kBestFit
+                                                         : Baseline::kNone;
         EvalReport report;
         if (!Evaluate(config, run.recording, baseline, &report, &error)) {
           spdlog::error("{} {}: {}", run.recording, method, error);
@@ -232,7 +232,7 @@ Run AddEvalSuiteCommand(CLI::App& app) {
   app.add_option("--scenarios", o->scenarios, "scenarios")->delimiter(',')->capture_default_str();
   app.add_option("--methods", o->methods, "methods and baselines")
       ->delimiter(',')
-      ->check(CLI::IsMember({"icp", "ik", "hough", "no-registration", "best-fit"}))
+      ->check(CLI::IsMember({"icp", "ik", "hough", "none", "best-fit"}))
       ->capture_default_str();
   app.add_option("--length", o->length_m, "walk length per run, metres (0: default)");
   app.add_option("--jobs", o->jobs, "parallel runs (0: one per core)");

@@ -83,7 +83,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
 
   v1::FloorposedConfig config = base_config;
   if (!device_id.empty()) config.mutable_dds()->set_device_id(device_id);
-  report->method = baseline == Baseline::kNoAlgorithm ? "no-registration"
+  report->method = baseline == Baseline::kNoAlgorithm ? "none"
                    : baseline == Baseline::kBestFit   ? "best-fit"
                                                       : config.registration().method();
   int64_t virtual_now = 0;
