@@ -16,26 +16,6 @@ namespace {
 // bounded whatever the plan.
 constexpr double kMaxCells = 8e6;
 
-bool InsidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
-  bool inside = false;
-  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
-    const Eigen::Vector2d& a = poly[i];
-    const Eigen::Vector2d& b = poly[j];
-    if ((a.y() > p.y()) != (b.y() > p.y()) &&
-        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x())
-      inside = !inside;
-  }
-  return inside;
-}
-
-double DistanceToPolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
-  if (InsidePolygon(poly, p)) return 0.0;
-  double best = std::numeric_limits<double>::infinity();
-  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++)
-    best = std::min(best, (ClosestPointOnSegment({poly[j], poly[i]}, p) - p).norm());
-  return best;
-}
-
 // The largest 4-connected piece of the cells where mask is set (the first of equals), in
 // ascending order.
 std::vector<int> LargestComponent(const std::vector<uint8_t>& mask, int nx, int ny) {
@@ -68,6 +48,26 @@ std::vector<int> LargestComponent(const std::vector<uint8_t>& mask, int nx, int 
 }
 
 }  // namespace
+
+bool InsidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
+  bool inside = false;
+  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+    const Eigen::Vector2d& a = poly[i];
+    const Eigen::Vector2d& b = poly[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) &&
+        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x())
+      inside = !inside;
+  }
+  return inside;
+}
+
+double DistanceToPolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
+  if (InsidePolygon(poly, p)) return 0.0;
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++)
+    best = std::min(best, (ClosestPointOnSegment({poly[j], poly[i]}, p) - p).norm());
+  return best;
+}
 
 FreeSpace::FreeSpace(const std::vector<Segment>& walls, const Eigen::Vector2d& min,
                      const Eigen::Vector2d& max, const FreeSpaceOptions& options)

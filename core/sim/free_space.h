@@ -87,4 +87,9 @@ class FreeSpace {
   std::string region_;
 };
 
+// Whether p lies inside a simple polygon (even-odd rule), and its distance to the
+// polygon (0 inside).
+bool InsidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p);
+double DistanceToPolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p);
+
 }  // namespace floorpose::sim

@@ -68,26 +68,6 @@ bool SegmentsIntersect(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const
   return ((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0));
 }
 
-bool InsidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
-  bool inside = false;
-  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
-    const Eigen::Vector2d& a = poly[i];
-    const Eigen::Vector2d& b = poly[j];
-    if ((a.y() > p.y()) != (b.y() > p.y()) &&
-        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x())
-      inside = !inside;
-  }
-  return inside;
-}
-
-double DistanceToPolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
-  if (InsidePolygon(poly, p)) return 0.0;
-  double best = 1e300;
-  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++)
-    best = std::min(best, (ClosestPointOnSegment({poly[j], poly[i]}, p) - p).norm());
-  return best;
-}
-
 bool PolygonsOverlap(const std::vector<Eigen::Vector2d>& p, const std::vector<Eigen::Vector2d>& q) {
   for (size_t i = 0, j = p.size() - 1; i < p.size(); j = i++)
     for (size_t k = 0, l = q.size() - 1; k < q.size(); l = k++)
