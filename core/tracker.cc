@@ -40,6 +40,7 @@ void Tracker::SetPlan(std::shared_ptr<const ClosestWallIndex> index) {
 
 void Tracker::Reset() {
   alignment_ = {};
+  pending_jump_.reset();
   pick_plan_point_.reset();
   last_plan_position_.reset();
   current_fit_.reset();
@@ -47,6 +48,7 @@ void Tracker::Reset() {
 }
 
 void Tracker::SetAlignment(const Se2& T, AlignmentSource source, int64_t stamp_ns) {
+  pending_jump_.reset();
   alignment_.T_plan_slam = T;
   alignment_.version = next_version_++;
   alignment_.source = source;
@@ -109,13 +111,17 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
     return d;
   }
   // Re-score the alignment in use on the same cloud, so both fits are comparable.
+  // Distances are capped at the inlier threshold: with a 1.5 m cap, clutter far from the
+  // walls outweighs the walls and can prefer a pose 10-20 cm off.
   const IcpOptions& o = options_.icp;
+  const double cap = options_.score_cap_m > 0 ? options_.score_cap_m : o.max_correspondence_m;
   RegistrationResult old_fit;
   double old_score = 0, new_score = 0;
+  EvaluateFit(cloud, *index_, alignment_.T_plan_slam, cap, o.inlier_threshold_m, nullptr,
+              &old_score);
   EvaluateFit(cloud, *index_, alignment_.T_plan_slam, o.max_correspondence_m, o.inlier_threshold_m,
-              &old_fit, &old_score);
-  EvaluateFit(cloud, *index_, result.T_plan_slam, o.max_correspondence_m, o.inlier_threshold_m,
-              nullptr, &new_score);
+              &old_fit, nullptr);
+  EvaluateFit(cloud, *index_, result.T_plan_slam, cap, o.inlier_threshold_m, nullptr, &new_score);
   if (!result.T_plan_slam.t.allFinite() || !std::isfinite(result.T_plan_slam.theta)) {
     d.reason = "non-finite result";
   } else if (result.matched < 3) {
@@ -125,7 +131,29 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
   } else {
     d.accepted = true;
   }
+  if (d.accepted && alignment_.source == AlignmentSource::kRegistration && options_.jump_m > 0) {
+    // A registered alignment does not jump on one result's word (the navigation app's
+    // 3 m / 10 degree rule): a far move must be found again by the next registration.
+    const Eigen::Vector2d pivot = last_plan_position_.value_or(Eigen::Vector2d::Zero());
+    auto moves = [&](const Se2& from, const Se2& to, double* metres, double* radians) {
+      *metres = (to * (from.Inverse() * pivot) - pivot).norm();
+      *radians = std::abs(WrapAngle(to.theta - from.theta));
+    };
+    double metres = 0, radians = 0;
+    moves(alignment_.T_plan_slam, result.T_plan_slam, &metres, &radians);
+    if (metres > options_.jump_m || radians > options_.jump_rad) {
+      double pm = 1e9, pr = 1e9;
+      if (pending_jump_) moves(*pending_jump_, result.T_plan_slam, &pm, &pr);
+      if (pm > 0.5 || pr > 0.035) {
+        pending_jump_ = result.T_plan_slam;
+        d.accepted = false;
+        d.reason = "jump of " + std::to_string(metres) + " m / " +
+                   std::to_string(radians * 180 / M_PI) + " deg waits for confirmation";
+      }
+    }
+  }
   if (d.accepted) {
+    pending_jump_.reset();
     SetAlignment(result.T_plan_slam, AlignmentSource::kRegistration, stamp_ns);
     alignment_.registration = result;
     current_fit_ = result;

@@ -24,6 +24,9 @@ struct TrackerOptions {
   double clip_margin_m = 0.0;      // see RegistrationOptions
   double pick_search_m = 2.5;      // correlative search after a pick or flip, metres
   double pick_search_rad = 0.175;  // ...and radians
+  double jump_m = 3.0;             // a registered alignment moving the wearer further...
+  double jump_rad = 0.1745;        // ...or turning more must be confirmed; 0 m: off
+  double score_cap_m = 0.2;        // distances capped here in the "better fit" score
   bool local_meshes = false;       // register only meshes new since the last run (thesis "local")
   uint32_t min_new_points = 500;   // register after this many new wall points...
   double max_interval_s = 3.0;     // ...or after this long with any new points
@@ -121,6 +124,7 @@ class Tracker {
   uint64_t next_version_ = 1;
   std::optional<Eigen::Vector2d> pick_plan_point_;
   std::optional<Eigen::Vector2d> last_plan_position_;
+  std::optional<Se2> pending_jump_;  // a far result waiting for a second one to agree
   int64_t last_start_ns_ = 0;
   // Fit of the alignment in use on the latest registration cloud.
   std::optional<RegistrationResult> current_fit_;

@@ -149,6 +149,9 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.min_points = k.min_points();
   t.reliable_rmse_m = k.reliable_rmse_m();
   t.reliable_inlier_ratio = k.reliable_inlier_ratio();
+  t.jump_m = k.jump_m();
+  t.jump_rad = k.jump_deg() * M_PI / 180.0;
+  t.score_cap_m = k.score_cap_m();
   return t;
 }
 

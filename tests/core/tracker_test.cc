@@ -296,5 +296,42 @@ TEST_F(TrackerTest, RegistrationDueFollowsPointsAndInjectedTime) {
   EXPECT_TRUE(tracker_.RegistrationDue(10 * s + interval, o.min_points, 1));
 }
 
+// Two identical rooms 6 m apart: a registered alignment that would put the wearer in the
+// other room (a better fit than a slightly-off one) is held until a second result
+// confirms it (the navigation app's 3 m / 10 degree rule).
+TEST(TrackerJumpTest, FarJumpWaitsForConfirmation) {
+  std::vector<Segment> walls;
+  for (double x0 : {0.0, 6.0}) {
+    walls.push_back({{x0, 0}, {x0 + 4, 0}});
+    walls.push_back({{x0 + 4, 0}, {x0 + 4, 3}});
+    walls.push_back({{x0 + 4, 3}, {x0, 3}});
+    walls.push_back({{x0, 3}, {x0, 0}});
+    walls.push_back({{x0 + 1, 0}, {x0 + 1, 1}});  // not symmetric within a room
+  }
+  auto plan = MakeFloorPlan("twins", walls);
+  ASSERT_TRUE(plan.ok());
+  Tracker tracker(TrackerOptions{});
+  tracker.SetPlan(std::make_shared<const ClosestWallIndex>(plan.plan));
+  // The wearer's walls: room A, in a slam frame equal to the plan frame.
+  std::vector<Eigen::Vector2d> cloud;
+  for (const Segment& s : std::vector<Segment>(walls.begin(), walls.begin() + 5))
+    for (double u = 0; u <= 1; u += 0.01) cloud.push_back(s.a + u * (s.b - s.a));
+  ASSERT_TRUE(tracker.ApplyWallPick(PickFor(Se2{0.02, {0.1, 0}}, {2, 0}, {0, 1}), 1).empty());
+  tracker.Correct({{2, 1.5}, 0, 1.6});
+  RegistrationResult near;
+  near.T_plan_slam = Se2{0.0, {0.03, 0}};  // slightly off, better than the pick
+  near.matched = static_cast<uint32_t>(cloud.size());
+  ASSERT_TRUE(tracker.Offer(near, cloud, tracker.alignment().version, 2).accepted);
+  tracker.Correct({{2, 1.5}, 0, 1.6});
+  RegistrationResult far = near;
+  far.T_plan_slam = Se2{0.0, {6, 0}};  // exact, but in room B: 6 m away
+  const Tracker::Decision first = tracker.Offer(far, cloud, tracker.alignment().version, 3);
+  EXPECT_FALSE(first.accepted);
+  EXPECT_THAT(first.reason, HasSubstr("waits for confirmation"));
+  const Tracker::Decision second = tracker.Offer(far, cloud, tracker.alignment().version, 4);
+  EXPECT_TRUE(second.accepted) << second.reason;
+  EXPECT_THAT(tracker.alignment().T_plan_slam, IsNearlySe2(far.T_plan_slam, 1e-9, 1e-9));
+}
+
 }  // namespace
 }  // namespace floorpose

@@ -32,6 +32,7 @@ struct SuiteOptions {
   std::vector<std::string> methods = {"icp", "ik", "hough", "none", "best-fit"};
   double length_m = 0;  // 0: the simulator's default
   int jobs = 0;
+  std::string config;  // floorposed configuration to evaluate with
 };
 
 struct SuiteRun {
@@ -57,6 +58,12 @@ std::vector<std::string> PlanFiles(const std::vector<std::string>& inputs) {
 
 int RunSuite(const SuiteOptions& o) {
   spdlog::set_level(spdlog::level::warn);  // thousands of registrations: only problems
+  v1::FloorposedConfig base_config;
+  std::string config_error;
+  if (!platform::LoadConfig(o.config, &base_config, &config_error)) {
+    spdlog::error("{}", config_error);
+    return 2;
+  }
   const std::vector<std::string> plans = PlanFiles(o.plans);
   if (plans.empty()) {
     spdlog::error("no floor plans (*.geojson) found in the given --plans");
@@ -105,7 +112,7 @@ int RunSuite(const SuiteOptions& o) {
         continue;
       }
       for (const std::string& method : o.methods) {
-        v1::FloorposedConfig config;
+        v1::FloorposedConfig config = base_config;
         config.set_plan_path(run.plan_path);
         config.set_log_level("warn");
         const bool registers = method != "none" && method != "best-fit";
@@ -236,6 +243,7 @@ Run AddEvalSuiteCommand(CLI::App& app) {
       ->capture_default_str();
   app.add_option("--length", o->length_m, "walk length per run, metres (0: default)");
   app.add_option("--jobs", o->jobs, "parallel runs (0: one per core)");
+  app.add_option("--config", o->config, "floorposed configuration to evaluate with");
   return [o] { return RunSuite(*o); };
 }
 
