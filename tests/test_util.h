@@ -60,6 +60,20 @@ MATCHER_P3(IsNearlySe2, expected, max_translation_m, max_rotation_rad,
   return dtheta <= max_rotation_rad && dt <= max_translation_m;
 }
 
+// A 10 x 7 m room with an inner wall and a short stub: no symmetry that registration
+// could confuse with the truth.
+inline FloorPlan AsymmetricRoom() {
+  auto parse = MakeFloorPlan("room", {{{0, 0}, {10, 0}},
+                                      {{10, 0}, {10, 7}},
+                                      {{10, 7}, {0, 7}},
+                                      {{0, 7}, {0, 0}},
+                                      {{4, 0}, {4, 4.5}},  // inner wall
+                                      {{7, 7}, {7, 5.5}},  // stub from the top wall
+                                      {{4, 4.5}, {5.5, 4.5}}});
+  EXPECT_TRUE(parse.ok()) << parse.error;
+  return parse.plan;
+}
+
 // Points evenly spaced along every segment of a plan (both ends included).
 inline std::vector<Eigen::Vector2d> SampleWalls(const FloorPlan& plan, double spacing_m) {
   std::vector<Eigen::Vector2d> out;

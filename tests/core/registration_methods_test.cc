@@ -36,17 +36,6 @@ FloorPlan Plan(const std::string& id, std::vector<Segment> walls) {
   return parse.plan;
 }
 
-// A 10 x 7 m room with an inner wall and a short stub: no symmetry.
-FloorPlan Room() {
-  return Plan("room", {{{0, 0}, {10, 0}},
-                       {{10, 0}, {10, 7}},
-                       {{10, 7}, {0, 7}},
-                       {{0, 7}, {0, 0}},
-                       {{4, 0}, {4, 4.5}},
-                       {{7, 7}, {7, 5.5}},
-                       {{4, 4.5}, {5.5, 4.5}}});
-}
-
 // A 12 x 9 m apartment: four rooms joined by 1 m doorways.
 FloorPlan Apartment() {
   return Plan("apartment", {{{0, 0}, {12, 0}},
@@ -95,7 +84,7 @@ struct Scenario {
 // Small plans are seen whole; the office floor in 15 m windows along the corridor.
 std::vector<Scenario> Scenarios() {
   std::vector<Scenario> out;
-  for (FloorPlan plan : {Room(), Apartment()}) {
+  for (FloorPlan plan : {testing::AsymmetricRoom(), Apartment()}) {
     const Box whole{plan.min - Eigen::Vector2d::Constant(0.5),
                     plan.max + Eigen::Vector2d::Constant(0.5)};
     out.push_back({plan.id, plan, {whole}, 12});

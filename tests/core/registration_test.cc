@@ -18,22 +18,6 @@ namespace {
 using testing::Deg;
 using testing::IsNearlySe2;
 
-// A 10 x 7 m room with an inner wall and a short stub: no symmetry that ICP could
-// confuse with the truth.
-FloorPlan Room() {
-  auto parse = MakeFloorPlan("room", {
-                                         {{0, 0}, {10, 0}},
-                                         {{10, 0}, {10, 7}},
-                                         {{10, 7}, {0, 7}},
-                                         {{0, 7}, {0, 0}},
-                                         {{4, 0}, {4, 4.5}},  // inner wall
-                                         {{7, 7}, {7, 5.5}},  // stub from the top wall
-                                         {{4, 4.5}, {5.5, 4.5}},
-                                     });
-  EXPECT_TRUE(parse.ok()) << parse.error;
-  return parse.plan;
-}
-
 // Wall points with their wall normals in the slam frame: points every 2 cm on the plan
 // walls, mapped by T_slam_plan, with Gaussian noise of noise_m per axis. Walls are
 // two-sided, so each wall's normal gets a random sign.
@@ -64,7 +48,7 @@ std::vector<Eigen::Vector2d> SlamCloud(const FloorPlan& plan, const Se2& T_slam_
 
 class IcpTest : public ::testing::Test {
  protected:
-  IcpTest() : plan_(Room()), index_(plan_) {}
+  IcpTest() : plan_(testing::AsymmetricRoom()), index_(plan_) {}
   FloorPlan plan_;
   ClosestWallIndex index_;
   IcpOptions options_;
@@ -162,7 +146,9 @@ TEST_F(IcpTest, ReportFieldsAreFilled) {
 
 class RegistrationMethodTest : public ::testing::TestWithParam<RegistrationMethod> {
  protected:
-  RegistrationMethodTest() : plan_(Room()), index_(plan_) { options_.method = GetParam(); }
+  RegistrationMethodTest() : plan_(testing::AsymmetricRoom()), index_(plan_) {
+    options_.method = GetParam();
+  }
   FloorPlan plan_;
   ClosestWallIndex index_;
   RegistrationOptions options_;
@@ -219,7 +205,7 @@ TEST(RegistrationTest, MethodNamesRoundTrip) {
 TEST(RegistrationTest, WallBufferDropsPointsFarFromWalls) {
   // The thesis' 0.5 m buffer (section 6.4.3): under the initial transform, points more
   // than the buffer away from every wall do not enter the registration.
-  const FloorPlan plan = Room();
+  const FloorPlan plan = testing::AsymmetricRoom();
   const ClosestWallIndex index(plan);
   const Se2 T_slam_plan{Deg(1), {0.05, 0.05}};
   Cloud cloud = SlamCloudWithNormals(plan, T_slam_plan, 0.0, 7);
@@ -241,7 +227,7 @@ TEST(RegistrationTest, WallBufferDropsPointsFarFromWalls) {
 }
 
 TEST(RegistrationTest, HoughNeedsANormalPerPoint) {
-  const FloorPlan plan = Room();
+  const FloorPlan plan = testing::AsymmetricRoom();
   const ClosestWallIndex index(plan);
   const Cloud cloud = SlamCloudWithNormals(plan, Se2{Deg(2), {0.1, 0.1}}, 0.0, 8);
   const Se2 initial{0.01, {0.02, 0.03}};
@@ -278,7 +264,7 @@ TEST(IcpDegenerateTest, CorridorLeavesOneDirectionUnconstrained) {
 }
 
 TEST(IcpDegenerateTest, TooFewPointsReturnsTheInitialGuess) {
-  const ClosestWallIndex index(Room());
+  const ClosestWallIndex index(testing::AsymmetricRoom());
   const Se2 initial{0.1, {0.2, 0.3}};
   const RegistrationResult r = RegisterIcp({{0, 0}, {1, 0}}, index, initial, IcpOptions{});
   EXPECT_FALSE(r.converged);
@@ -292,7 +278,7 @@ TEST(IcpDegenerateTest, TooFewPointsReturnsTheInitialGuess) {
 }
 
 TEST(IcpDegenerateTest, PointsFarFromEveryWallDoNotConverge) {
-  const FloorPlan plan = Room();
+  const FloorPlan plan = testing::AsymmetricRoom();
   const ClosestWallIndex index(plan);
   std::vector<Eigen::Vector2d> far;
   for (int i = 0; i < 100; ++i) far.push_back({100.0 + i, 100.0});
@@ -348,7 +334,7 @@ TEST(EvaluateFitTest, ExactValuesOnOneWall) {
 }
 
 TEST(EvaluateFitTest, TruthScoresBetterThanAPerturbedTransform) {
-  const FloorPlan plan = Room();
+  const FloorPlan plan = testing::AsymmetricRoom();
   const ClosestWallIndex index(plan);
   SplitMix64 rng(33);
   for (int i = 0; i < 10; ++i) {

@@ -17,20 +17,6 @@ using testing::Deg;
 using ::testing::HasSubstr;
 using testing::IsNearlySe2;
 
-FloorPlan Room() {
-  auto parse = MakeFloorPlan("room", {
-                                         {{0, 0}, {10, 0}},
-                                         {{10, 0}, {10, 7}},
-                                         {{10, 7}, {0, 7}},
-                                         {{0, 7}, {0, 0}},
-                                         {{4, 0}, {4, 4.5}},
-                                         {{7, 7}, {7, 5.5}},
-                                         {{4, 4.5}, {5.5, 4.5}},
-                                     });
-  EXPECT_TRUE(parse.ok()) << parse.error;
-  return parse.plan;
-}
-
 // The pick a wearer makes when slam and plan are related by T_plan_slam: a point on a
 // plan wall with its normal, and the same point and normal seen in slam.
 WallPick PickFor(const Se2& T_plan_slam, const Eigen::Vector2d& plan_point,
@@ -41,7 +27,7 @@ WallPick PickFor(const Se2& T_plan_slam, const Eigen::Vector2d& plan_point,
 
 TEST(AlignFromWallPickTest, RecoversRandomTransformsExactly) {
   // Equation 6.2: one point with its normal fixes all three degrees of freedom.
-  const FloorPlan plan = Room();
+  const FloorPlan plan = testing::AsymmetricRoom();
   SplitMix64 rng(51);
   for (int i = 0; i < 500; ++i) {
     const Se2 truth{rng.Uniform(-M_PI, M_PI), {rng.Uniform(-50, 50), rng.Uniform(-50, 50)}};
@@ -76,7 +62,7 @@ TEST(AlignFromWallPickTest, RejectsZeroAndNonFiniteInput) {
 class TrackerTest : public ::testing::Test {
  protected:
   TrackerTest()
-      : plan_(Room()),
+      : plan_(testing::AsymmetricRoom()),
         index_(std::make_shared<const ClosestWallIndex>(plan_)),
         tracker_(TrackerOptions{}) {}
 

@@ -12,6 +12,7 @@
 #include "floorpose/v1/config.pb.h"
 #include "platform/config.h"
 #include "platform/dds.h"
+#include "platform/floor_plan_io.h"
 #include "tools/lib/headset_link.h"
 #include "tools/lib/headset_messages.h"
 #include "tools/lib/process.h"
@@ -93,15 +94,8 @@ class DaemonTest : public ::testing::Test {
     o.initial_offset_m = {2.0, -3.0};
     o.pick_point_error_m = pick_error_m;
     o.pick_normal_error_rad = pick_error_m > 0 ? 0.05 : 0.0;
-    const FloorPlanParse plan = MakeFloorPlan("room", {{{0, 0}, {10, 0}},
-                                                       {{10, 0}, {10, 6}},
-                                                       {{10, 6}, {0, 6}},
-                                                       {{0, 6}, {0, 0}},
-                                                       {{4, 0}, {4, 3.5}},
-                                                       {{7, 3}, {7.5, 3}},
-                                                       {{7.5, 3}, {7.5, 3.6}},
-                                                       {{7.5, 3.6}, {7, 3.6}},
-                                                       {{7, 3.6}, {7, 3}}});
+    // The same room the daemon loads.
+    const FloorPlanParse plan = platform::ParseGeoJsonFloorPlan(kRoomGeoJson, "room");
     return sim::SimulateDemoWalk(plan.plan,
                                  {{1.5, 1.5}, {2.5, 4.8}, {6.0, 4.8}, {8.8, 2.0}, {6, 1.0}}, o);
   }

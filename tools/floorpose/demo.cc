@@ -17,6 +17,7 @@
 #include "platform/clock.h"
 #include "platform/floor_plan_io.h"
 #include "tools/floorpose/commands.h"
+#include "tools/lib/evaluation.h"
 #include "tools/lib/headset_link.h"
 #include "tools/lib/headset_messages.h"
 #include "tools/lib/process.h"
@@ -60,12 +61,6 @@ bool LoadWaypoints(const std::string& path, std::vector<Eigen::Vector2d>* out, s
     return false;
   }
   return true;
-}
-
-double Percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
 }
 
 struct DemoOptions {

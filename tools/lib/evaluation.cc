@@ -17,13 +17,6 @@ namespace {
 
 using platform::Topic;
 
-double Percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1,
-                    static_cast<size_t>(q * static_cast<double>(v.size() - 1) + 0.5))];
-}
-
 struct Input {
   int64_t stamp_ns;
   Topic topic;
@@ -31,6 +24,13 @@ struct Input {
 };
 
 }  // namespace
+
+double Percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1,
+                    static_cast<size_t>(q * static_cast<double>(v.size() - 1) + 0.5))];
+}
 
 bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& recording,
               Baseline baseline, EvalReport* report, std::string* error) {

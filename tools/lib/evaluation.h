@@ -52,6 +52,9 @@ struct EvalReport {
 bool Evaluate(const v1::FloorposedConfig& config, const std::string& recording, Baseline baseline,
               EvalReport* report, std::string* error);
 
+// The q-quantile (0..1) of v, nearest rank; 0 for an empty v.
+double Percentile(std::vector<double> v, double q);
+
 // The report as one JSON object (the keys of the issue) and as readable text.
 std::string ToJson(const EvalReport& report);
 std::string ToText(const EvalReport& report);
