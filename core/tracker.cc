@@ -1,7 +1,10 @@
 #include "core/tracker.h"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace floorpose {
 
@@ -45,6 +48,10 @@ void Tracker::Reset() {
   last_plan_position_.reset();
   current_fit_.reset();
   last_start_ns_ = 0;
+  walked_since_predict_m_ = walked_since_fused_m_ = walked_since_start_m_ = 0;
+  fused_ = 0;
+  last_disagreement_ = weakest_direction_ = 0;
+  history_.clear();
 }
 
 void Tracker::SetAlignment(const Se2& T, AlignmentSource source, int64_t stamp_ns) {
@@ -54,14 +61,32 @@ void Tracker::SetAlignment(const Se2& T, AlignmentSource source, int64_t stamp_n
   alignment_.source = source;
   alignment_.stamp_ns = stamp_ns;
   alignment_.registration.reset();
+  if (source != AlignmentSource::kRegistration) {
+    // A pick or a flip: start the filter over, as uncertain as a pick is.
+    const Eigen::Vector2d pivot = pick_plan_point_.value_or(
+        last_plan_position_.value_or(T * last_slam_position_.value_or(Eigen::Vector2d::Zero())));
+    const double sm = options_.pick_sigma_m, sr = options_.pick_sigma_rad;
+    filter_ = AlignmentFilter(options_.filter);
+    filter_.Reset(T, Eigen::Vector3d(sr * sr, sm * sm, sm * sm).asDiagonal(), pivot);
+    walked_since_predict_m_ = walked_since_fused_m_ = 0;
+    fused_ = 0;
+    last_disagreement_ = weakest_direction_ = 0;
+  }
+}
+
+void Tracker::PredictToWearer() {
+  const Eigen::Vector2d pivot =
+      last_slam_position_ ? alignment_.T_plan_slam * *last_slam_position_ : filter_.pivot();
+  filter_.Predict(pivot, walked_since_predict_m_);
+  walked_since_predict_m_ = 0;
 }
 
 std::string Tracker::ApplyWallPick(const WallPick& pick, int64_t stamp_ns) {
   if (!index_) return "no floor plan loaded";
   const auto T = AlignFromWallPick(pick);
   if (!T) return "wall pick needs finite points and non-zero normals";
-  SetAlignment(*T, AlignmentSource::kWallPick, stamp_ns);
   pick_plan_point_ = pick.plan_point;
+  SetAlignment(*T, AlignmentSource::kWallPick, stamp_ns);
   current_fit_.reset();
   return {};
 }
@@ -74,11 +99,22 @@ std::string Tracker::Flip(int64_t stamp_ns) {
   // Rotation by pi about the pivot: p -> 2 pivot - p.
   const Se2 flip{M_PI, 2.0 * *pivot};
   SetAlignment(flip * alignment_.T_plan_slam, AlignmentSource::kFlip, stamp_ns);
+  filter_.Reset(filter_.T(), filter_.P(), *pivot);
   current_fit_.reset();
   return {};
 }
 
 PlanPoseEstimate Tracker::Correct(const Pose2& pose_slam) {
+  if (last_slam_position_) {
+    // Steps over 5 m between poses 0.3 s apart are a SLAM relocalisation, not a walk.
+    const double step = (pose_slam.position - *last_slam_position_).norm();
+    if (step < 5.0) {
+      walked_since_predict_m_ += step;
+      walked_since_fused_m_ += step;
+      walked_since_start_m_ += step;
+    }
+  }
+  last_slam_position_ = pose_slam.position;
   PlanPoseEstimate out;
   out.alignment_version = alignment_.version;
   out.reliability = CurrentReliability();
@@ -95,6 +131,7 @@ bool Tracker::RegistrationDue(int64_t now_ns, size_t live_points, size_t new_poi
   if (!index_ || !has_alignment() || live_points < options_.min_points || new_points == 0)
     return false;
   if (new_points >= options_.min_new_points) return true;
+  if (options_.min_walk_m > 0 && walked_since_start_m_ >= options_.min_walk_m) return true;
   return static_cast<double>(now_ns - last_start_ns_) * 1e-9 >= options_.max_interval_s;
 }
 
@@ -115,53 +152,150 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
   // walls outweighs the walls and can prefer a pose 10-20 cm off.
   const IcpOptions& o = options_.icp;
   const double cap = options_.score_cap_m > 0 ? options_.score_cap_m : o.max_correspondence_m;
-  RegistrationResult old_fit;
   double old_score = 0, new_score = 0;
   EvaluateFit(cloud, *index_, alignment_.T_plan_slam, cap, o.inlier_threshold_m, nullptr,
               &old_score);
-  EvaluateFit(cloud, *index_, alignment_.T_plan_slam, o.max_correspondence_m, o.inlier_threshold_m,
-              &old_fit, nullptr);
-  EvaluateFit(cloud, *index_, result.T_plan_slam, cap, o.inlier_threshold_m, nullptr, &new_score);
-  if (!result.T_plan_slam.t.allFinite() || !std::isfinite(result.T_plan_slam.theta)) {
+  const bool finite = result.T_plan_slam.t.allFinite() && std::isfinite(result.T_plan_slam.theta);
+  if (finite) {
+    EvaluateFit(cloud, *index_, result.T_plan_slam, cap, o.inlier_threshold_m, nullptr,
+                &new_score);
+  }
+  PredictToWearer();
+  if (!finite) {
     d.reason = "non-finite result";
   } else if (result.matched < 3) {
     d.reason = "registration failed: " + result.reason;
-  } else if (!(new_score < old_score)) {
-    d.reason = "fit not better than the alignment in use";
+  } else if (new_score > old_score * options_.worse_fit_ratio) {
+    d.reason = "fit worse than the alignment in use";
   } else {
-    d.accepted = true;
-  }
-  if (d.accepted && alignment_.source == AlignmentSource::kRegistration && options_.jump_m > 0) {
-    // A registered alignment does not jump on one result's word (the navigation app's
-    // 3 m / 10 degree rule): a far move must be found again by the next registration.
-    const Eigen::Vector2d pivot = last_plan_position_.value_or(Eigen::Vector2d::Zero());
-    auto moves = [&](const Se2& from, const Se2& to, double* metres, double* radians) {
-      *metres = (to * (from.Inverse() * pivot) - pivot).norm();
-      *radians = std::abs(WrapAngle(to.theta - from.theta));
-    };
-    double metres = 0, radians = 0;
-    moves(alignment_.T_plan_slam, result.T_plan_slam, &metres, &radians);
-    if (metres > options_.jump_m || radians > options_.jump_rad) {
-      double pm = 1e9, pr = 1e9;
-      if (pending_jump_) moves(*pending_jump_, result.T_plan_slam, &pm, &pr);
-      if (pm > 0.5 || pr > 0.035) {
+    // The measurement: the result, with the information its wall points give about the
+    // wearer (none along a corridor's axis).
+    size_t inliers = 0;
+    const Eigen::Matrix3d H = FitInformation(cloud, *index_, result.T_plan_slam, filter_.pivot(),
+                                             o.inlier_threshold_m, &inliers);
+    const Eigen::Matrix3d R = filter_.MeasurementCovariance(H, inliers);
+    if (inliers > 0) {
+      const Eigen::Matrix2d mean_t = H.block<2, 2>(1, 1) / static_cast<double>(inliers);
+      const double lo = std::max(1e-6, mean_t.selfadjointView<Eigen::Lower>().eigenvalues()(0));
+      weakest_direction_ = options_.filter.measurement_sigma_m / std::sqrt(lo);
+    }
+    const AlignmentFilter::Update u = filter_.Fuse(result.T_plan_slam, R);
+    last_disagreement_ = std::sqrt(u.mahalanobis2);
+    if (!u.gated) {
+      d.accepted = true;
+      pending_jump_.reset();
+    } else {
+      // Beyond the gate: a wrong minimum, or the alignment in use is wrong. Taken only
+      // when the next registration lands on it again.
+      const Eigen::Vector3d apart =
+          pending_jump_ ? Difference(result.T_plan_slam, *pending_jump_, filter_.pivot())
+                        : Eigen::Vector3d::Constant(1e9);
+      if (apart.tail<2>().norm() <= options_.confirm_m &&
+          std::abs(apart(0)) <= options_.confirm_rad) {
+        filter_.Reset(result.T_plan_slam, R + filter_.P(), filter_.pivot());
+        d.accepted = true;
+        d.reason = "jump confirmed";
+        pending_jump_.reset();
+      } else {
         pending_jump_ = result.T_plan_slam;
-        d.accepted = false;
-        d.reason = "jump of " + std::to_string(metres) + " m / " +
-                   std::to_string(radians * 180 / M_PI) + " deg waits for confirmation";
+        char text[128];
+        std::snprintf(text, sizeof text,
+                      "disagrees with the alignment in use (%.2f m, %.1f deg, %.1f sigma): "
+                      "waits for confirmation",
+                      u.innovation.tail<2>().norm(), std::abs(u.innovation(0)) * 180 / M_PI,
+                      last_disagreement_);
+        d.reason = text;
       }
     }
   }
   if (d.accepted) {
-    pending_jump_.reset();
-    SetAlignment(result.T_plan_slam, AlignmentSource::kRegistration, stamp_ns);
+    SetAlignment(filter_.T(), AlignmentSource::kRegistration, stamp_ns);
     alignment_.registration = result;
-    current_fit_ = result;
-  } else {
-    old_fit.method = "current";
-    current_fit_ = old_fit;
+    alignment_.registration->T_plan_slam = filter_.T();
+    ++fused_;
+    walked_since_fused_m_ = 0;
+    history_.push_back(alignment_);
+    if (history_.size() > options_.history) history_.erase(history_.begin());
   }
+  RegistrationResult fit;
+  EvaluateFit(cloud, *index_, alignment_.T_plan_slam, o.max_correspondence_m, o.inlier_threshold_m,
+              &fit, nullptr);
+  fit.method = d.accepted ? result.method : "current";
+  current_fit_ = fit;
   return d;
+}
+
+const char* ReliabilityFeatures::Name(int i) {
+  static const char* const kNames[ReliabilityModel::kFeatures] = {
+      "inlier_ratio",      "inlier_rmse_m", "position_sigma_m", "heading_sigma_deg",
+      "weakest_direction", "disagreement",  "log_accepted",     "log_walked_m"};
+  return i >= 0 && i < ReliabilityModel::kFeatures ? kNames[i] : "?";
+}
+
+ReliabilityFeatures Tracker::CurrentFeatures() const {
+  ReliabilityFeatures f;
+  if (current_fit_ && current_fit_->points) {
+    f.inlier_ratio = static_cast<double>(current_fit_->inliers) / current_fit_->points;
+    f.inlier_rmse_m = current_fit_->inlier_rmse;
+  }
+  // The filter's uncertainty moved to the wearer, with the drift walked since.
+  AlignmentFilter at_wearer = filter_;
+  if (last_slam_position_)
+    at_wearer.Predict(alignment_.T_plan_slam * *last_slam_position_, walked_since_predict_m_);
+  f.position_sigma_m = at_wearer.position_sigma_m();
+  f.heading_sigma_deg = at_wearer.heading_sigma_rad() * 180 / M_PI;
+  f.weakest_direction = std::min(weakest_direction_, 10.0);
+  f.disagreement = std::min(last_disagreement_, 10.0);
+  f.accepted = std::log1p(fused_);
+  f.walked_m = std::log1p(walked_since_fused_m_);
+  return f;
+}
+
+Reliability Tracker::Assess(const ReliabilityFeatures& f) const {
+  const ReliabilityModel& m = options_.reliability;
+  const auto x = f.Vector();
+  double z = m.bias;
+  // The reason is the feature that lowers the probability most against a typical good
+  // fix (the values below).
+  static constexpr std::array<double, ReliabilityModel::kFeatures> kGood = {
+      0.95, 0.06, 0.15, 0.5, 0.3, 1.0, 3.0, 1.0};
+  int worst = -1;
+  double worst_drop = 0;
+  for (int i = 0; i < ReliabilityModel::kFeatures; ++i) {
+    z += m.weights[i] * x[i];
+    const double drop = m.weights[i] * (x[i] - kGood[i]);
+    if (drop < worst_drop) {
+      worst_drop = drop;
+      worst = i;
+    }
+  }
+  Reliability r;
+  r.probability = 1.0 / (1.0 + std::exp(-z));
+  r.rmse_m = f.inlier_rmse_m;
+  r.flag = r.probability >= m.reliable_probability   ? ReliabilityFlag::kReliable
+           : r.probability >= m.degraded_probability ? ReliabilityFlag::kDegraded
+                                                     : ReliabilityFlag::kUnreliable;
+  char text[96];
+  switch (worst) {
+    case 0: std::snprintf(text, sizeof text, "%.0f%% of wall points match the plan",
+                          100 * f.inlier_ratio); break;
+    case 1: std::snprintf(text, sizeof text, "walls fit loosely (%.2f m RMSE)", f.inlier_rmse_m);
+      break;
+    case 2: std::snprintf(text, sizeof text, "position uncertain (%.2f m)", f.position_sigma_m);
+      break;
+    case 3: std::snprintf(text, sizeof text, "heading uncertain (%.1f deg)", f.heading_sigma_deg);
+      break;
+    case 4: std::snprintf(text, sizeof text, "walls constrain one direction only (corridor)");
+      break;
+    case 5: std::snprintf(text, sizeof text, "the latest registration disagreed (%.1f sigma)",
+                          f.disagreement); break;
+    case 6: std::snprintf(text, sizeof text, "few registrations since the pick"); break;
+    case 7: std::snprintf(text, sizeof text, "%.0f m walked since the latest registration",
+                          std::expm1(f.walked_m)); break;
+    default: std::snprintf(text, sizeof text, "registered"); break;
+  }
+  r.reason = r.flag == ReliabilityFlag::kReliable ? "registered" : text;
+  return r;
 }
 
 Reliability Tracker::CurrentReliability() const {
@@ -174,31 +308,10 @@ Reliability Tracker::CurrentReliability() const {
     r.reason = "no alignment: waiting for a wall pick";
     return r;
   }
-  if (!current_fit_) {
-    r.flag = ReliabilityFlag::kDegraded;
-    r.probability = 0.5;
+  r = Assess(CurrentFeatures());
+  if (!current_fit_ && r.flag != ReliabilityFlag::kReliable) {
     r.reason = alignment_.source == AlignmentSource::kFlip ? "flipped, not yet checked"
                                                            : "wall pick, not yet checked";
-    return r;
-  }
-  const RegistrationResult& f = *current_fit_;
-  const double ratio = f.points ? static_cast<double>(f.inliers) / f.points : 0.0;
-  const double q = f.inlier_rmse / options_.reliable_rmse_m;
-  // Heuristic until issue "Tracking" calibrates it on simulated walks.
-  r.probability = std::clamp(ratio, 0.0, 1.0) * std::exp(-0.5 * q * q);
-  r.rmse_m = f.inlier_rmse;
-  if (ratio < 0.2) {
-    r.flag = ReliabilityFlag::kUnreliable;
-    r.reason = "few wall points match the plan";
-  } else if (ratio < options_.reliable_inlier_ratio) {
-    r.flag = ReliabilityFlag::kDegraded;
-    r.reason = "low inlier ratio";
-  } else if (f.inlier_rmse > options_.reliable_rmse_m) {
-    r.flag = ReliabilityFlag::kDegraded;
-    r.reason = "high inlier RMSE";
-  } else {
-    r.flag = ReliabilityFlag::kReliable;
-    r.reason = "registered";
   }
   return r;
 }

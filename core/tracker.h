@@ -6,33 +6,52 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <memory>
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "core/alignment_filter.h"
 #include "core/closest_wall_index.h"
 #include "core/registration.h"
 #include "core/se2.h"
 
 namespace floorpose {
 
+// The reliability model: a logistic regression over ReliabilityFeatures, fitted by
+// `floorpose calibrate` on simulated walks (docs/evaluation.md). The defaults are the
+// fit reported there.
+struct ReliabilityModel {
+  static constexpr int kFeatures = 8;
+  double bias = 4.77;
+  // In the order of ReliabilityFeatures::Vector().
+  std::array<double, kFeatures> weights = {4.16, -11.42, -1.50, -0.49, -0.35, -0.83, 0.12, -0.48};
+  double reliable_probability = 0.9;  // RELIABLE at or above this
+  double degraded_probability = 0.5;  // DEGRADED at or above this, else UNRELIABLE
+};
+
 struct TrackerOptions {
   IcpOptions icp;
   RegistrationMethod method = RegistrationMethod::kIcp;
   HoughOptions hough;
+  AlignmentFilterOptions filter;
+  ReliabilityModel reliability;
   double wall_buffer_m = 0.0;      // see RegistrationOptions
   double clip_margin_m = 0.0;      // see RegistrationOptions
   double pick_search_m = 2.5;      // correlative search after a pick or flip, metres
   double pick_search_rad = 0.175;  // ...and radians
-  double jump_m = 3.0;             // a registered alignment moving the wearer further...
-  double jump_rad = 0.1745;        // ...or turning more must be confirmed; 0 m: off
+  double pick_sigma_m = 1.5;       // uncertainty of a wall pick at its point, metres
+  double pick_sigma_rad = 5.0 * M_PI / 180;  // ...and of its heading
+  double confirm_m = 0.5;          // a gated result is taken when the next one lands
+  double confirm_rad = 0.035;      // ...within this of it
   double score_cap_m = 0.2;        // distances capped here in the "better fit" score
+  double worse_fit_ratio = 1.25;   // results scoring worse than this times the one in use: rejected
   bool local_meshes = false;       // register only meshes new since the last run (thesis "local")
   uint32_t min_new_points = 500;   // register after this many new wall points...
+  double min_walk_m = 2.0;         // ...or this many metres walked with new points...
   double max_interval_s = 3.0;     // ...or after this long with any new points
   uint32_t min_points = 200;       // no registration on fewer points
-  double reliable_rmse_m = 0.15;
-  double reliable_inlier_ratio = 0.5;
+  size_t history = 16;             // accepted alignments kept
 };
 
 // Thesis section 6.3.4: one wall point with its normal, seen by the headset (slam
@@ -54,9 +73,28 @@ enum class AlignmentSource { kNone, kWallPick, kFlip, kRegistration };
 // after a pick or flip, with the correlative search.
 RegistrationOptions ToRegistrationOptions(const TrackerOptions& options, AlignmentSource from);
 
+// What the tracker knows about the alignment in use at a pose: the inputs of the
+// reliability model.
+struct ReliabilityFeatures {
+  double inlier_ratio = 0;        // of the latest registration cloud, under the alignment in use
+  double inlier_rmse_m = 0;       // ...of those inliers
+  double position_sigma_m = 0;    // filter: one sigma at the wearer (largest axis)
+  double heading_sigma_deg = 0;   // filter: one sigma of the heading
+  double weakest_direction = 0;   // smallest eigenvalue of the mean information, as metres of
+                                  // uncertainty per point: large in a corridor
+  double disagreement = 0;        // Mahalanobis distance of the latest registration (sqrt)
+  double accepted = 0;            // registrations fused since the pick, log(1 + n)
+  double walked_m = 0;            // since the latest fused registration, metres (log(1 + m))
+  std::array<double, ReliabilityModel::kFeatures> Vector() const {
+    return {inlier_ratio, inlier_rmse_m,   position_sigma_m, heading_sigma_deg,
+            weakest_direction, disagreement, accepted,       walked_m};
+  }
+  static const char* Name(int i);
+};
+
 struct Reliability {
   ReliabilityFlag flag = ReliabilityFlag::kUnreliable;
-  double probability = 0.0;  // of being within 1 m (a heuristic until calibrated)
+  double probability = 0.0;  // of the plan position being within 1 m
   double rmse_m = 0.0;
   std::string reason;
 };
@@ -98,25 +136,40 @@ class Tracker {
 
   PlanPoseEstimate Correct(const Pose2& pose_slam);
 
-  // Scheduling: due when aligned, with enough points, and enough new data or time.
+  // Scheduling: due when aligned, with enough points, and enough new data, distance
+  // walked or time.
   bool RegistrationDue(int64_t now_ns, size_t live_points, size_t new_points) const;
-  void MarkRegistrationStarted(int64_t now_ns) { last_start_ns_ = now_ns; }
+  void MarkRegistrationStarted(int64_t now_ns) {
+    last_start_ns_ = now_ns;
+    walked_since_start_m_ = 0;
+  }
 
   struct Decision {
     bool accepted = false;
     std::string reason;
   };
   // Offers a finished registration that started from alignment `based_on_version` on
-  // `cloud`. Accepted when it still applies and fits the cloud better than the alignment
-  // in use (section 6.4.3).
+  // `cloud`. Fused into the alignment when it still applies, fits the cloud about as
+  // well as the alignment in use or better (section 6.4.3), and agrees with it within
+  // the filter's gate; a result beyond the gate is taken only when the next one
+  // confirms it (the navigation app's rule for jumps).
   Decision Offer(const RegistrationResult& result, const std::vector<Eigen::Vector2d>& cloud,
                  uint64_t based_on_version, int64_t stamp_ns);
 
   TrackState state() const;
   Reliability CurrentReliability() const;
+  ReliabilityFeatures CurrentFeatures() const;
+  // The model's probability and flag for given features (public for calibration).
+  Reliability Assess(const ReliabilityFeatures& f) const;
+
+  // The latest accepted alignments, oldest first.
+  const std::vector<AlignmentState>& history() const { return history_; }
+  const AlignmentFilter& filter() const { return filter_; }
 
  private:
   void SetAlignment(const Se2& T, AlignmentSource source, int64_t stamp_ns);
+  // Moves the filter to the wearer, with the drift of the metres walked since.
+  void PredictToWearer();
 
   TrackerOptions options_;
   std::shared_ptr<const ClosestWallIndex> index_;
@@ -124,8 +177,17 @@ class Tracker {
   uint64_t next_version_ = 1;
   std::optional<Eigen::Vector2d> pick_plan_point_;
   std::optional<Eigen::Vector2d> last_plan_position_;
-  std::optional<Se2> pending_jump_;  // a far result waiting for a second one to agree
+  std::optional<Se2> pending_jump_;  // a gated result waiting for a second one to agree
   int64_t last_start_ns_ = 0;
+  AlignmentFilter filter_;
+  std::optional<Eigen::Vector2d> last_slam_position_;
+  double walked_since_predict_m_ = 0;  // not yet in the filter
+  double walked_since_fused_m_ = 0;
+  double walked_since_start_m_ = 0;
+  uint32_t fused_ = 0;              // registrations fused since the pick
+  double last_disagreement_ = 0;    // sqrt Mahalanobis of the latest registration
+  double weakest_direction_ = 0;
+  std::vector<AlignmentState> history_;
   // Fit of the alignment in use on the latest registration cloud.
   std::optional<RegistrationResult> current_fit_;
 };

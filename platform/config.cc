@@ -107,6 +107,26 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (!(c.registration().clip_margin_m() >= 0)) return "registration.clip_margin_m must be >= 0";
   if (!(c.icp().degeneracy_ratio() >= 0 && c.icp().degeneracy_ratio() < 1))
     return "icp.degeneracy_ratio must be in [0, 1)";
+  const auto& k = c.tracking();
+  for (const auto& [value, name] :
+       {std::pair{k.measurement_sigma_m(), "measurement_sigma_m"},
+        std::pair{k.measurement_points(), "measurement_points"},
+        std::pair{k.gate_chi2(), "gate_chi2"}, std::pair{k.pick_sigma_m(), "pick_sigma_m"},
+        std::pair{k.pick_sigma_deg(), "pick_sigma_deg"}, std::pair{k.worse_fit_ratio(), "worse_fit_ratio"}}) {
+    if (!(value > 0 && std::isfinite(value))) return std::string("tracking.") + name + " must be positive";
+  }
+  if (!(k.drift_heading_deg() >= 0 && k.drift_position_m() >= 0 && k.min_walk_m() >= 0 &&
+        k.confirm_m() >= 0 && k.confirm_deg() >= 0))
+    return "tracking.drift_*, min_walk_m and confirm_* must be >= 0";
+  const auto& rel = k.reliability();
+  if (rel.coefficients_size() != 0 && rel.coefficients_size() != ReliabilityModel::kFeatures + 1)
+    return "tracking.reliability.coefficients needs " +
+           std::to_string(ReliabilityModel::kFeatures + 1) + " values (bias, then weights)";
+  for (double v : rel.coefficients())
+    if (!std::isfinite(v)) return "tracking.reliability.coefficients must be finite";
+  if (!(rel.degraded_probability() >= 0 && rel.degraded_probability() <= rel.reliable_probability() &&
+        rel.reliable_probability() <= 1))
+    return "tracking.reliability: need 0 <= degraded_probability <= reliable_probability <= 1";
   const std::string& l = c.log_level();
   if (l != "trace" && l != "debug" && l != "info" && l != "warn" && l != "error")
     return "log_level must be trace, debug, info, warn or error";
@@ -147,11 +167,27 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.min_new_points = k.min_new_points();
   t.max_interval_s = k.max_interval_s();
   t.min_points = k.min_points();
-  t.reliable_rmse_m = k.reliable_rmse_m();
-  t.reliable_inlier_ratio = k.reliable_inlier_ratio();
-  t.jump_m = k.jump_m();
-  t.jump_rad = k.jump_deg() * M_PI / 180.0;
   t.score_cap_m = k.score_cap_m();
+  t.worse_fit_ratio = k.worse_fit_ratio();
+  t.min_walk_m = k.min_walk_m();
+  t.pick_sigma_m = k.pick_sigma_m();
+  t.pick_sigma_rad = k.pick_sigma_deg() * M_PI / 180.0;
+  t.confirm_m = k.confirm_m();
+  t.confirm_rad = k.confirm_deg() * M_PI / 180.0;
+  const double drift_rad = k.drift_heading_deg() * M_PI / 180.0;
+  t.filter.heading_var_per_m = drift_rad * drift_rad;
+  t.filter.position_var_per_m = k.drift_position_m() * k.drift_position_m();
+  t.filter.measurement_sigma_m = k.measurement_sigma_m();
+  t.filter.measurement_points = k.measurement_points();
+  t.filter.gate_chi2 = k.gate_chi2();
+  const auto& rel = k.reliability();
+  if (rel.coefficients_size() == ReliabilityModel::kFeatures + 1) {  // validated
+    t.reliability.bias = rel.coefficients(0);
+    for (int w = 0; w < ReliabilityModel::kFeatures; ++w)
+      t.reliability.weights[w] = rel.coefficients(w + 1);
+  }
+  t.reliability.reliable_probability = rel.reliable_probability();
+  t.reliability.degraded_probability = rel.degraded_probability();
   return t;
 }
 

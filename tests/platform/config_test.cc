@@ -54,8 +54,13 @@ TEST(ConfigTest, ProtoDefaultsMatchTheCoreDefaults) {
   EXPECT_EQ(t.min_new_points, core.min_new_points);
   EXPECT_EQ(t.max_interval_s, core.max_interval_s);
   EXPECT_EQ(t.min_points, core.min_points);
-  EXPECT_EQ(t.reliable_rmse_m, core.reliable_rmse_m);
-  EXPECT_EQ(t.reliable_inlier_ratio, core.reliable_inlier_ratio);
+  EXPECT_EQ(t.pick_sigma_m, core.pick_sigma_m);
+  EXPECT_NEAR(t.pick_sigma_rad, core.pick_sigma_rad, 1e-4);
+  EXPECT_NEAR(t.filter.heading_var_per_m, core.filter.heading_var_per_m, 1e-8);
+  EXPECT_NEAR(t.filter.position_var_per_m, core.filter.position_var_per_m, 1e-12);
+  EXPECT_EQ(t.filter.measurement_points, core.filter.measurement_points);
+  EXPECT_EQ(t.reliability.weights, core.reliability.weights);
+  EXPECT_EQ(t.min_walk_m, core.min_walk_m);
   const WallExtractionOptions w = ToWallExtractionOptions(c);
   const WallExtractionOptions core_w;
   EXPECT_EQ(w.max_normal_up, core_w.max_normal_up);

@@ -14,12 +14,13 @@ namespace floorpose::tools {
 namespace {
 
 struct EvalOptions {
-  std::string plan, recording, method = "icp", baseline, config, svg;
+  std::string plan, recording, method = "icp", baseline, config, svg, track;
   bool json = false;
 };
 
 int RunEval(const EvalOptions& o) {
-  spdlog::set_level(spdlog::level::warn);  // the report is the output, not the daemon's log
+  // The report is the output, not the daemon's log (`floorpose --log-level debug eval` shows it).
+  if (spdlog::get_level() > spdlog::level::debug) spdlog::set_level(spdlog::level::warn);
   v1::FloorposedConfig config;
   std::string error;
   if (!platform::LoadConfig(o.config, &config, &error)) {
@@ -45,6 +46,7 @@ int RunEval(const EvalOptions& o) {
     const FloorPlanParse plan = platform::LoadFloorPlan(o.plan);
     std::ofstream(o.svg) << ToSvg(plan.plan, report);
   }
+  if (!o.track.empty()) std::ofstream(o.track) << ToTrackCsv(report);
   std::fputs((o.json ? ToJson(report) + "\n" : ToText(report)).c_str(), stdout);
   return 0;
 }
@@ -65,6 +67,7 @@ Run AddEvalCommand(CLI::App& app) {
   app.add_option("--config", o->config, "floorposed configuration to evaluate with");
   app.add_flag("--json", o->json, "print one JSON object");
   app.add_option("--svg", o->svg, "draw the plan, both trajectories and the markers here");
+  app.add_option("--track", o->track, "write every scored pose here as CSV");
   return [o] { return RunEval(*o); };
 }
 

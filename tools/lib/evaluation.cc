@@ -155,6 +155,8 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     e.heading = p.heading();
     e.alignment_version = p.alignment_version();
     e.reliable = p.reliability().flag() == v1::Reliability::RELIABLE;
+    e.probability = p.reliability().probability();
+    e.reason = p.reliability().reason();
     if (best_fit) {
       const auto s = slam_poses.find(e.stamp_ns);
       if (s == slam_poses.end()) continue;
@@ -234,6 +236,19 @@ std::string ToText(const EvalReport& r) {
     << " ms\n"
     << "  flagged reliable              " << 100 * r.reliable_fraction << "% of poses, "
     << 100 * r.reliable_precision_1m << "% of those within 1 m\n";
+  return s.str();
+}
+
+std::string ToTrackCsv(const EvalReport& r) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(3);
+  s << "t_s,x,y,true_x,true_y,error_m,reliable,probability,alignment_version,reason\n";
+  const int64_t t0 = r.track.empty() ? 0 : r.track.front().stamp_ns;
+  for (const EvalPose& p : r.track)
+    s << static_cast<double>(p.stamp_ns - t0) * 1e-9 << "," << p.x << "," << p.y << ","
+      << p.true_x << "," << p.true_y << "," << p.error_m << "," << p.reliable << ","
+      << p.probability << "," << p.alignment_version << ",\"" << p.reason << "\"\n";
   return s.str();
 }
 

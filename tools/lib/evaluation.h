@@ -26,6 +26,8 @@ struct EvalPose {
   double true_x = 0, true_y = 0;
   double error_m = 0;
   bool reliable = false;
+  double probability = 0;  // published probability of being within 1 m
+  std::string reason;      // published reliability reason
   uint32_t marker = 0;
   uint64_t alignment_version = 0;
 };
@@ -58,6 +60,9 @@ double Percentile(std::vector<double> v, double q);
 // The report as one JSON object (the keys of the issue) and as readable text.
 std::string ToJson(const EvalReport& report);
 std::string ToText(const EvalReport& report);
+
+// One line per scored pose: stamp, estimate, truth, error, flag, probability, reason.
+std::string ToTrackCsv(const EvalReport& report);
 
 // An SVG of the plan, the true and the estimated trajectories and the markers.
 std::string ToSvg(const FloorPlan& plan, const EvalReport& report);
