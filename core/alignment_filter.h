@@ -22,8 +22,8 @@ namespace floorpose {
 struct AlignmentFilterOptions {
   // Drift of the SLAM frame per metre walked, as variance growth (random walk):
   // heading rad^2/m and position m^2/m at the wearer.
-  double heading_var_per_m = (0.115 * M_PI / 180) * (0.115 * M_PI / 180);  // 1.15 deg after 100 m
-  double position_var_per_m = 4e-4;  // (0.02 m)^2 per metre: 0.2 m after 100 m
+  double heading_var_per_m = (0.3 * M_PI / 180) * (0.3 * M_PI / 180);  // 3 deg after 100 m
+  double position_var_per_m = 0.06 * 0.06;  // 0.6 m after 100 m
   // A registration's covariance: sigma^2 / points_equivalent times the inverse of the
   // mean information of its wall points (so a corridor's axis gets no information).
   // The points of one snapshot share the drift and the plan's errors: they are worth a

@@ -112,6 +112,7 @@ PlanPoseEstimate Tracker::Correct(const Pose2& pose_slam) {
       walked_since_predict_m_ += step;
       walked_since_fused_m_ += step;
       walked_since_start_m_ += step;
+      pending_walk_m_ += step;
     }
   }
   last_slam_position_ = pose_slam.position;
@@ -186,16 +187,20 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
       pending_jump_.reset();
     } else {
       // Beyond the gate: a wrong minimum, or the alignment in use is wrong. Taken only
-      // when the next registration lands on it again.
+      // when registrations keep landing on it while the wearer walks on (snapshots a few
+      // seconds apart share most of their points, so one more agreeing result proves
+      // little), and when it fits clearly better than the alignment in use.
       const Eigen::Vector3d apart =
           pending_jump_ ? Difference(result.T_plan_slam, *pending_jump_, filter_.pivot())
                         : Eigen::Vector3d::Constant(1e9);
-      if (apart.tail<2>().norm() <= options_.confirm_m &&
-          std::abs(apart(0)) <= options_.confirm_rad) {
+      const bool agrees =
+          apart.tail<2>().norm() <= options_.confirm_m && std::abs(apart(0)) <= options_.confirm_rad;
+      if (!agrees) pending_walk_m_ = 0;
+      if (agrees && pending_walk_m_ >= options_.confirm_walk_m &&
+          new_score < options_.jump_score_ratio * old_score) {
         filter_.Reset(result.T_plan_slam, R + filter_.P(), filter_.pivot());
         d.accepted = true;
         d.reason = "jump confirmed";
-        pending_jump_.reset();
       } else {
         pending_jump_ = result.T_plan_slam;
         char text[128];
@@ -209,6 +214,7 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
     }
   }
   if (d.accepted) {
+    pending_jump_.reset();  // by SetAlignment too
     SetAlignment(filter_.T(), AlignmentSource::kRegistration, stamp_ns);
     alignment_.registration = result;
     alignment_.registration->T_plan_slam = filter_.T();

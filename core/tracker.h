@@ -23,9 +23,10 @@ namespace floorpose {
 // fit reported there.
 struct ReliabilityModel {
   static constexpr int kFeatures = 8;
-  double bias = 4.77;
+  double bias = -3.504;
   // In the order of ReliabilityFeatures::Vector().
-  std::array<double, kFeatures> weights = {4.16, -11.42, -1.50, -0.49, -0.35, -0.83, 0.12, -0.48};
+  std::array<double, kFeatures> weights = {5.819,   -9.403,  -2.086, 1.279,
+                                           -0.1076, -0.1351, 0.4804, -0.3771};
   double reliable_probability = 0.9;  // RELIABLE at or above this
   double degraded_probability = 0.5;  // DEGRADED at or above this, else UNRELIABLE
 };
@@ -42,8 +43,10 @@ struct TrackerOptions {
   double pick_search_rad = 0.175;  // ...and radians
   double pick_sigma_m = 1.5;       // uncertainty of a wall pick at its point, metres
   double pick_sigma_rad = 5.0 * M_PI / 180;  // ...and of its heading
-  double confirm_m = 0.5;          // a gated result is taken when the next one lands
-  double confirm_rad = 0.035;      // ...within this of it
+  double confirm_m = 0.5;          // a gated result is taken when later ones land within
+  double confirm_rad = 0.035;      // ...this of it...
+  double confirm_walk_m = 10.0;    // ...over this many metres walked...
+  double jump_score_ratio = 0.7;   // ...and it fits the cloud this much better than the one in use
   double score_cap_m = 0.2;        // distances capped here in the "better fit" score
   double worse_fit_ratio = 1.25;   // results scoring worse than this times the one in use: rejected
   bool local_meshes = false;       // register only meshes new since the last run (thesis "local")
@@ -177,7 +180,8 @@ class Tracker {
   uint64_t next_version_ = 1;
   std::optional<Eigen::Vector2d> pick_plan_point_;
   std::optional<Eigen::Vector2d> last_plan_position_;
-  std::optional<Se2> pending_jump_;  // a gated result waiting for a second one to agree
+  std::optional<Se2> pending_jump_;  // a gated result waiting for later ones to agree
+  double pending_walk_m_ = 0;         // walked since it was first seen
   int64_t last_start_ns_ = 0;
   AlignmentFilter filter_;
   std::optional<Eigen::Vector2d> last_slam_position_;

@@ -27,6 +27,7 @@ bool Daemon::Start(std::string* error) {
     plan_pose_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kPlanPose);
     alignment_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kAlignment);
     status_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kStatus);
+    track_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kPlanTrack);
     waiter_ = std::make_unique<platform::Waiter>(*participant_);
     waiter_->Attach(*mesh_reader_);
     waiter_->Attach(*pose_reader_);
@@ -159,6 +160,7 @@ void Daemon::Publish(Topic topic, const google::protobuf::Message& msg) {
   platform::Writer* writer = topic == Topic::kPlanPose    ? plan_pose_writer_.get()
                              : topic == Topic::kAlignment ? alignment_writer_.get()
                              : topic == Topic::kStatus    ? status_writer_.get()
+                             : topic == Topic::kPlanTrack ? track_writer_.get()
                                                           : nullptr;
   if (!writer) return;
   platform::Envelope e;

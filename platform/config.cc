@@ -174,6 +174,8 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.pick_sigma_rad = k.pick_sigma_deg() * M_PI / 180.0;
   t.confirm_m = k.confirm_m();
   t.confirm_rad = k.confirm_deg() * M_PI / 180.0;
+  t.confirm_walk_m = k.confirm_walk_m();
+  t.jump_score_ratio = k.jump_score_ratio();
   const double drift_rad = k.drift_heading_deg() * M_PI / 180.0;
   t.filter.heading_var_per_m = drift_rad * drift_rad;
   t.filter.position_var_per_m = k.drift_position_m() * k.drift_position_m();

@@ -15,13 +15,14 @@ struct TopicSpec {
   int32_t depth;  // keep-last depth; 0 = keep-all
 };
 
-constexpr std::array<TopicSpec, 6> kSpecs = {{
+constexpr std::array<TopicSpec, 7> kSpecs = {{
     {Topic::kMeshDelta, "floorpose/v1/mesh_delta", false, 0},
     {Topic::kHeadsetPose, "floorpose/v1/headset_pose", false, 64},
     {Topic::kCommand, "floorpose/v1/command", false, 0},
     {Topic::kPlanPose, "floorpose/v1/plan_pose", true, 1},
     {Topic::kAlignment, "floorpose/v1/alignment", true, 1},
     {Topic::kStatus, "floorpose/v1/status", true, 1},
+    {Topic::kPlanTrack, "floorpose/v1/plan_track", true, 1},
 }};
 
 const TopicSpec& Spec(Topic t) { return kSpecs[static_cast<size_t>(t)]; }

@@ -24,9 +24,11 @@ enum class Topic {
   kPlanPose,     // daemon -> all: reliable, transient-local, keep-last 1 per device
   kAlignment,    // daemon -> all: reliable, transient-local, keep-last 1 per device
   kStatus,       // daemon -> all: reliable, transient-local, keep-last 1 per device
+  kPlanTrack,    // daemon -> all: reliable, transient-local, keep-last 1 per device
 };
 inline constexpr Topic kAllTopics[] = {Topic::kMeshDelta, Topic::kHeadsetPose, Topic::kCommand,
-                                       Topic::kPlanPose,  Topic::kAlignment,   Topic::kStatus};
+                                       Topic::kPlanPose,  Topic::kAlignment,   Topic::kStatus,
+                                       Topic::kPlanTrack};
 const char* TopicName(Topic topic);
 std::optional<Topic> TopicFromName(std::string_view name);
 

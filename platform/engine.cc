@@ -184,8 +184,20 @@ void Engine::OnHeadsetPose(const Envelope& e) {
     est.reliability.probability = 0.0;
     est.reliability.reason = "headset tracking lost";
   }
+  const v1::PlanPose out = ToPlanPose(est, pose.stamp_ns);
+  if (config_.tracking().track_history_s() > 0) {
+    recent_.emplace_back(pose.pose_slam, out);
+    const auto horizon = static_cast<int64_t>(config_.tracking().track_history_s() * 1e9);
+    while (!recent_.empty() && recent_.front().second.source_stamp_ns() < pose.stamp_ns - horizon)
+      recent_.pop_front();
+  }
+  publish_(Topic::kPlanPose, out);
+  counters_.set_plan_poses_out(counters_.plan_poses_out() + 1);
+}
+
+v1::PlanPose Engine::ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) const {
   v1::PlanPose out;
-  out.set_source_stamp_ns(pose.stamp_ns);
+  out.set_source_stamp_ns(stamp_ns);
   out.set_x(est.pose.position.x());
   out.set_y(est.pose.position.y());
   out.set_heading(est.pose.heading);
@@ -197,8 +209,25 @@ void Engine::OnHeadsetPose(const Envelope& e) {
   rel->set_probability(est.reliability.probability);
   rel->set_rmse_m(est.reliability.rmse_m);
   rel->set_reason(est.reliability.reason);
-  publish_(Topic::kPlanPose, out);
-  counters_.set_plan_poses_out(counters_.plan_poses_out() + 1);
+  return out;
+}
+
+void Engine::PublishTrack() {
+  if (recent_.empty() || !tracker_.has_alignment()) return;
+  v1::PlanTrack track;
+  const AlignmentState& a = tracker_.alignment();
+  track.set_alignment_version(a.version);
+  track.set_floor(floor_);
+  for (const auto& [slam, published] : recent_) {
+    v1::PlanPose* p = track.add_poses();
+    *p = published;
+    const Pose2 plan = Apply(a.T_plan_slam, slam);
+    p->set_x(plan.position.x());
+    p->set_y(plan.position.y());
+    p->set_heading(plan.heading);
+    p->set_alignment_version(a.version);
+  }
+  publish_(Topic::kPlanTrack, track);
 }
 
 void Engine::OnCommand(const Envelope& e) {
@@ -254,6 +283,9 @@ void Engine::OnCommand(const Envelope& e) {
   spdlog::info("command: {}{}", prefix, done);
   // Always: after a reset or a new plan, version 0 tells late joiners the old one is void.
   PublishAlignment();
+  if (cmd.command_case() == v1::Command::kReset || cmd.command_case() == v1::Command::kLoadPlan)
+    recent_.clear();  // that track belonged to the old alignment or plan
+  PublishTrack();
   PublishStatus(prefix + done);
 }
 
@@ -294,6 +326,7 @@ void Engine::OnRegistrationDone(Done done) {
   if (d.accepted) {
     counters_.set_registrations_accepted(counters_.registrations_accepted() + 1);
     PublishAlignment();
+    PublishTrack();
   }
 }
 
@@ -330,6 +363,11 @@ void Engine::PublishStatus(const std::string& message) {
   s.set_alignment_version(tracker_.alignment().version);
   s.set_stamp_ns(now_ns_());
   s.set_message(message);
+  const Reliability r = tracker_.CurrentReliability();
+  s.mutable_reliability()->set_flag(ToProto(r.flag));
+  s.mutable_reliability()->set_probability(r.probability);
+  s.mutable_reliability()->set_rmse_m(r.rmse_m);
+  s.mutable_reliability()->set_reason(r.reason);
   publish_(Topic::kStatus, s);
 }
 

@@ -5,6 +5,7 @@
 // the two give the same plan poses.
 #pragma once
 
+#include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -79,6 +80,9 @@ class Engine {
  private:
   std::string LoadPlan(const std::string& path, const std::string& floor);
   void PublishAlignment();
+  // The recent trajectory under the alignment in use (PlanTrack).
+  void PublishTrack();
+  v1::PlanPose ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) const;
   void Reject(const std::string& why);
   // The wall options with the height band about the wearer's eyes, once a pose is known.
   WallExtractionOptions BandedWallOptions() const;
@@ -101,6 +105,8 @@ class Engine {
   std::optional<LastRegistration> last_registration_;
   int64_t latest_stamp_ns_ = 0;  // newest headset stamp seen: the scheduling clock
   std::optional<double> eye_z_;  // slam height of the latest pose
+  // Recent poses: slam, and as published (for PlanTrack).
+  std::deque<std::pair<Pose2, v1::PlanPose>> recent_;
   bool running_ = false;
   uint64_t last_run_generation_ = 0;
 };

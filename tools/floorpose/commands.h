@@ -16,5 +16,6 @@ Run AddSimulateCommand(CLI::App& app);
 Run AddEvalCommand(CLI::App& app);
 Run AddEvalSuiteCommand(CLI::App& app);
 Run AddBenchCommand(CLI::App& app);
+Run AddCalibrateCommand(CLI::App& app);
 
 }  // namespace floorpose::tools

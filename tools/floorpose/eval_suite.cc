@@ -16,6 +16,7 @@
 #include "platform/config.h"
 #include "platform/floor_plan_io.h"
 #include "tools/floorpose/commands.h"
+#include "tools/lib/calibration.h"
 #include "tools/lib/evaluation.h"
 #include "tools/lib/simulate_recording.h"
 
@@ -33,6 +34,7 @@ struct SuiteOptions {
   double length_m = 0;  // 0: the simulator's default
   int jobs = 0;
   std::string config;  // floorposed configuration to evaluate with
+  int first_seed = 1;
 };
 
 struct SuiteRun {
@@ -74,7 +76,7 @@ int RunSuite(const SuiteOptions& o) {
   std::vector<SuiteRun> runs;
   for (const std::string& plan : plans)
     for (const std::string& scenario : o.scenarios)
-      for (int seed = 1; seed <= o.seeds; ++seed) {
+      for (int seed = o.first_seed; seed < o.first_seed + o.seeds; ++seed) {
         const std::string id = fs::path(plan).stem().string();
         runs.push_back({plan, id, scenario, static_cast<uint64_t>(seed),
                         (fs::path(o.out) / "recordings" /
@@ -93,6 +95,8 @@ int RunSuite(const SuiteOptions& o) {
 
   // Work items: one simulation, then its evaluations; spread over the cores.
   std::vector<EvalReport> reports;
+  std::ofstream calibration(fs::path(o.out) / "calibration.csv");
+  calibration << CalibrationCsvHeader() << "\n";
   std::mutex mu;
   std::atomic<size_t> next{0};
   std::atomic<int> failures{0};
@@ -135,6 +139,13 @@ int RunSuite(const SuiteOptions& o) {
             report.method.c_str(), report.mean_error_m, report.max_error_m,
             100 * report.reliable_fraction, 100 * report.reliable_precision_1m);
         std::fflush(stdout);
+        if (registers) {
+          // Every third pose for calibration: neighbours 0.3 s apart say the same.
+          for (size_t k = 0; k < report.track.size(); k += 3) {
+            const EvalPose& p = report.track[k];
+            calibration << CalibrationCsvLine({p.features, p.error_m <= 1.0}) << "\n";
+          }
+        }
         report.track.shrink_to_fit();
         report.plan_poses.clear();
         reports.push_back(std::move(report));
@@ -210,6 +221,36 @@ int RunSuite(const SuiteOptions& o) {
        << " | " << fin / n << " | " << marker / n << " | " << diverged << " | " << 100 * rel / n
        << "% | " << 100 * prec / n << "% | " << reg / n << " |\n";
   }
+  // Reliability: does RELIABLE mean within 1 m, per scenario, and how calibrated is the
+  // published probability (first registering method).
+  const std::string& first = o.methods.front();
+  md << "\nReliability (" << first
+     << "): poses flagged RELIABLE, and the share of those within 1 m, per scenario:\n\n"
+        "| scenario | poses | reliable | reliable within 1 m | all within 1 m |\n|---|---|---|---|---|\n";
+  std::vector<double> predicted;
+  std::vector<bool> within;
+  for (const std::string& scenario : o.scenarios) {
+    size_t n = 0, reliable = 0, reliable_ok = 0, ok = 0;
+    for (const EvalReport& r : reports) {
+      if (r.method != first || r.scenario != scenario) continue;
+      for (const EvalPose& p : r.track) {
+        ++n;
+        ok += p.error_m <= 1.0;
+        reliable += p.reliable;
+        reliable_ok += p.reliable && p.error_m <= 1.0;
+        predicted.push_back(p.probability);
+        within.push_back(p.error_m <= 1.0);
+      }
+    }
+    if (!n) continue;
+    md << "| " << scenario << " | " << n << " | " << 100.0 * reliable / n << "% | "
+       << (reliable ? 100.0 * reliable_ok / reliable : 0.0) << "% | " << 100.0 * ok / n << "% |\n";
+  }
+  const auto curve = CalibrationCurve(predicted, within);
+  md << "\nCalibration of the published probability (" << first << ", every pose):\n\n"
+     << CalibrationTable(curve);
+  std::ofstream(fs::path(o.out) / "svg" / "calibration.svg")
+      << CalibrationSvg({{first + ": published probability, every pose of the suite", curve}});
   std::ofstream(fs::path(o.out) / "results.md") << md.str();
   // SVGs of the best and the worst registered run.
   std::vector<const EvalReport*> registered;
@@ -244,6 +285,8 @@ Run AddEvalSuiteCommand(CLI::App& app) {
   app.add_option("--length", o->length_m, "walk length per run, metres (0: default)");
   app.add_option("--jobs", o->jobs, "parallel runs (0: one per core)");
   app.add_option("--config", o->config, "floorposed configuration to evaluate with");
+  app.add_option("--first-seed", o->first_seed, "seeds run from this one (calibrate on others)")
+      ->capture_default_str();
   return [o] { return RunSuite(*o); };
 }
 

@@ -24,6 +24,8 @@ int main(int argc, char** argv) {
       floorpose::tools::AddEvalCommand);
   add("eval-suite", "every plan x scenario x seed x method, as a table",
       floorpose::tools::AddEvalSuiteCommand);
+  add("calibrate", "fit the reliability model on an eval-suite's calibration.csv",
+      floorpose::tools::AddCalibrateCommand);
   add("bench", "time the registration methods and the closest-wall index",
       floorpose::tools::AddBenchCommand);
   CLI11_PARSE(app, argc, argv);

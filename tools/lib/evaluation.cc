@@ -101,6 +101,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
   const HeadsetFrame frame =
       ParseHeadsetFrame(config.headset_frame()).value_or(HeadsetFrame::kUnityLeftHandedYUp);
   std::map<int64_t, Pose2> slam_poses;  // for the best-fit baseline
+  std::map<int64_t, std::array<double, ReliabilityModel::kFeatures>> features;
   std::vector<double> reg_times;
   for (const Input& in : inputs) {
     virtual_now = in.stamp_ns;
@@ -108,7 +109,10 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
       case Topic::kCommand: engine.OnCommand(in.envelope); break;
       case Topic::kMeshDelta: engine.OnMeshDelta(in.envelope); break;
       case Topic::kHeadsetPose: {
+        const size_t published = plan_poses.size();
         engine.OnHeadsetPose(in.envelope);
+        if (plan_poses.size() > published)
+          features[plan_poses.back().source_stamp_ns()] = engine.tracker().CurrentFeatures().Vector();
         platform::DecodedPose pose;
         if (baseline == Baseline::kBestFit &&
             platform::DecodeHeadsetPose(in.envelope.payload, frame, config.limits(), &pose).empty())
@@ -157,6 +161,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     e.reliable = p.reliability().flag() == v1::Reliability::RELIABLE;
     e.probability = p.reliability().probability();
     e.reason = p.reliability().reason();
+    if (auto f = features.find(e.stamp_ns); f != features.end()) e.features = f->second;
     if (best_fit) {
       const auto s = slam_poses.find(e.stamp_ns);
       if (s == slam_poses.end()) continue;

@@ -3,12 +3,14 @@
 // the recording's ground truth with the thesis' metrics (chapter 7).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "core/floor_plan.h"
+#include "core/tracker.h"
 #include "floorpose/v1/config.pb.h"
 #include "floorpose/v1/floorpose.pb.h"
 
@@ -28,6 +30,8 @@ struct EvalPose {
   bool reliable = false;
   double probability = 0;  // published probability of being within 1 m
   std::string reason;      // published reliability reason
+  // The tracker's reliability features when the pose was published (calibration input).
+  std::array<double, ReliabilityModel::kFeatures> features{};
   uint32_t marker = 0;
   uint64_t alignment_version = 0;
 };
