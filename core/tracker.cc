@@ -158,8 +158,7 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
               &old_score);
   const bool finite = result.T_plan_slam.t.allFinite() && std::isfinite(result.T_plan_slam.theta);
   if (finite) {
-    EvaluateFit(cloud, *index_, result.T_plan_slam, cap, o.inlier_threshold_m, nullptr,
-                &new_score);
+    EvaluateFit(cloud, *index_, result.T_plan_slam, cap, o.inlier_threshold_m, nullptr, &new_score);
   }
   PredictToWearer();
   if (!finite) {
@@ -193,8 +192,8 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
       const Eigen::Vector3d apart =
           pending_jump_ ? Difference(result.T_plan_slam, *pending_jump_, filter_.pivot())
                         : Eigen::Vector3d::Constant(1e9);
-      const bool agrees =
-          apart.tail<2>().norm() <= options_.confirm_m && std::abs(apart(0)) <= options_.confirm_rad;
+      const bool agrees = apart.tail<2>().norm() <= options_.confirm_m &&
+                          std::abs(apart(0)) <= options_.confirm_rad;
       if (!agrees) pending_walk_m_ = 0;
       if (agrees && pending_walk_m_ >= options_.confirm_walk_m &&
           new_score < options_.jump_score_ratio * old_score) {
@@ -263,8 +262,8 @@ Reliability Tracker::Assess(const ReliabilityFeatures& f) const {
   double z = m.bias;
   // The reason is the feature that lowers the probability most against a typical good
   // fix (the values below).
-  static constexpr std::array<double, ReliabilityModel::kFeatures> kGood = {
-      0.95, 0.06, 0.15, 0.5, 0.3, 1.0, 3.0, 1.0};
+  static constexpr std::array<double, ReliabilityModel::kFeatures> kGood = {0.95, 0.06, 0.15, 0.5,
+                                                                            0.3,  1.0,  3.0,  1.0};
   int worst = -1;
   double worst_drop = 0;
   for (int i = 0; i < ReliabilityModel::kFeatures; ++i) {
@@ -283,21 +282,31 @@ Reliability Tracker::Assess(const ReliabilityFeatures& f) const {
                                                      : ReliabilityFlag::kUnreliable;
   char text[96];
   switch (worst) {
-    case 0: std::snprintf(text, sizeof text, "%.0f%% of wall points match the plan",
-                          100 * f.inlier_ratio); break;
-    case 1: std::snprintf(text, sizeof text, "walls fit loosely (%.2f m RMSE)", f.inlier_rmse_m);
+    case 0:
+      std::snprintf(text, sizeof text, "%.0f%% of wall points match the plan",
+                    100 * f.inlier_ratio);
       break;
-    case 2: std::snprintf(text, sizeof text, "position uncertain (%.2f m)", f.position_sigma_m);
+    case 1:
+      std::snprintf(text, sizeof text, "walls fit loosely (%.2f m RMSE)", f.inlier_rmse_m);
       break;
-    case 3: std::snprintf(text, sizeof text, "heading uncertain (%.1f deg)", f.heading_sigma_deg);
+    case 2:
+      std::snprintf(text, sizeof text, "position uncertain (%.2f m)", f.position_sigma_m);
       break;
-    case 4: std::snprintf(text, sizeof text, "walls constrain one direction only (corridor)");
+    case 3:
+      std::snprintf(text, sizeof text, "heading uncertain (%.1f deg)", f.heading_sigma_deg);
       break;
-    case 5: std::snprintf(text, sizeof text, "the latest registration disagreed (%.1f sigma)",
-                          f.disagreement); break;
+    case 4:
+      std::snprintf(text, sizeof text, "walls constrain one direction only (corridor)");
+      break;
+    case 5:
+      std::snprintf(text, sizeof text, "the latest registration disagreed (%.1f sigma)",
+                    f.disagreement);
+      break;
     case 6: std::snprintf(text, sizeof text, "few registrations since the pick"); break;
-    case 7: std::snprintf(text, sizeof text, "%.0f m walked since the latest registration",
-                          std::expm1(f.walked_m)); break;
+    case 7:
+      std::snprintf(text, sizeof text, "%.0f m walked since the latest registration",
+                    std::expm1(f.walked_m));
+      break;
     default: std::snprintf(text, sizeof text, "registered"); break;
   }
   r.reason = r.flag == ReliabilityFlag::kReliable ? "registered" : text;
@@ -315,7 +324,9 @@ Reliability Tracker::CurrentReliability() const {
     return r;
   }
   r = Assess(CurrentFeatures());
-  if (!current_fit_ && r.flag != ReliabilityFlag::kReliable) {
+  if (!current_fit_) {
+    // Aligned by hand, not yet checked against the walls: DEGRADED, whatever the odds.
+    r.flag = ReliabilityFlag::kDegraded;
     r.reason = alignment_.source == AlignmentSource::kFlip ? "flipped, not yet checked"
                                                            : "wall pick, not yet checked";
   }

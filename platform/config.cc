@@ -112,8 +112,10 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
        {std::pair{k.measurement_sigma_m(), "measurement_sigma_m"},
         std::pair{k.measurement_points(), "measurement_points"},
         std::pair{k.gate_chi2(), "gate_chi2"}, std::pair{k.pick_sigma_m(), "pick_sigma_m"},
-        std::pair{k.pick_sigma_deg(), "pick_sigma_deg"}, std::pair{k.worse_fit_ratio(), "worse_fit_ratio"}}) {
-    if (!(value > 0 && std::isfinite(value))) return std::string("tracking.") + name + " must be positive";
+        std::pair{k.pick_sigma_deg(), "pick_sigma_deg"},
+        std::pair{k.worse_fit_ratio(), "worse_fit_ratio"}}) {
+    if (!(value > 0 && std::isfinite(value)))
+      return std::string("tracking.") + name + " must be positive";
   }
   if (!(k.drift_heading_deg() >= 0 && k.drift_position_m() >= 0 && k.min_walk_m() >= 0 &&
         k.confirm_m() >= 0 && k.confirm_deg() >= 0))
@@ -124,7 +126,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
            std::to_string(ReliabilityModel::kFeatures + 1) + " values (bias, then weights)";
   for (double v : rel.coefficients())
     if (!std::isfinite(v)) return "tracking.reliability.coefficients must be finite";
-  if (!(rel.degraded_probability() >= 0 && rel.degraded_probability() <= rel.reliable_probability() &&
+  if (!(rel.degraded_probability() >= 0 &&
+        rel.degraded_probability() <= rel.reliable_probability() &&
         rel.reliable_probability() <= 1))
     return "tracking.reliability: need 0 <= degraded_probability <= reliable_probability <= 1";
   const std::string& l = c.log_level();
@@ -136,6 +139,13 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
 std::string ResolvedConfigText(const v1::FloorposedConfig& config) {
   v1::FloorposedConfig copy = config;
   MaterializeDefaults(&copy);
+  // The reliability model prints as the coefficients in use: the built-in fit if unset.
+  auto* rel = copy.mutable_tracking()->mutable_reliability();
+  if (rel->coefficients_size() == 0) {
+    const ReliabilityModel model;
+    rel->add_coefficients(model.bias);
+    for (double w : model.weights) rel->add_coefficients(w);
+  }
   std::string out;
   pb::TextFormat::PrintToString(copy, &out);
   return out;
