@@ -68,8 +68,8 @@ Eigen::Matrix3d AlignmentFilter::MeasurementCovariance(const Eigen::Matrix3d& in
   if (inliers == 0) return Eigen::Matrix3d::Identity() * 1e6;
   const double n = static_cast<double>(inliers);
   // Mean information per point, regularised so that an unconstrained direction gets a
-  // large but finite variance (1000 sigma^2 / points_equivalent).
-  const Eigen::Matrix3d mean = information / n + Eigen::Matrix3d::Identity() * 1e-3;
+  // large but finite variance (10^4 sigma^2 / points_equivalent).
+  const Eigen::Matrix3d mean = information / n + Eigen::Matrix3d::Identity() * 1e-4;
   const double s = options_.measurement_sigma_m;
   const double k = std::min(options_.measurement_points, n);
   return mean.inverse() * (s * s / k);

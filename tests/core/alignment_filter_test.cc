@@ -1,0 +1,86 @@
+// The alignment filter: perturbations about the wearer, covariance moved with the wearer,
+// degenerate directions left to the prior, and the gate.
+#include "core/alignment_filter.h"
+
+#include <gtest/gtest.h>
+
+#include "core/random.h"
+#include "tests/test_util.h"
+
+namespace floorpose {
+namespace {
+
+using testing::Deg;
+using testing::IsNearlySe2;
+
+TEST(AlignmentFilterTest, DifferenceAndPerturbAreInverse) {
+  SplitMix64 rng(61);
+  for (int i = 0; i < 200; ++i) {
+    const Se2 from{rng.Uniform(-M_PI, M_PI), {rng.Uniform(-30, 30), rng.Uniform(-30, 30)}};
+    const Se2 to{rng.Uniform(-M_PI, M_PI), {rng.Uniform(-30, 30), rng.Uniform(-30, 30)}};
+    const Eigen::Vector2d pivot(rng.Uniform(-20, 20), rng.Uniform(-20, 20));
+    const Eigen::Vector3d d = Difference(to, from, pivot);
+    EXPECT_THAT(Perturb(from, d, pivot), IsNearlySe2(to, 1e-9, 1e-12));
+  }
+  // A rotation about the pivot leaves the pivot where it was: u = 0.
+  const Eigen::Vector2d pivot(5, -2);
+  const Se2 from{0.3, {1, 2}};
+  const Se2 turned = Perturb(from, {0.1, 0, 0}, pivot);
+  EXPECT_NEAR((turned * (from.Inverse() * pivot) - pivot).norm(), 0.0, 1e-12);
+}
+
+TEST(AlignmentFilterTest, CorridorAxisKeepsThePrior) {
+  // Two long parallel walls along x: the points say nothing about x.
+  auto plan = MakeFloorPlan("corridor", {{{-50, 0}, {50, 0}}, {{-50, 2}, {50, 2}}});
+  ASSERT_TRUE(plan.ok());
+  const ClosestWallIndex index(plan.plan);
+  std::vector<Eigen::Vector2d> cloud;
+  for (double x = -5; x <= 5; x += 0.05) {
+    cloud.emplace_back(x, 0.0);
+    cloud.emplace_back(x, 2.0);
+  }
+  AlignmentFilter filter;
+  const Eigen::Vector2d wearer(0, 1);
+  filter.Reset(Se2{}, Eigen::Vector3d(1e-3, 0.25, 0.25).asDiagonal(), wearer);
+  size_t inliers = 0;
+  const Eigen::Matrix3d H = FitInformation(cloud, index, Se2{}, wearer, 0.2, &inliers);
+  EXPECT_EQ(inliers, cloud.size());
+  EXPECT_NEAR(H(1, 1), 0.0, 1e-9);  // no information along the axis
+  const Eigen::Matrix3d R = filter.MeasurementCovariance(H, inliers);
+  // A registration that slid 0.4 m along the axis (free) and 0.1 m across it.
+  const AlignmentFilter::Update u = filter.Fuse(Se2{0.0, {0.4, 0.1}}, R);
+  ASSERT_FALSE(u.gated);
+  EXPECT_LT(std::abs(filter.T().t.x()), 0.01);          // the prior holds along the axis
+  EXPECT_NEAR(filter.T().t.y(), 0.1, 0.005);            // the walls decide across it
+  EXPECT_GT(filter.P()(1, 1), 100 * filter.P()(2, 2));  // and it stays uncertain along it
+}
+
+TEST(AlignmentFilterTest, UncertaintyGrowsWithWalkAndMovesWithTheWearer) {
+  AlignmentFilter filter;
+  filter.Reset(Se2{}, Eigen::Matrix3d::Zero(), {0, 0});
+  filter.Predict({0, 0}, 100.0);
+  const AlignmentFilterOptions& o = filter.options();
+  EXPECT_NEAR(filter.P()(0, 0), o.heading_var_per_m * 100, 1e-12);
+  EXPECT_NEAR(filter.position_sigma_m(), std::sqrt(o.position_var_per_m * 100), 1e-9);
+  // Only heading uncertainty, then 10 m away: it becomes 10 m of lever arm.
+  filter.Reset(Se2{}, Eigen::Vector3d(Deg(1) * Deg(1), 0, 0).asDiagonal(), {0, 0});
+  filter.Predict({10, 0}, 0.0);
+  EXPECT_NEAR(filter.position_sigma_m(), 10 * Deg(1), 1e-9);
+}
+
+TEST(AlignmentFilterTest, GatesAResultFarBeyondTheUncertainty) {
+  AlignmentFilter filter;
+  filter.Reset(Se2{}, Eigen::Vector3d(Deg(1) * Deg(1), 0.01, 0.01).asDiagonal(), {0, 0});
+  const Eigen::Matrix3d R = Eigen::Vector3d(Deg(0.5) * Deg(0.5), 0.0025, 0.0025).asDiagonal();
+  const AlignmentFilter::Update far = filter.Fuse(Se2{0.0, {3.0, 0}}, R);
+  EXPECT_TRUE(far.gated);
+  EXPECT_GT(far.mahalanobis2, filter.options().gate_chi2);
+  EXPECT_THAT(filter.T(), IsNearlySe2(Se2{}, 0, 0));  // untouched
+  const AlignmentFilter::Update near = filter.Fuse(Se2{0.0, {0.1, 0}}, R);
+  EXPECT_FALSE(near.gated);
+  // Prior 0.1 m, measurement 0.05 m: the estimate goes 4/5 of the way.
+  EXPECT_NEAR(filter.T().t.x(), 0.08, 1e-9);
+}
+
+}  // namespace
+}  // namespace floorpose
