@@ -92,6 +92,10 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
       config,
       [&](Topic t, const google::protobuf::Message& m) {
         if (t == Topic::kPlanPose) plan_poses.push_back(static_cast<const v1::PlanPose&>(m));
+        if (t == Topic::kPlanTrack) {
+          ++report->plan_tracks;
+          report->last_plan_track = static_cast<const v1::PlanTrack&>(m);
+        }
       },
       [&] { return virtual_now; });
   if (const std::string e = engine.Start(); !e.empty()) {

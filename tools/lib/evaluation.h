@@ -51,6 +51,8 @@ struct EvalReport {
   double reliable_precision_1m = 0;  // of those, the share within 1 m
   std::vector<EvalPose> track;
   std::vector<v1::PlanPose> plan_poses;  // as the Engine published them, in order
+  size_t plan_tracks = 0;                // PlanTrack messages published
+  v1::PlanTrack last_plan_track;         // the last of them
 };
 
 // Runs `recording` against the plan in config.plan_path() (config as the daemon's; the
