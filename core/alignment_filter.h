@@ -23,7 +23,7 @@ struct AlignmentFilterOptions {
   // Drift of the SLAM frame per metre walked, as variance growth (random walk):
   // heading rad^2/m and position m^2/m at the wearer.
   double heading_var_per_m = (0.3 * M_PI / 180) * (0.3 * M_PI / 180);  // 3 deg after 100 m
-  double position_var_per_m = 0.06 * 0.06;  // 0.6 m after 100 m
+  double position_var_per_m = 0.06 * 0.06;                             // 0.6 m after 100 m
   // A registration's covariance: sigma^2 / points_equivalent times the inverse of the
   // mean information of its wall points (so a corridor's axis gets no information).
   // The points of one snapshot share the drift and the plan's errors: they are worth a
@@ -64,7 +64,7 @@ class AlignmentFilter {
   struct Update {
     Eigen::Vector3d innovation = Eigen::Vector3d::Zero();  // measured minus predicted
     double mahalanobis2 = 0;
-    bool gated = false;                               // beyond gate_chi2: not applied
+    bool gated = false;                                    // beyond gate_chi2: not applied
     Eigen::Vector3d correction = Eigen::Vector3d::Zero();  // what was applied
   };
   // Fuses a measured alignment with covariance R (about the current pivot).

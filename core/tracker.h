@@ -4,9 +4,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <memory>
-#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -37,24 +37,24 @@ struct TrackerOptions {
   HoughOptions hough;
   AlignmentFilterOptions filter;
   ReliabilityModel reliability;
-  double wall_buffer_m = 0.0;      // see RegistrationOptions
-  double clip_margin_m = 0.0;      // see RegistrationOptions
-  double pick_search_m = 2.5;      // correlative search after a pick or flip, metres
-  double pick_search_rad = 0.175;  // ...and radians
-  double pick_sigma_m = 1.5;       // uncertainty of a wall pick at its point, metres
+  double wall_buffer_m = 0.0;                // see RegistrationOptions
+  double clip_margin_m = 0.0;                // see RegistrationOptions
+  double pick_search_m = 2.5;                // correlative search after a pick or flip, metres
+  double pick_search_rad = 0.175;            // ...and radians
+  double pick_sigma_m = 1.5;                 // uncertainty of a wall pick at its point, metres
   double pick_sigma_rad = 5.0 * M_PI / 180;  // ...and of its heading
-  double confirm_m = 0.5;          // a gated result is taken when later ones land within
-  double confirm_rad = 0.035;      // ...this of it...
-  double confirm_walk_m = 10.0;    // ...over this many metres walked...
-  double jump_score_ratio = 0.7;   // ...and it fits the cloud this much better than the one in use
-  double score_cap_m = 0.2;        // distances capped here in the "better fit" score
-  double worse_fit_ratio = 1.25;   // results scoring worse than this times the one in use: rejected
-  bool local_meshes = false;       // register only meshes new since the last run (thesis "local")
-  uint32_t min_new_points = 500;   // register after this many new wall points...
-  double min_walk_m = 2.0;         // ...or this many metres walked with new points...
-  double max_interval_s = 3.0;     // ...or after this long with any new points
-  uint32_t min_points = 200;       // no registration on fewer points
-  size_t history = 16;             // accepted alignments kept
+  double confirm_m = 0.5;                    // a gated result is taken when later ones land within
+  double confirm_rad = 0.035;                // ...this of it...
+  double confirm_walk_m = 10.0;              // ...over this many metres walked...
+  double jump_score_ratio = 0.7;  // ...and it fits the cloud this much better than the one in use
+  double score_cap_m = 0.2;       // distances capped here in the "better fit" score
+  double worse_fit_ratio = 1.25;  // results scoring worse than this times the one in use: rejected
+  bool local_meshes = false;      // register only meshes new since the last run (thesis "local")
+  uint32_t min_new_points = 500;  // register after this many new wall points...
+  double min_walk_m = 2.0;        // ...or this many metres walked with new points...
+  double max_interval_s = 3.0;    // ...or after this long with any new points
+  uint32_t min_points = 200;      // no registration on fewer points
+  size_t history = 16;            // accepted alignments kept
 };
 
 // Thesis section 6.3.4: one wall point with its normal, seen by the headset (slam
@@ -79,18 +79,18 @@ RegistrationOptions ToRegistrationOptions(const TrackerOptions& options, Alignme
 // What the tracker knows about the alignment in use at a pose: the inputs of the
 // reliability model.
 struct ReliabilityFeatures {
-  double inlier_ratio = 0;        // of the latest registration cloud, under the alignment in use
-  double inlier_rmse_m = 0;       // ...of those inliers
-  double position_sigma_m = 0;    // filter: one sigma at the wearer (largest axis)
-  double heading_sigma_deg = 0;   // filter: one sigma of the heading
-  double weakest_direction = 0;   // smallest eigenvalue of the mean information, as metres of
-                                  // uncertainty per point: large in a corridor
-  double disagreement = 0;        // Mahalanobis distance of the latest registration (sqrt)
-  double accepted = 0;            // registrations fused since the pick, log(1 + n)
-  double walked_m = 0;            // since the latest fused registration, metres (log(1 + m))
+  double inlier_ratio = 0;       // of the latest registration cloud, under the alignment in use
+  double inlier_rmse_m = 0;      // ...of those inliers
+  double position_sigma_m = 0;   // filter: one sigma at the wearer (largest axis)
+  double heading_sigma_deg = 0;  // filter: one sigma of the heading
+  double weakest_direction = 0;  // smallest eigenvalue of the mean information, as metres of
+                                 // uncertainty per point: large in a corridor
+  double disagreement = 0;       // Mahalanobis distance of the latest registration (sqrt)
+  double accepted = 0;           // registrations fused since the pick, log(1 + n)
+  double walked_m = 0;           // since the latest fused registration, metres (log(1 + m))
   std::array<double, ReliabilityModel::kFeatures> Vector() const {
-    return {inlier_ratio, inlier_rmse_m,   position_sigma_m, heading_sigma_deg,
-            weakest_direction, disagreement, accepted,       walked_m};
+    return {inlier_ratio,      inlier_rmse_m, position_sigma_m, heading_sigma_deg,
+            weakest_direction, disagreement,  accepted,         walked_m};
   }
   static const char* Name(int i);
 };
@@ -181,15 +181,15 @@ class Tracker {
   std::optional<Eigen::Vector2d> pick_plan_point_;
   std::optional<Eigen::Vector2d> last_plan_position_;
   std::optional<Se2> pending_jump_;  // a gated result waiting for later ones to agree
-  double pending_walk_m_ = 0;         // walked since it was first seen
+  double pending_walk_m_ = 0;        // walked since it was first seen
   int64_t last_start_ns_ = 0;
   AlignmentFilter filter_;
   std::optional<Eigen::Vector2d> last_slam_position_;
   double walked_since_predict_m_ = 0;  // not yet in the filter
   double walked_since_fused_m_ = 0;
   double walked_since_start_m_ = 0;
-  uint32_t fused_ = 0;              // registrations fused since the pick
-  double last_disagreement_ = 0;    // sqrt Mahalanobis of the latest registration
+  uint32_t fused_ = 0;            // registrations fused since the pick
+  double last_disagreement_ = 0;  // sqrt Mahalanobis of the latest registration
   double weakest_direction_ = 0;
   std::vector<AlignmentState> history_;
   // Fit of the alignment in use on the latest registration cloud.

@@ -226,7 +226,8 @@ int RunSuite(const SuiteOptions& o) {
   const std::string& first = o.methods.front();
   md << "\nReliability (" << first
      << "): poses flagged RELIABLE, and the share of those within 1 m, per scenario:\n\n"
-        "| scenario | poses | reliable | reliable within 1 m | all within 1 m |\n|---|---|---|---|---|\n";
+        "| scenario | poses | reliable | reliable within 1 m | all within 1 m "
+        "|\n|---|---|---|---|---|\n";
   std::vector<double> predicted;
   std::vector<bool> within;
   for (const std::string& scenario : o.scenarios) {

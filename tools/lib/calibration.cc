@@ -139,8 +139,8 @@ std::string CalibrationTable(const std::vector<CalibrationBin>& bins) {
   s << "| predicted | poses | mean predicted | observed within 1 m |\n|---|---|---|---|\n";
   for (const auto& b : bins) {
     if (!b.n) continue;
-    s << "| " << b.lo << "-" << b.hi << " | " << b.n << " | " << b.predicted << " | "
-      << b.observed << " |\n";
+    s << "| " << b.lo << "-" << b.hi << " | " << b.n << " | " << b.predicted << " | " << b.observed
+      << " |\n";
   }
   return s.str();
 }

@@ -35,7 +35,8 @@ std::vector<CalibrationBin> CalibrationCurve(const std::vector<double>& predicte
                                              const std::vector<bool>& within_1m);
 
 // Predicted against observed, with the diagonal; one curve per label.
-std::string CalibrationSvg(const std::vector<std::pair<std::string, std::vector<CalibrationBin>>>& curves);
+std::string CalibrationSvg(
+    const std::vector<std::pair<std::string, std::vector<CalibrationBin>>>& curves);
 
 // The curve as a markdown table.
 std::string CalibrationTable(const std::vector<CalibrationBin>& bins);

@@ -116,7 +116,8 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
         const size_t published = plan_poses.size();
         engine.OnHeadsetPose(in.envelope);
         if (plan_poses.size() > published)
-          features[plan_poses.back().source_stamp_ns()] = engine.tracker().CurrentFeatures().Vector();
+          features[plan_poses.back().source_stamp_ns()] =
+              engine.tracker().CurrentFeatures().Vector();
         platform::DecodedPose pose;
         if (baseline == Baseline::kBestFit &&
             platform::DecodeHeadsetPose(in.envelope.payload, frame, config.limits(), &pose).empty())
@@ -255,9 +256,9 @@ std::string ToTrackCsv(const EvalReport& r) {
   s << "t_s,x,y,true_x,true_y,error_m,reliable,probability,alignment_version,reason\n";
   const int64_t t0 = r.track.empty() ? 0 : r.track.front().stamp_ns;
   for (const EvalPose& p : r.track)
-    s << static_cast<double>(p.stamp_ns - t0) * 1e-9 << "," << p.x << "," << p.y << ","
-      << p.true_x << "," << p.true_y << "," << p.error_m << "," << p.reliable << ","
-      << p.probability << "," << p.alignment_version << ",\"" << p.reason << "\"\n";
+    s << static_cast<double>(p.stamp_ns - t0) * 1e-9 << "," << p.x << "," << p.y << "," << p.true_x
+      << "," << p.true_y << "," << p.error_m << "," << p.reliable << "," << p.probability << ","
+      << p.alignment_version << ",\"" << p.reason << "\"\n";
   return s.str();
 }
 
