@@ -75,12 +75,6 @@ Eigen::Matrix3d AlignmentFilter::MeasurementCovariance(const Eigen::Matrix3d& in
   return mean.inverse() * (s * s / k);
 }
 
-double AlignmentFilter::Mahalanobis2(const Se2& measured, const Eigen::Matrix3d& R) const {
-  const Eigen::Vector3d z = Difference(measured, T_, pivot_);
-  const Eigen::Matrix3d S = P_ + R;
-  return z.dot(S.inverse() * z);
-}
-
 AlignmentFilter::Update AlignmentFilter::Fuse(const Se2& measured, const Eigen::Matrix3d& R) {
   Update u;
   u.innovation = Difference(measured, T_, pivot_);

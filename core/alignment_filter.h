@@ -69,8 +69,6 @@ class AlignmentFilter {
   };
   // Fuses a measured alignment with covariance R (about the current pivot).
   Update Fuse(const Se2& measured, const Eigen::Matrix3d& R);
-  // The Mahalanobis distance squared of a measurement, without applying it.
-  double Mahalanobis2(const Se2& measured, const Eigen::Matrix3d& R) const;
 
   const Se2& T() const { return T_; }
   const Eigen::Matrix3d& P() const { return P_; }

@@ -48,10 +48,15 @@ void Tracker::Reset() {
   last_plan_position_.reset();
   current_fit_.reset();
   last_start_ns_ = 0;
-  walked_since_predict_m_ = walked_since_fused_m_ = walked_since_start_m_ = 0;
+  walked_since_start_m_ = 0;
+  ForgetRegistrations();
+  history_.clear();
+}
+
+void Tracker::ForgetRegistrations() {
+  walked_since_predict_m_ = walked_since_fused_m_ = 0;
   fused_ = 0;
   last_disagreement_ = weakest_direction_ = 0;
-  history_.clear();
 }
 
 void Tracker::SetAlignment(const Se2& T, AlignmentSource source, int64_t stamp_ns) {
@@ -68,9 +73,7 @@ void Tracker::SetAlignment(const Se2& T, AlignmentSource source, int64_t stamp_n
     const double sm = options_.pick_sigma_m, sr = options_.pick_sigma_rad;
     filter_ = AlignmentFilter(options_.filter);
     filter_.Reset(T, Eigen::Vector3d(sr * sr, sm * sm, sm * sm).asDiagonal(), pivot);
-    walked_since_predict_m_ = walked_since_fused_m_ = 0;
-    fused_ = 0;
-    last_disagreement_ = weakest_direction_ = 0;
+    ForgetRegistrations();
   }
 }
 
@@ -99,7 +102,6 @@ std::string Tracker::Flip(int64_t stamp_ns) {
   // Rotation by pi about the pivot: p -> 2 pivot - p.
   const Se2 flip{M_PI, 2.0 * *pivot};
   SetAlignment(flip * alignment_.T_plan_slam, AlignmentSource::kFlip, stamp_ns);
-  filter_.Reset(filter_.T(), filter_.P(), *pivot);
   current_fit_.reset();
   return {};
 }
@@ -183,7 +185,6 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
     last_disagreement_ = std::sqrt(u.mahalanobis2);
     if (!u.gated) {
       d.accepted = true;
-      pending_jump_.reset();
     } else {
       // Beyond the gate: a wrong minimum, or the alignment in use is wrong. Taken only
       // when registrations keep landing on it while the wearer walks on (snapshots a few
@@ -213,7 +214,6 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
     }
   }
   if (d.accepted) {
-    pending_jump_.reset();  // by SetAlignment too
     SetAlignment(filter_.T(), AlignmentSource::kRegistration, stamp_ns);
     alignment_.registration = result;
     alignment_.registration->T_plan_slam = filter_.T();

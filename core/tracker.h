@@ -167,12 +167,14 @@ class Tracker {
 
   // The latest accepted alignments, oldest first.
   const std::vector<AlignmentState>& history() const { return history_; }
-  const AlignmentFilter& filter() const { return filter_; }
 
  private:
   void SetAlignment(const Se2& T, AlignmentSource source, int64_t stamp_ns);
   // Moves the filter to the wearer, with the drift of the metres walked since.
   void PredictToWearer();
+  // Clears what the registrations since the last pick told the filter and the
+  // reliability features (a new pick or flip starts over).
+  void ForgetRegistrations();
 
   TrackerOptions options_;
   std::shared_ptr<const ClosestWallIndex> index_;
