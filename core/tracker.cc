@@ -256,10 +256,15 @@ ReliabilityFeatures Tracker::CurrentFeatures() const {
   return f;
 }
 
+double ReliabilityModel::Probability(const std::array<double, kFeatures>& x) const {
+  double z = bias;
+  for (int i = 0; i < kFeatures; ++i) z += weights[i] * x[i];
+  return 1.0 / (1.0 + std::exp(-z));
+}
+
 Reliability Tracker::Assess(const ReliabilityFeatures& f) const {
   const ReliabilityModel& m = options_.reliability;
   const auto x = f.Vector();
-  double z = m.bias;
   // The reason is the feature that lowers the probability most against a typical good
   // fix (the values below).
   static constexpr std::array<double, ReliabilityModel::kFeatures> kGood = {0.95, 0.06, 0.15, 0.5,
@@ -267,7 +272,6 @@ Reliability Tracker::Assess(const ReliabilityFeatures& f) const {
   int worst = -1;
   double worst_drop = 0;
   for (int i = 0; i < ReliabilityModel::kFeatures; ++i) {
-    z += m.weights[i] * x[i];
     const double drop = m.weights[i] * (x[i] - kGood[i]);
     if (drop < worst_drop) {
       worst_drop = drop;
@@ -275,7 +279,7 @@ Reliability Tracker::Assess(const ReliabilityFeatures& f) const {
     }
   }
   Reliability r;
-  r.probability = 1.0 / (1.0 + std::exp(-z));
+  r.probability = m.Probability(x);
   r.rmse_m = f.inlier_rmse_m;
   r.flag = r.probability >= m.reliable_probability   ? ReliabilityFlag::kReliable
            : r.probability >= m.degraded_probability ? ReliabilityFlag::kDegraded

@@ -29,6 +29,9 @@ struct ReliabilityModel {
                                            -0.1076, -0.1351, 0.4804, -0.3771};
   double reliable_probability = 0.9;  // RELIABLE at or above this
   double degraded_probability = 0.5;  // DEGRADED at or above this, else UNRELIABLE
+
+  // The probability of being within 1 m for features in that order.
+  double Probability(const std::array<double, kFeatures>& features) const;
 };
 
 struct TrackerOptions {

@@ -18,7 +18,7 @@ TEST(CalibrationTest, FitRecoversAKnownModel) {
   for (int i = 0; i < 20000; ++i) {
     CalibrationSample s;
     for (double& f : s.features) f = rng.Uniform(0, 2);
-    s.within_1m = rng.Uniform() < Probability(truth, s.features);
+    s.within_1m = rng.Uniform() < truth.Probability(s.features);
     samples.push_back(s);
   }
   const ReliabilityModel fit = FitReliabilityModel(samples, ReliabilityModel{}, 1e-6);
@@ -29,7 +29,7 @@ TEST(CalibrationTest, FitRecoversAKnownModel) {
   std::vector<double> p;
   std::vector<bool> y;
   for (const auto& s : samples) {
-    p.push_back(Probability(fit, s.features));
+    p.push_back(fit.Probability(s.features));
     y.push_back(s.within_1m);
   }
   for (const CalibrationBin& b : CalibrationCurve(p, y))

@@ -51,7 +51,7 @@ int RunCalibrate(const CalibrateOptions& o) {
   std::vector<bool> within;
   size_t reliable = 0, reliable_ok = 0, ok = 0;
   for (const auto& s : samples) {
-    const double p = Probability(m, s.features);
+    const double p = m.Probability(s.features);
     predicted.push_back(p);
     within.push_back(s.within_1m);
     ok += s.within_1m;

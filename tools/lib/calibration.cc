@@ -14,12 +14,6 @@ double Sigmoid(double z) { return 1.0 / (1.0 + std::exp(-z)); }
 
 }  // namespace
 
-double Probability(const ReliabilityModel& m, const std::array<double, kF>& x) {
-  double z = m.bias;
-  for (int i = 0; i < kF; ++i) z += m.weights[i] * x[i];
-  return Sigmoid(z);
-}
-
 ReliabilityModel FitReliabilityModel(const std::vector<CalibrationSample>& samples,
                                      const ReliabilityModel& start, double ridge) {
   ReliabilityModel m = start;

@@ -21,9 +21,6 @@ struct CalibrationSample {
 ReliabilityModel FitReliabilityModel(const std::vector<CalibrationSample>& samples,
                                      const ReliabilityModel& start, double ridge = 1e-3);
 
-double Probability(const ReliabilityModel& model,
-                   const std::array<double, ReliabilityModel::kFeatures>& features);
-
 struct CalibrationBin {
   double lo = 0, hi = 0;  // predicted probability range
   size_t n = 0;
