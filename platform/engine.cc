@@ -35,6 +35,15 @@ v1::Reliability::Flag ToProto(ReliabilityFlag f) {
   return v1::Reliability::FLAG_UNSPECIFIED;
 }
 
+v1::Reliability ToProto(const Reliability& r) {
+  v1::Reliability out;
+  out.set_flag(ToProto(r.flag));
+  out.set_probability(r.probability);
+  out.set_rmse_m(r.rmse_m);
+  out.set_reason(r.reason);
+  return out;
+}
+
 v1::DaemonStatus::State ToProto(TrackState s) {
   switch (s) {
     case TrackState::kWaitingForPlan: return v1::DaemonStatus::WAITING_FOR_PLAN;
@@ -204,11 +213,7 @@ v1::PlanPose Engine::ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) c
   out.set_height(est.pose.z);
   out.set_floor(floor_);
   out.set_alignment_version(est.alignment_version);
-  auto* rel = out.mutable_reliability();
-  rel->set_flag(ToProto(est.reliability.flag));
-  rel->set_probability(est.reliability.probability);
-  rel->set_rmse_m(est.reliability.rmse_m);
-  rel->set_reason(est.reliability.reason);
+  *out.mutable_reliability() = ToProto(est.reliability);
   return out;
 }
 
@@ -363,11 +368,7 @@ void Engine::PublishStatus(const std::string& message) {
   s.set_alignment_version(tracker_.alignment().version);
   s.set_stamp_ns(now_ns_());
   s.set_message(message);
-  const Reliability r = tracker_.CurrentReliability();
-  s.mutable_reliability()->set_flag(ToProto(r.flag));
-  s.mutable_reliability()->set_probability(r.probability);
-  s.mutable_reliability()->set_rmse_m(r.rmse_m);
-  s.mutable_reliability()->set_reason(r.reason);
+  *s.mutable_reliability() = ToProto(tracker_.CurrentReliability());
   publish_(Topic::kStatus, s);
 }
 
