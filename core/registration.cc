@@ -597,8 +597,7 @@ RegistrationResult Register(const std::vector<Eigen::Vector2d>& points,
   if (options.search_window_m <= 0 && options.search_window_rad <= 0) return refine(initial);
   std::vector<Se2> starts = CorrelativeSearch(*use_points, *use_index, initial, options);
   starts.insert(starts.begin(), initial);
-  RegistrationResult best;
-  double best_score = std::numeric_limits<double>::infinity();
+  std::vector<std::pair<double, RegistrationResult>> fits;
   uint32_t iterations = 0;
   for (const Se2& start : starts) {
     RegistrationResult r = refine(start);
@@ -608,12 +607,23 @@ RegistrationResult Register(const std::vector<Eigen::Vector2d>& points,
     // outweighs the walls and prefers a pose 10-20 cm off.
     EvaluateFit(*use_points, *use_index, r.T_plan_slam, options.icp.inlier_threshold_m,
                 options.icp.inlier_threshold_m, nullptr, &score);
-    if (score < best_score) {
-      best_score = score;
-      best = std::move(r);
-    }
+    fits.emplace_back(score, std::move(r));
   }
+  std::stable_sort(fits.begin(), fits.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  RegistrationResult best = std::move(fits.front().second);
   best.iterations = iterations;
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  for (const Eigen::Vector2d& p : *use_points) centre += p;
+  centre /= static_cast<double>(std::max<size_t>(1, use_points->size()));
+  for (size_t i = 1; i < fits.size(); ++i) {
+    const Se2& T = fits[i].second.T_plan_slam;
+    const bool distinct = (T * centre - best.T_plan_slam * centre).norm() > 0.5 ||
+                          std::abs(WrapAngle(T.theta - best.T_plan_slam.theta)) > 2 * M_PI / 180;
+    if (!distinct) continue;
+    best.ambiguity = fits[i].first > 0 ? fits.front().first / fits[i].first : 1.0;
+    break;
+  }
   return best;
 }
 

@@ -34,6 +34,10 @@ struct RegistrationResult {
   // and Singh 2016): the solution did not move along them.
   Eigen::Matrix3d eigenvectors = Eigen::Matrix3d::Identity();
   std::vector<Eigen::Vector3d> degenerate_directions;
+  // With a correlative search: the best fit's score over the best distinct other fit's
+  // (more than 0.5 m or 2 degrees apart at the cloud's centre), in (0, 1]; near 1, two
+  // places explain the walls equally well. 0 when there was no search or no other fit.
+  double ambiguity = 0.0;
   double time_ms = 0.0;  // filled by the caller, which owns the clock
   std::string reason;    // why it did not converge, if it did not
 };

@@ -169,6 +169,11 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
     d.reason = "registration failed: " + result.reason;
   } else if (new_score > old_score * options_.worse_fit_ratio) {
     d.reason = "fit worse than the alignment in use";
+  } else if (result.ambiguity > options_.max_ambiguity) {
+    char text[96];
+    std::snprintf(text, sizeof text, "ambiguous: another place fits within %.0f%%",
+                  100 * (1 - result.ambiguity));
+    d.reason = text;
   } else {
     // The measurement: the result, with the information its wall points give about the
     // wearer (none along a corridor's axis).

@@ -50,6 +50,8 @@ struct TrackerOptions {
   double confirm_rad = 0.035;                // ...this of it...
   double confirm_walk_m = 10.0;              // ...over this many metres walked...
   double jump_score_ratio = 0.7;  // ...and it fits the cloud this much better than the one in use
+  double max_ambiguity = 1.0;     // results after a pick with RegistrationResult::ambiguity above
+                                  // this: refused (1 = never)
   double score_cap_m = 0.2;       // distances capped here in the "better fit" score
   double worse_fit_ratio = 1.25;  // results scoring worse than this times the one in use: rejected
   bool local_meshes = false;      // register only meshes new since the last run (thesis "local")

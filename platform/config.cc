@@ -120,6 +120,10 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (!(k.drift_heading_deg() >= 0 && k.drift_position_m() >= 0 && k.min_walk_m() >= 0 &&
         k.confirm_m() >= 0 && k.confirm_deg() >= 0))
     return "tracking.drift_*, min_walk_m and confirm_* must be >= 0";
+  if (!(k.max_ambiguity() > 0 && k.max_ambiguity() <= 1))
+    return "tracking.max_ambiguity must be in (0, 1]";
+  if (!(k.refine_window_s() >= 0 && std::isfinite(k.refine_window_s())))
+    return "tracking.refine_window_s must be >= 0";
   const auto& rel = k.reliability();
   if (rel.coefficients_size() != 0 && rel.coefficients_size() != ReliabilityModel::kFeatures + 1)
     return "tracking.reliability.coefficients needs " +
@@ -186,6 +190,7 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.confirm_rad = k.confirm_deg() * M_PI / 180.0;
   t.confirm_walk_m = k.confirm_walk_m();
   t.jump_score_ratio = k.jump_score_ratio();
+  t.max_ambiguity = k.max_ambiguity();
   const double drift_rad = k.drift_heading_deg() * M_PI / 180.0;
   t.filter.heading_var_per_m = drift_rad * drift_rad;
   t.filter.position_var_per_m = k.drift_position_m() * k.drift_position_m();

@@ -90,6 +90,16 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
   if (job.index) {
     const int64_t t0 = now_ns();
     done.result = Register(job.cloud, job.normals, *job.index, job.initial, job.options);
+    if (!job.recent.empty() && done.result.converged) {
+      const RegistrationResult whole = done.result;
+      done.result = job.options.method == RegistrationMethod::kIk
+                        ? RegisterIk(job.recent, *job.index, whole.T_plan_slam, job.options.icp)
+                        : RegisterIcp(job.recent, *job.index, whole.T_plan_slam, job.options.icp);
+      done.result.iterations += whole.iterations;
+      done.result.ambiguity = whole.ambiguity;
+      done.refined = done.result.converged;
+      if (!done.refined) done.result = whole;
+    }
     done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
   } else {
     done.result.reason = "no floor plan";
@@ -307,6 +317,13 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
       window_s > 0 ? latest_stamp_ns_ - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
   job.cloud = store_.Snapshot(config_.tracking().max_points(), &job.normals,
                               options.local_meshes ? last_run_generation_ : 0, min_stamp);
+  const double refine_s = config_.tracking().refine_window_s();
+  if (refine_s > 0) {
+    job.recent = store_.Snapshot(config_.tracking().max_points(), nullptr,
+                                 options.local_meshes ? last_run_generation_ : 0,
+                                 latest_stamp_ns_ - static_cast<int64_t>(refine_s * 1e9));
+    if (job.recent.size() < options.min_points / 2) job.recent.clear();
+  }
   last_run_generation_ = store_.generation();
   job.index = tracker_.index();
   job.options = ToRegistrationOptions(options, tracker_.alignment().source);
@@ -321,8 +338,8 @@ void Engine::OnRegistrationDone(Done done) {
   running_ = false;
   const RegistrationResult& r = done.result;
   counters_.set_registrations(counters_.registrations() + 1);
-  const Tracker::Decision d =
-      tracker_.Offer(r, done.job.cloud, done.job.version, done.job.stamp_ns);
+  const Tracker::Decision d = tracker_.Offer(r, done.refined ? done.job.recent : done.job.cloud,
+                                             done.job.version, done.job.stamp_ns);
   last_registration_ = {r, d.accepted, d.reason};
   spdlog::info(
       "registration: {} points, {} inliers, inlier RMSE {:.3f} m, {} iterations, {:.1f} ms: {}{}",

@@ -38,6 +38,9 @@ class Engine {
   // A registration to run: everything it needs, copied, so it can run on any thread.
   struct Job {
     std::vector<Eigen::Vector2d> cloud, normals;
+    // When not empty: the result on `cloud` is refined on these (the recent walls), and
+    // offered with them.
+    std::vector<Eigen::Vector2d> recent;
     std::shared_ptr<const ClosestWallIndex> index;
     RegistrationOptions options;
     Se2 initial;
@@ -47,6 +50,7 @@ class Engine {
   struct Done {
     Job job;
     RegistrationResult result;
+    bool refined = false;  // the result is job.recent's
   };
   // Runs a job; now_ns() is read before and after to fill result.time_ms.
   static Done Run(Job job, const std::function<int64_t()>& now_ns);
