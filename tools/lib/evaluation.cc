@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include "core/sim/simulator.h"
@@ -11,6 +12,8 @@
 #include "platform/engine.h"
 #include "platform/recording.h"
 #include "tools/lib/simulate_recording.h"
+
+#include <spdlog/spdlog.h>
 
 namespace floorpose::tools {
 namespace {
@@ -107,6 +110,11 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
   std::map<int64_t, Pose2> slam_poses;  // for the best-fit baseline
   std::map<int64_t, std::array<double, ReliabilityModel::kFeatures>> features;
   std::vector<double> reg_times;
+  struct Latest {
+    Eigen::Vector2d slam, plan;
+    int64_t stamp_ns;
+  };
+  std::optional<Latest> latest;  // the newest pose with ground truth
   for (const Input& in : inputs) {
     virtual_now = in.stamp_ns;
     switch (in.topic) {
@@ -119,9 +127,12 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
           features[plan_poses.back().source_stamp_ns()] =
               engine.tracker().CurrentFeatures().Vector();
         platform::DecodedPose pose;
-        if (baseline == Baseline::kBestFit &&
-            platform::DecodeHeadsetPose(in.envelope.payload, frame, config.limits(), &pose).empty())
-          slam_poses[pose.stamp_ns] = pose.pose_slam;
+        if (platform::DecodeHeadsetPose(in.envelope.payload, frame, config.limits(), &pose)
+                .empty()) {
+          if (baseline == Baseline::kBestFit) slam_poses[pose.stamp_ns] = pose.pose_slam;
+          if (auto it = truth.find(pose.stamp_ns); it != truth.end())
+            latest = {pose.pose_slam.position, {it->second.x(), it->second.y()}, pose.stamp_ns};
+        }
         break;
       }
       default: break;
@@ -130,6 +141,14 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     if (auto job = engine.TakeDueJob()) {
       platform::Engine::Done done = platform::Engine::Run(std::move(*job), platform::MonotonicNs);
       reg_times.push_back(done.result.time_ms);
+      // For tuning: how far the result and the alignment in use put the wearer from the
+      // truth (the engine logs its decision right after).
+      if (latest && spdlog::should_log(spdlog::level::debug))
+        spdlog::debug(
+            "at {:.1f} s, truth: result {:.2f} m off at the wearer, alignment in use {:.2f} m",
+            static_cast<double>(latest->stamp_ns - inputs.front().stamp_ns) * 1e-9,
+            (done.result.T_plan_slam * latest->slam - latest->plan).norm(),
+            (engine.tracker().alignment().T_plan_slam * latest->slam - latest->plan).norm());
       engine.OnRegistrationDone(std::move(done));
     }
   }
