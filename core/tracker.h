@@ -50,7 +50,7 @@ struct TrackerOptions {
   double confirm_rad = 0.035;                // ...this of it...
   double confirm_walk_m = 10.0;              // ...over this many metres walked...
   double jump_score_ratio = 0.7;  // ...and it fits the cloud this much better than the one in use
-  double max_ambiguity = 1.0;     // results after a pick with RegistrationResult::ambiguity above
+  double max_ambiguity = 0.7;     // results after a pick with RegistrationResult::ambiguity above
                                   // this: refused (1 = never)
   double score_cap_m = 0.2;       // distances capped here in the "better fit" score
   double worse_fit_ratio = 1.25;  // results scoring worse than this times the one in use: rejected
@@ -58,7 +58,7 @@ struct TrackerOptions {
   uint32_t min_new_points = 500;  // register after this many new wall points...
   double min_walk_m = 2.0;        // ...or this many metres walked with new points...
   double max_interval_s = 3.0;    // ...or after this long with any new points
-  uint32_t min_points = 200;      // no registration on fewer points
+  uint32_t min_points = 50;       // no registration on fewer points
   size_t history = 16;            // accepted alignments kept
 };
 
