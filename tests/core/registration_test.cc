@@ -350,5 +350,41 @@ TEST(EvaluateFitTest, TruthScoresBetterThanAPerturbedTransform) {
   }
 }
 
+// The correlative search's ambiguity: one wall seen, and the plan has two parallel walls
+// within the search window, so two places explain the points equally well; a room's
+// corners leave one.
+TEST(RegistrationAmbiguityTest, OneWallBetweenTwoParallelWallsIsAmbiguous) {
+  auto parse = MakeFloorPlan("two walls", {{{0, 0}, {20, 0}}, {{0, 2}, {20, 2}}});
+  ASSERT_TRUE(parse.ok()) << parse.error;
+  const ClosestWallIndex index(parse.plan);
+  const FloorPlan seen{"", {{{5, 0}, {12, 0}}}, {}, {}};
+  std::vector<Eigen::Vector2d> points = testing::SampleWalls(seen, 0.05);
+  SplitMix64 rng(3);
+  for (Eigen::Vector2d& p : points) p += 0.02 * Eigen::Vector2d(rng.Gaussian(), rng.Gaussian());
+  RegistrationOptions options;
+  options.search_window_m = 2.5;
+  options.search_window_rad = Deg(10);
+  const Se2 initial{0.0, {0.0, 1.0}};  // halfway between the walls
+  const RegistrationResult r = Register(points, {}, index, initial, options);
+  ASSERT_TRUE(r.converged) << r.reason;
+  EXPECT_GT(r.ambiguity, 0.9);
+  EXPECT_LE(r.ambiguity, 1.0);
+}
+
+TEST(RegistrationAmbiguityTest, WholeRoomIsNotAmbiguous) {
+  const FloorPlan plan = testing::AsymmetricRoom();
+  const ClosestWallIndex index(plan);
+  const Se2 truth{Deg(3), {0.5, -0.4}};  // T_plan_slam
+  const std::vector<Eigen::Vector2d> points = SlamCloud(plan, truth.Inverse(), 0.02, 7);
+  RegistrationOptions options;
+  EXPECT_EQ(Register(points, {}, index, Se2{}, options).ambiguity, 0.0);  // no search
+  options.search_window_m = 2.5;
+  options.search_window_rad = Deg(10);
+  const RegistrationResult r = Register(points, {}, index, Se2{}, options);
+  ASSERT_TRUE(r.converged) << r.reason;
+  EXPECT_THAT(r.T_plan_slam, IsNearlySe2(truth, 0.02, Deg(0.2)));
+  EXPECT_LT(r.ambiguity, 0.3);
+}
+
 }  // namespace
 }  // namespace floorpose

@@ -229,6 +229,30 @@ TEST_F(TrackerTest, OfferAcceptsBetterRejectsWorseAndStale) {
   EXPECT_THAT(d.reason, HasSubstr("alignment changed"));
 }
 
+TEST_F(TrackerTest, AmbiguousResultAfterAPickIsRefused) {
+  tracker_.SetPlan(index_);
+  const Se2 picked = Se2{Deg(2), {0.3, -0.2}} * truth_;
+  const Se2 T_slam_plan = picked.Inverse();
+  const Eigen::Vector2d plan_point(4, 2), plan_normal(1, 0);
+  ASSERT_EQ(
+      tracker_.ApplyWallPick(
+          {T_slam_plan * plan_point, T_slam_plan.R() * plan_normal, plan_point, plan_normal}, 1),
+      "");
+  const uint64_t v1 = tracker_.alignment().version;
+  const auto cloud = Cloud();
+  // Another place scored within 5% of this one: the pick stays until the walls decide.
+  RegistrationResult r = ResultFor(truth_, cloud);
+  r.ambiguity = 0.95;
+  const Tracker::Decision d = tracker_.Offer(r, cloud, v1, 2);
+  EXPECT_FALSE(d.accepted);
+  EXPECT_THAT(d.reason, HasSubstr("ambiguous"));
+  EXPECT_EQ(tracker_.alignment().version, v1);
+  // The next one stands out: taken.
+  r.ambiguity = 0.2;
+  EXPECT_TRUE(tracker_.Offer(r, cloud, v1, 3).accepted);
+  EXPECT_THAT(tracker_.alignment().T_plan_slam, IsNearlySe2(truth_, 0.01, 0.001));
+}
+
 TEST_F(TrackerTest, OfferBasedOnAReplacedAlignmentIsStale) {
   // A registration started from the pick; meanwhile the wearer flipped. The result is
   // far better than the flipped alignment, but it answers a question nobody asks any
