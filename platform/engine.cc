@@ -317,6 +317,8 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
       window_s > 0 ? latest_stamp_ns_ - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
   job.cloud = store_.Snapshot(config_.tracking().max_points(), &job.normals,
                               options.local_meshes ? last_run_generation_ : 0, min_stamp);
+  // The live points were enough, but not those in the window: wait for more walls.
+  if (job.cloud.size() < options.min_points) return std::nullopt;
   const double refine_s = config_.tracking().refine_window_s();
   if (refine_s > 0) {
     job.recent = store_.Snapshot(config_.tracking().max_points(), nullptr,
