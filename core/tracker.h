@@ -23,10 +23,10 @@ namespace floorpose {
 // fit reported there.
 struct ReliabilityModel {
   static constexpr int kFeatures = 8;
-  double bias = -3.504;
+  double bias = -2.832;
   // In the order of ReliabilityFeatures::Vector().
-  std::array<double, kFeatures> weights = {5.819,   -9.403,  -2.086, 1.279,
-                                           -0.1076, -0.1351, 0.4804, -0.3771};
+  std::array<double, kFeatures> weights = {5.877,   -19.27,   -2.201, 0.9241,
+                                           -0.1612, -0.04813, 0.5805, -0.3552};
   double reliable_probability = 0.9;  // RELIABLE at or above this
   double degraded_probability = 0.5;  // DEGRADED at or above this, else UNRELIABLE
 
