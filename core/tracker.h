@@ -23,10 +23,10 @@ namespace floorpose {
 // fit reported there.
 struct ReliabilityModel {
   static constexpr int kFeatures = 8;
-  double bias = -2.832;
+  double bias = -1.4;
   // In the order of ReliabilityFeatures::Vector().
-  std::array<double, kFeatures> weights = {5.877,   -19.27,   -2.201, 0.9241,
-                                           -0.1612, -0.04813, 0.5805, -0.3552};
+  std::array<double, kFeatures> weights = {5.363,   -20.68,  -1.734, 0.8428,
+                                           -0.1195, -0.0769, 0.4247, -0.4667};
   double reliable_probability = 0.9;  // RELIABLE at or above this
   double degraded_probability = 0.5;  // DEGRADED at or above this, else UNRELIABLE
 
