@@ -91,6 +91,8 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
     const int64_t t0 = now_ns();
     done.result = Register(job.cloud, job.normals, *job.index, job.initial, job.options);
     if (!job.recent.empty() && done.result.converged) {
+      // From the whole window's answer, the recent walls only (Hough's rotation search has
+      // done its work there; its refinement is ICP).
       const RegistrationResult whole = done.result;
       done.result = job.options.method == RegistrationMethod::kIk
                         ? RegisterIk(job.recent, *job.index, whole.T_plan_slam, job.options.icp)

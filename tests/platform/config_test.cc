@@ -61,6 +61,7 @@ TEST(ConfigTest, ProtoDefaultsMatchTheCoreDefaults) {
   EXPECT_EQ(t.filter.measurement_points, core.filter.measurement_points);
   EXPECT_EQ(t.reliability.weights, core.reliability.weights);
   EXPECT_EQ(t.min_walk_m, core.min_walk_m);
+  EXPECT_EQ(t.max_ambiguity, core.max_ambiguity);
   const WallExtractionOptions w = ToWallExtractionOptions(c);
   const WallExtractionOptions core_w;
   EXPECT_EQ(w.max_normal_up, core_w.max_normal_up);
@@ -129,6 +130,10 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"icp { max_correspondence_m: -1 }", "max_correspondence_m"},
            Case{"icp { levels: 20 }", "levels"},
            Case{"tracking { snapshot_voxel_m: 0 }", "snapshot_voxel_m"},
+           Case{"tracking { max_ambiguity: 0 }", "max_ambiguity"},
+           Case{"tracking { max_ambiguity: 1.5 }", "max_ambiguity"},
+           Case{"tracking { refine_window_s: -1 }", "refine_window_s"},
+           Case{"tracking { refine_window_s: inf }", "refine_window_s"},
            Case{"status_period_s: 0", "status_period_s"},
            Case{"log_level: \"loud\"", "log_level"},
        }) {
