@@ -19,6 +19,12 @@ constexpr double kDeg = M_PI / 180.0;
 
 // One random stream per concern (reality, walk, drift, sensor, mesh, pick), so that, e.g.,
 // turning the mesh off leaves the walk and the drift as they were.
+uint64_t Fnv1a(const std::string& text) {
+  uint64_t h = 0xcbf29ce484222325ULL;
+  for (const char c : text) h = (h ^ static_cast<uint8_t>(c)) * 0x100000001b3ULL;
+  return h;
+}
+
 SplitMix64 Stream(uint64_t seed, uint64_t salt) {
   SplitMix64 mix(seed ^ (0xd1b54a32d192ed03ULL * (salt + 1)));
   return SplitMix64(mix.Next());
@@ -509,9 +515,13 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
     sim.error = "invalid simulator options";
     return sim;
   }
-  SplitMix64 reality_rng = Stream(o.seed, 1), walk_rng = Stream(o.seed, 2);
-  SplitMix64 drift_rng = Stream(o.seed, 3), sensor_rng = Stream(o.seed, 4);
-  SplitMix64 mesh_rng = Stream(o.seed, 5), pick_rng = Stream(o.seed, 6);
+  // Every plan and scenario gets its own draws for a seed: the SLAM drift and the wall
+  // pick's error would otherwise repeat across a suite's plans (three seeds, three
+  // pick errors).
+  const uint64_t walk_key = o.seed ^ Fnv1a(plan.id) ^ (static_cast<uint64_t>(o.scenario) << 56);
+  SplitMix64 reality_rng = Stream(walk_key, 1), walk_rng = Stream(walk_key, 2);
+  SplitMix64 drift_rng = Stream(walk_key, 3), sensor_rng = Stream(walk_key, 4);
+  SplitMix64 mesh_rng = Stream(walk_key, 5), pick_rng = Stream(walk_key, 6);
   const double dt = o.pose_period_s;
 
   // Where one can walk: the plan's walls, all of them (so the walk never crosses one, even
