@@ -57,6 +57,8 @@ void Tracker::ForgetRegistrations() {
   walked_since_predict_m_ = walked_since_fused_m_ = 0;
   fused_ = 0;
   last_disagreement_ = weakest_direction_ = 0;
+  pending_ambiguous_.reset();
+  ambiguous_walk_m_ = 0;
 }
 
 void Tracker::SetAlignment(const Se2& T, AlignmentSource source, int64_t stamp_ns) {
@@ -115,6 +117,7 @@ PlanPoseEstimate Tracker::Correct(const Pose2& pose_slam) {
       walked_since_fused_m_ += step;
       walked_since_start_m_ += step;
       pending_walk_m_ += step;
+      ambiguous_walk_m_ += step;
     }
   }
   last_slam_position_ = pose_slam.position;
@@ -128,6 +131,18 @@ PlanPoseEstimate Tracker::Correct(const Pose2& pose_slam) {
   out.pose = Apply(alignment_.T_plan_slam, pose_slam);
   last_plan_position_ = out.pose.position;
   return out;
+}
+
+bool Tracker::AmbiguityResolved(const RegistrationResult& result) {
+  const Eigen::Vector3d apart =
+      pending_ambiguous_ ? Difference(result.T_plan_slam, *pending_ambiguous_, filter_.pivot())
+                         : Eigen::Vector3d::Constant(1e9);
+  if (apart.tail<2>().norm() > options_.confirm_m || std::abs(apart(0)) > options_.confirm_rad) {
+    pending_ambiguous_ = result.T_plan_slam;
+    ambiguous_walk_m_ = 0;
+    return false;
+  }
+  return ambiguous_walk_m_ >= options_.confirm_walk_m;
 }
 
 bool Tracker::RegistrationDue(int64_t now_ns, size_t live_points, size_t new_points) const {
@@ -169,7 +184,10 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
     d.reason = "registration failed: " + result.reason;
   } else if (new_score > old_score * options_.worse_fit_ratio) {
     d.reason = "fit worse than the alignment in use";
-  } else if (result.ambiguity > options_.max_ambiguity) {
+  } else if (alignment_.source != AlignmentSource::kRegistration && result.points > 0 &&
+             result.inliers < options_.first_inlier_ratio * result.points) {
+    d.reason = "too few wall points fit for a first registration";
+  } else if (result.ambiguity > options_.max_ambiguity && !AmbiguityResolved(result)) {
     char text[96];
     std::snprintf(text, sizeof text, "ambiguous: another place fits within %.0f%%",
                   100 * (1 - result.ambiguity));

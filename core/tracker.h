@@ -49,10 +49,11 @@ struct TrackerOptions {
   double confirm_m = 0.5;                    // a gated result is taken when later ones land within
   double confirm_rad = 0.035;                // ...this of it...
   double confirm_walk_m = 10.0;              // ...over this many metres walked...
-  double jump_score_ratio = 0.7;  // ...and it fits the cloud this much better than the one in use
-  double max_ambiguity = 0.7;     // results after a pick with RegistrationResult::ambiguity above
-                                  // this: refused (1 = never)
-  double score_cap_m = 0.2;       // distances capped here in the "better fit" score
+  double jump_score_ratio = 0.7;    // ...and it fits the cloud this much better than the one in use
+  double max_ambiguity = 0.7;       // results after a pick with RegistrationResult::ambiguity above
+                                    // this: refused until later ones confirm the place (as jumps)
+  double first_inlier_ratio = 0.9;  // results after a pick with fewer inliers: refused
+  double score_cap_m = 0.2;         // distances capped here in the "better fit" score
   double worse_fit_ratio = 1.25;  // results scoring worse than this times the one in use: rejected
   bool local_meshes = false;      // register only meshes new since the last run (thesis "local")
   uint32_t min_new_points = 500;  // register after this many new wall points...
@@ -175,6 +176,9 @@ class Tracker {
 
  private:
   void SetAlignment(const Se2& T, AlignmentSource source, int64_t stamp_ns);
+  // An ambiguous result after a pick is taken when the results since have kept landing
+  // on the same place while the wearer walked confirm_walk_m.
+  bool AmbiguityResolved(const RegistrationResult& result);
   // Moves the filter to the wearer, with the drift of the metres walked since.
   void PredictToWearer();
   // Clears what the registrations since the last pick told the filter and the
@@ -187,8 +191,10 @@ class Tracker {
   uint64_t next_version_ = 1;
   std::optional<Eigen::Vector2d> pick_plan_point_;
   std::optional<Eigen::Vector2d> last_plan_position_;
-  std::optional<Se2> pending_jump_;  // a gated result waiting for later ones to agree
-  double pending_walk_m_ = 0;        // walked since it was first seen
+  std::optional<Se2> pending_jump_;       // a gated result waiting for later ones to agree
+  double pending_walk_m_ = 0;             // walked since it was first seen
+  std::optional<Se2> pending_ambiguous_;  // the place ambiguous results keep landing on
+  double ambiguous_walk_m_ = 0;
   int64_t last_start_ns_ = 0;
   AlignmentFilter filter_;
   std::optional<Eigen::Vector2d> last_slam_position_;

@@ -122,6 +122,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
     return "tracking.drift_*, min_walk_m and confirm_* must be >= 0";
   if (!(k.max_ambiguity() > 0 && k.max_ambiguity() <= 1))
     return "tracking.max_ambiguity must be in (0, 1]";
+  if (!(k.first_inlier_ratio() >= 0 && k.first_inlier_ratio() <= 1))
+    return "tracking.first_inlier_ratio must be in [0, 1]";
   if (!(k.refine_window_s() >= 0 && std::isfinite(k.refine_window_s())))
     return "tracking.refine_window_s must be >= 0";
   const auto& rel = k.reliability();
@@ -191,6 +193,7 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.confirm_walk_m = k.confirm_walk_m();
   t.jump_score_ratio = k.jump_score_ratio();
   t.max_ambiguity = k.max_ambiguity();
+  t.first_inlier_ratio = k.first_inlier_ratio();
   const double drift_rad = k.drift_heading_deg() * M_PI / 180.0;
   t.filter.heading_var_per_m = drift_rad * drift_rad;
   t.filter.position_var_per_m = k.drift_position_m() * k.drift_position_m();
