@@ -253,6 +253,49 @@ TEST_F(TrackerTest, AmbiguousResultAfterAPickIsRefused) {
   EXPECT_THAT(tracker_.alignment().T_plan_slam, IsNearlySe2(truth_, 0.01, 0.001));
 }
 
+TEST_F(TrackerTest, AmbiguousPlaceIsTakenOnceLaterResultsKeepLandingOnIt) {
+  tracker_.SetPlan(index_);
+  const Se2 picked = Se2{Deg(2), {0.3, -0.2}} * truth_;
+  const Se2 T_slam_plan = picked.Inverse();
+  const Eigen::Vector2d plan_point(4, 2), plan_normal(1, 0);
+  ASSERT_EQ(
+      tracker_.ApplyWallPick(
+          {T_slam_plan * plan_point, T_slam_plan.R() * plan_normal, plan_point, plan_normal}, 1),
+      "");
+  const auto cloud = Cloud();
+  RegistrationResult r = ResultFor(truth_, cloud);
+  r.ambiguity = 0.95;
+  // The wearer walks 1 m between registrations that all land on the same place.
+  int64_t t = 2;
+  for (int metre = 0; metre < 10; ++metre, ++t) {
+    tracker_.Correct({T_slam_plan * Eigen::Vector2d(-3.0 + metre, 3.0), 0.0, 0.0});
+    const Tracker::Decision d = tracker_.Offer(r, cloud, tracker_.alignment().version, t);
+    EXPECT_FALSE(d.accepted) << metre;
+    EXPECT_THAT(d.reason, HasSubstr("ambiguous"));
+  }
+  tracker_.Correct({T_slam_plan * Eigen::Vector2d(7.0, 3.0), 0.0, 0.0});
+  EXPECT_TRUE(tracker_.Offer(r, cloud, tracker_.alignment().version, t).accepted);
+  EXPECT_THAT(tracker_.alignment().T_plan_slam, IsNearlySe2(truth_, 0.01, 0.001));
+}
+
+TEST_F(TrackerTest, FirstRegistrationNeedsMostWallPointsToFit) {
+  tracker_.SetPlan(index_);
+  const Se2 T_slam_plan = truth_.Inverse();
+  const Eigen::Vector2d plan_point(4, 2), plan_normal(1, 0);
+  ASSERT_EQ(
+      tracker_.ApplyWallPick(
+          {T_slam_plan * plan_point, T_slam_plan.R() * plan_normal, plan_point, plan_normal}, 1),
+      "");
+  const auto cloud = Cloud();
+  RegistrationResult r = ResultFor(truth_, cloud);
+  r.inliers = r.points / 2;  // as a place that explains half the walls would report
+  const Tracker::Decision d = tracker_.Offer(r, cloud, tracker_.alignment().version, 2);
+  EXPECT_FALSE(d.accepted);
+  EXPECT_THAT(d.reason, HasSubstr("too few wall points fit"));
+  r.inliers = r.points;
+  EXPECT_TRUE(tracker_.Offer(r, cloud, tracker_.alignment().version, 3).accepted);
+}
+
 TEST_F(TrackerTest, OfferBasedOnAReplacedAlignmentIsStale) {
   // A registration started from the pick; meanwhile the wearer flipped. The result is
   // far better than the flipped alignment, but it answers a question nobody asks any
