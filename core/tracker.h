@@ -23,10 +23,10 @@ namespace floorpose {
 // fit reported there.
 struct ReliabilityModel {
   static constexpr int kFeatures = 8;
-  double bias = -1.4;
+  double bias = -1.016;
   // In the order of ReliabilityFeatures::Vector().
-  std::array<double, kFeatures> weights = {5.363,   -20.68,  -1.734, 0.8428,
-                                           -0.1195, -0.0769, 0.4247, -0.4667};
+  std::array<double, kFeatures> weights = {4.698,   -6.832,  -0.8276, 0.311,
+                                           -0.1433, -0.2753, 0.4446,  -0.1104};
   double reliable_probability = 0.9;  // RELIABLE at or above this
   double degraded_probability = 0.5;  // DEGRADED at or above this, else UNRELIABLE
 
