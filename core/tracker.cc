@@ -57,8 +57,8 @@ void Tracker::ForgetRegistrations() {
   walked_since_predict_m_ = walked_since_fused_m_ = 0;
   fused_ = 0;
   last_disagreement_ = weakest_direction_ = 0;
-  pending_ambiguous_.reset();
-  ambiguous_walk_m_ = 0;
+  pending_place_.reset();
+  place_walk_m_ = 0;
 }
 
 void Tracker::SetAlignment(const Se2& T, AlignmentSource source, int64_t stamp_ns) {
@@ -117,7 +117,7 @@ PlanPoseEstimate Tracker::Correct(const Pose2& pose_slam) {
       walked_since_fused_m_ += step;
       walked_since_start_m_ += step;
       pending_walk_m_ += step;
-      ambiguous_walk_m_ += step;
+      place_walk_m_ += step;
     }
   }
   last_slam_position_ = pose_slam.position;
@@ -133,16 +133,29 @@ PlanPoseEstimate Tracker::Correct(const Pose2& pose_slam) {
   return out;
 }
 
-bool Tracker::AmbiguityResolved(const RegistrationResult& result) {
+std::string Tracker::FirstRegistrationDoubt(const RegistrationResult& result) const {
+  if (alignment_.source == AlignmentSource::kRegistration) return {};
+  if (result.ambiguity > options_.max_ambiguity) {
+    char text[96];
+    std::snprintf(text, sizeof text, "ambiguous: another place fits within %.0f%%",
+                  100 * (1 - result.ambiguity));
+    return text;
+  }
+  if (result.points > 0 && result.inliers < options_.first_inlier_ratio * result.points)
+    return "too few wall points fit for a first registration";
+  return {};
+}
+
+bool Tracker::PlaceConfirmed(const RegistrationResult& result) {
   const Eigen::Vector3d apart =
-      pending_ambiguous_ ? Difference(result.T_plan_slam, *pending_ambiguous_, filter_.pivot())
-                         : Eigen::Vector3d::Constant(1e9);
+      pending_place_ ? Difference(result.T_plan_slam, *pending_place_, filter_.pivot())
+                     : Eigen::Vector3d::Constant(1e9);
   if (apart.tail<2>().norm() > options_.confirm_m || std::abs(apart(0)) > options_.confirm_rad) {
-    pending_ambiguous_ = result.T_plan_slam;
-    ambiguous_walk_m_ = 0;
+    pending_place_ = result.T_plan_slam;
+    place_walk_m_ = 0;
     return false;
   }
-  return ambiguous_walk_m_ >= options_.confirm_walk_m;
+  return place_walk_m_ >= options_.confirm_walk_m;
 }
 
 bool Tracker::RegistrationDue(int64_t now_ns, size_t live_points, size_t new_points) const {
@@ -184,14 +197,9 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
     d.reason = "registration failed: " + result.reason;
   } else if (new_score > old_score * options_.worse_fit_ratio) {
     d.reason = "fit worse than the alignment in use";
-  } else if (alignment_.source != AlignmentSource::kRegistration && result.points > 0 &&
-             result.inliers < options_.first_inlier_ratio * result.points) {
-    d.reason = "too few wall points fit for a first registration";
-  } else if (result.ambiguity > options_.max_ambiguity && !AmbiguityResolved(result)) {
-    char text[96];
-    std::snprintf(text, sizeof text, "ambiguous: another place fits within %.0f%%",
-                  100 * (1 - result.ambiguity));
-    d.reason = text;
+  } else if (const std::string doubt = FirstRegistrationDoubt(result);
+             !doubt.empty() && !PlaceConfirmed(result)) {
+    d.reason = doubt;
   } else {
     // The measurement: the result, with the information its wall points give about the
     // wearer (none along a corridor's axis).

@@ -176,9 +176,12 @@ class Tracker {
 
  private:
   void SetAlignment(const Se2& T, AlignmentSource source, int64_t stamp_ns);
-  // An ambiguous result after a pick is taken when the results since have kept landing
-  // on the same place while the wearer walked confirm_walk_m.
-  bool AmbiguityResolved(const RegistrationResult& result);
+  // Why a result after a pick or flip is not to be trusted yet (ambiguous, or too few
+  // of its points fit), or empty.
+  std::string FirstRegistrationDoubt(const RegistrationResult& result) const;
+  // Such a result is taken when the results since have kept landing on the same place
+  // while the wearer walked confirm_walk_m.
+  bool PlaceConfirmed(const RegistrationResult& result);
   // Moves the filter to the wearer, with the drift of the metres walked since.
   void PredictToWearer();
   // Clears what the registrations since the last pick told the filter and the
@@ -191,10 +194,10 @@ class Tracker {
   uint64_t next_version_ = 1;
   std::optional<Eigen::Vector2d> pick_plan_point_;
   std::optional<Eigen::Vector2d> last_plan_position_;
-  std::optional<Se2> pending_jump_;       // a gated result waiting for later ones to agree
-  double pending_walk_m_ = 0;             // walked since it was first seen
-  std::optional<Se2> pending_ambiguous_;  // the place ambiguous results keep landing on
-  double ambiguous_walk_m_ = 0;
+  std::optional<Se2> pending_jump_;   // a gated result waiting for later ones to agree
+  double pending_walk_m_ = 0;         // walked since it was first seen
+  std::optional<Se2> pending_place_;  // where doubted first results keep landing
+  double place_walk_m_ = 0;
   int64_t last_start_ns_ = 0;
   AlignmentFilter filter_;
   std::optional<Eigen::Vector2d> last_slam_position_;
