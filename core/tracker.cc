@@ -146,7 +146,7 @@ std::string Tracker::FirstRegistrationDoubt(const RegistrationResult& result) co
   return {};
 }
 
-bool Tracker::PlaceConfirmed(const RegistrationResult& result) {
+bool Tracker::PlaceConfirmed(const RegistrationResult& result, double walk_m) {
   const Eigen::Vector3d apart =
       pending_place_ ? Difference(result.T_plan_slam, *pending_place_, filter_.pivot())
                      : Eigen::Vector3d::Constant(1e9);
@@ -155,7 +155,7 @@ bool Tracker::PlaceConfirmed(const RegistrationResult& result) {
     place_walk_m_ = 0;
     return false;
   }
-  return place_walk_m_ >= options_.confirm_walk_m;
+  return place_walk_m_ >= walk_m;
 }
 
 bool Tracker::RegistrationDue(int64_t now_ns, size_t live_points, size_t new_points) const {
@@ -198,8 +198,11 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
   } else if (new_score > old_score * options_.worse_fit_ratio) {
     d.reason = "fit worse than the alignment in use";
   } else if (const std::string doubt = FirstRegistrationDoubt(result);
-             !doubt.empty() && !PlaceConfirmed(result)) {
-    d.reason = doubt;
+             alignment_.source != AlignmentSource::kRegistration &&
+             !PlaceConfirmed(result, doubt.empty() ? 0.0 : options_.confirm_walk_m)) {
+    // The first place after a pick is taken when the next result lands on it too, or,
+    // when in doubt, the results over confirm_walk_m.
+    d.reason = doubt.empty() ? "first place: waits for the next result to agree" : doubt;
   } else {
     // The measurement: the result, with the information its wall points give about the
     // wearer (none along a corridor's axis).

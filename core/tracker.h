@@ -179,9 +179,9 @@ class Tracker {
   // Why a result after a pick or flip is not to be trusted yet (ambiguous, or too few
   // of its points fit), or empty.
   std::string FirstRegistrationDoubt(const RegistrationResult& result) const;
-  // Such a result is taken when the results since have kept landing on the same place
-  // while the wearer walked confirm_walk_m.
-  bool PlaceConfirmed(const RegistrationResult& result);
+  // Whether the results since this place was first seen kept landing on it (confirm_m,
+  // confirm_rad) while the wearer walked walk_m; starts over at a new place.
+  bool PlaceConfirmed(const RegistrationResult& result, double walk_m);
   // Moves the filter to the wearer, with the drift of the metres walked since.
   void PredictToWearer();
   // Clears what the registrations since the last pick told the filter and the

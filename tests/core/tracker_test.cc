@@ -206,6 +206,12 @@ TEST_F(TrackerTest, OfferAcceptsBetterRejectsWorseAndStale) {
   nan.T_plan_slam.theta = std::numeric_limits<double>::quiet_NaN();
   EXPECT_FALSE(tracker_.Offer(nan, cloud, v1, 4).accepted);
 
+  // The first place after a pick waits for the next result to land on it too.
+  d = tracker_.Offer(ResultFor(truth_, cloud), cloud, v1, 5);
+  EXPECT_FALSE(d.accepted);
+  EXPECT_THAT(d.reason, HasSubstr("first place"));
+  EXPECT_EQ(tracker_.alignment().version, v1);
+
   // Better and current: fused, a new version, and the fit makes it reliable. The pick
   // is 1.5 m and 5 degrees uncertain, the registration a few centimetres: the result
   // is taken almost whole.
@@ -329,6 +335,7 @@ TEST_F(TrackerTest, PickThenIcpThenCorrectEndToEnd) {
   const uint64_t version = tracker_.alignment().version;
   const RegistrationResult r = RegisterIcp(
       cloud, *tracker_.index(), tracker_.alignment().T_plan_slam, tracker_.options().icp);
+  EXPECT_FALSE(tracker_.Offer(r, cloud, version, 3).accepted);  // a first place: once more
   ASSERT_TRUE(tracker_.Offer(r, cloud, version, 3).accepted);
   EXPECT_EQ(tracker_.state(), TrackState::kTracking);
   const Pose2 pose{truth_.Inverse() * Eigen::Vector2d(5, 5), 0.0, 1.6};
@@ -379,6 +386,7 @@ TEST(TrackerJumpTest, FarJumpWaitsForConfirmation) {
   RegistrationResult near;
   near.T_plan_slam = Se2{0.0, {0.03, 0}};  // slightly off, better than the pick
   near.matched = static_cast<uint32_t>(cloud.size());
+  EXPECT_FALSE(tracker.Offer(near, cloud, tracker.alignment().version, 2).accepted);
   ASSERT_TRUE(tracker.Offer(near, cloud, tracker.alignment().version, 2).accepted);
   tracker.Correct({{2, 1.5}, 0, 1.6});
   RegistrationResult far = near;
