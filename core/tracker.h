@@ -23,10 +23,10 @@ namespace floorpose {
 // fit reported there.
 struct ReliabilityModel {
   static constexpr int kFeatures = 8;
-  double bias = -1.016;
+  double bias = 0.3307;
   // In the order of ReliabilityFeatures::Vector().
-  std::array<double, kFeatures> weights = {4.698,   -6.832,  -0.8276, 0.311,
-                                           -0.1433, -0.2753, 0.4446,  -0.1104};
+  std::array<double, kFeatures> weights = {4.636,   -13.99,  -0.3025, -0.1204,
+                                           -0.1736, -0.2154, 0.2721,  -0.169};
   double reliable_probability = 0.9;  // RELIABLE at or above this
   double degraded_probability = 0.5;  // DEGRADED at or above this, else UNRELIABLE
 
