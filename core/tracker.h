@@ -23,10 +23,10 @@ namespace floorpose {
 // fit reported there.
 struct ReliabilityModel {
   static constexpr int kFeatures = 8;
-  double bias = 0.3307;
+  double bias = -0.589;
   // In the order of ReliabilityFeatures::Vector().
-  std::array<double, kFeatures> weights = {4.636,   -13.99,  -0.3025, -0.1204,
-                                           -0.1736, -0.2154, 0.2721,  -0.169};
+  std::array<double, kFeatures> weights = {5.525,   -8.686,  -1.433, 0.3743,
+                                           -0.1307, -0.2059, 0.1293, -0.1176};
   double reliable_probability = 0.9;  // RELIABLE at or above this
   double degraded_probability = 0.5;  // DEGRADED at or above this, else UNRELIABLE
 
@@ -36,7 +36,7 @@ struct ReliabilityModel {
 
 struct TrackerOptions {
   IcpOptions icp;
-  RegistrationMethod method = RegistrationMethod::kIcp;
+  RegistrationMethod method = RegistrationMethod::kIk;
   HoughOptions hough;
   AlignmentFilterOptions filter;
   ReliabilityModel reliability;

@@ -72,7 +72,7 @@ struct DemoOptions {
   int every = 5;
   std::string floorposed;
   std::string log;
-  std::string method = "icp";
+  std::string method = v1::RegistrationConfig().method();  // the daemon's default
 };
 
 int RunDemo(const DemoOptions& o) {

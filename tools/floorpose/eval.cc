@@ -14,7 +14,8 @@ namespace floorpose::tools {
 namespace {
 
 struct EvalOptions {
-  std::string plan, recording, method = "icp", baseline, config, svg, track;
+  std::string plan, recording, baseline, config, svg, track;
+  std::string method = v1::RegistrationConfig().method();  // the daemon's default
   bool json = false;
 };
 
