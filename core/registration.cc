@@ -611,17 +611,30 @@ RegistrationResult Register(const std::vector<Eigen::Vector2d>& points,
   }
   std::stable_sort(fits.begin(), fits.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
-  RegistrationResult best = std::move(fits.front().second);
-  best.iterations = iterations;
+  // Places that score about the same are told apart by the initial guess: the nearest
+  // at the cloud's centre wins (a wall seen alone fits every place along it equally).
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
   for (const Eigen::Vector2d& p : *use_points) centre += p;
   centre /= static_cast<double>(std::max<size_t>(1, use_points->size()));
+  if (options.search_tie_ratio > 0) {
+    const Eigen::Vector2d guess = initial * centre;
+    size_t nearest = 0;
+    for (size_t i = 1; i < fits.size(); ++i) {
+      if (fits[i].first * options.search_tie_ratio > fits.front().first) break;
+      if ((fits[i].second.T_plan_slam * centre - guess).norm() <
+          (fits[nearest].second.T_plan_slam * centre - guess).norm())
+        nearest = i;
+    }
+    std::swap(fits[0], fits[nearest]);
+  }
+  RegistrationResult best = std::move(fits.front().second);
+  best.iterations = iterations;
   for (size_t i = 1; i < fits.size(); ++i) {
     const Se2& T = fits[i].second.T_plan_slam;
     const bool distinct = (T * centre - best.T_plan_slam * centre).norm() > 0.5 ||
                           std::abs(WrapAngle(T.theta - best.T_plan_slam.theta)) > 2 * M_PI / 180;
     if (!distinct) continue;
-    best.ambiguity = fits[i].first > 0 ? fits.front().first / fits[i].first : 1.0;
+    best.ambiguity = fits[i].first > 0 ? std::min(1.0, fits.front().first / fits[i].first) : 1.0;
     break;
   }
   return best;

@@ -91,6 +91,9 @@ struct RegistrationOptions {
   double search_window_m = 0.0;
   double search_window_rad = 0.0;
   uint32_t search_candidates = 4;
+  // Refined places scoring within this ratio of the best (0.9: 10% worse) are told apart
+  // by the initial guess: the nearest wins. 0 = the best score always wins.
+  double search_tie_ratio = 0.0;
 };
 
 // Point-to-line ICP after thesis Algorithm 4.2: multi-resolution (level h uses every

@@ -32,6 +32,7 @@ RegistrationOptions ToRegistrationOptions(const TrackerOptions& t, AlignmentSour
   if (from == AlignmentSource::kWallPick || from == AlignmentSource::kFlip) {
     r.search_window_m = t.pick_search_m;
     r.search_window_rad = t.pick_search_rad;
+    r.search_tie_ratio = t.pick_tie_ratio;
   }
   return r;
 }

@@ -44,6 +44,7 @@ struct TrackerOptions {
   double clip_margin_m = 0.0;                // see RegistrationOptions
   double pick_search_m = 2.5;                // correlative search after a pick or flip, metres
   double pick_search_rad = 0.175;            // ...and radians
+  double pick_tie_ratio = 0.9;               // see RegistrationOptions::search_tie_ratio
   double pick_sigma_m = 1.5;                 // uncertainty of a wall pick at its point, metres
   double pick_sigma_rad = 5.0 * M_PI / 180;  // ...and of its heading
   double confirm_m = 0.5;                    // a gated result is taken when later ones land within

@@ -105,6 +105,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
     return "registration.hough_bin_deg must be in (0, 5]";
   if (!(c.registration().wall_buffer_m() >= 0)) return "registration.wall_buffer_m must be >= 0";
   if (!(c.registration().clip_margin_m() >= 0)) return "registration.clip_margin_m must be >= 0";
+  if (!(c.registration().pick_tie_ratio() >= 0 && c.registration().pick_tie_ratio() <= 1))
+    return "registration.pick_tie_ratio must be in [0, 1]";
   if (!(c.icp().degeneracy_ratio() >= 0 && c.icp().degeneracy_ratio() < 1))
     return "icp.degeneracy_ratio must be in [0, 1)";
   const auto& k = c.tracking();
@@ -176,6 +178,7 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.clip_margin_m = r.clip_margin_m();
   t.pick_search_m = r.pick_search_m();
   t.pick_search_rad = r.pick_search_deg() * M_PI / 180.0;
+  t.pick_tie_ratio = r.pick_tie_ratio();
   t.local_meshes = r.meshes() == "local";
   t.hough.max_rotation_rad = r.hough_max_rotation_deg() * M_PI / 180.0;
   t.hough.bin_rad = r.hough_bin_deg() * M_PI / 180.0;

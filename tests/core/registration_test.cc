@@ -371,6 +371,28 @@ TEST(RegistrationAmbiguityTest, OneWallBetweenTwoParallelWallsIsAmbiguous) {
   EXPECT_LE(r.ambiguity, 1.0);
 }
 
+TEST(RegistrationAmbiguityTest, EqualPlacesAreToldApartByTheInitialGuess) {
+  auto parse = MakeFloorPlan("two walls", {{{0, 0}, {20, 0}}, {{0, 2}, {20, 2}}});
+  ASSERT_TRUE(parse.ok()) << parse.error;
+  const ClosestWallIndex index(parse.plan);
+  const FloorPlan seen{"", {{{5, 0}, {12, 0}}}, {}, {}};
+  std::vector<Eigen::Vector2d> points = testing::SampleWalls(seen, 0.05);
+  SplitMix64 rng(5);
+  for (Eigen::Vector2d& p : points) p += 0.02 * Eigen::Vector2d(rng.Gaussian(), rng.Gaussian());
+  RegistrationOptions options;
+  options.search_window_m = 2.5;
+  options.search_window_rad = Deg(10);
+  options.search_tie_ratio = 0.9;
+  // Either wall fits; the one nearer the guess wins, whichever side the guess is on.
+  for (const double guess_y : {0.6, 1.4}) {
+    SCOPED_TRACE(guess_y);
+    const RegistrationResult r = Register(points, {}, index, Se2{0.0, {0.0, guess_y}}, options);
+    ASSERT_TRUE(r.converged) << r.reason;
+    EXPECT_NEAR(r.T_plan_slam.t.y(), guess_y < 1 ? 0.0 : 2.0, 0.05);
+    EXPECT_GT(r.ambiguity, 0.9);  // still ambiguous: the tracker waits for confirmation
+  }
+}
+
 TEST(RegistrationAmbiguityTest, WholeRoomIsNotAmbiguous) {
   const FloorPlan plan = testing::AsymmetricRoom();
   const ClosestWallIndex index(plan);
