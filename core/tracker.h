@@ -23,10 +23,10 @@ namespace floorpose {
 // fit reported there.
 struct ReliabilityModel {
   static constexpr int kFeatures = 8;
-  double bias = -0.589;
+  double bias = -0.1237;
   // In the order of ReliabilityFeatures::Vector().
-  std::array<double, kFeatures> weights = {5.525,   -8.686,  -1.433, 0.3743,
-                                           -0.1307, -0.2059, 0.1293, -0.1176};
+  std::array<double, kFeatures> weights = {5.341,   -11.12,  -2.021,  0.4606,
+                                           -0.1218, -0.2167, 0.08587, -0.07514};
   double reliable_probability = 0.9;  // RELIABLE at or above this
   double degraded_probability = 0.5;  // DEGRADED at or above this, else UNRELIABLE
 
