@@ -1,0 +1,84 @@
+// `floorpose eval-suite` as a user runs it: a real process over the bundled plan, and the
+// files it promises (results.md with the Tracking targets table, results.json, the
+// calibration data).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+
+#include "tools/lib/process.h"
+
+namespace floorpose {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string Slurp(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// The cells of a markdown table row ("| a | b |" -> {"a", "b"}).
+std::vector<std::string> Cells(const std::string& row) {
+  std::vector<std::string> out;
+  std::stringstream ss(row);
+  std::string cell;
+  std::getline(ss, cell, '|');  // before the first bar
+  while (std::getline(ss, cell, '|')) {
+    const auto b = cell.find_first_not_of(' '), e = cell.find_last_not_of(' ');
+    if (b != std::string::npos) out.push_back(cell.substr(b, e - b + 1));
+  }
+  return out;
+}
+
+TEST(EvalSuiteTest, WritesResultsAndTheTrackingTargets) {
+  const fs::path dir = fs::path(::testing::TempDir()) / ("suite-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  tools::ChildProcess suite(
+      {FLOORPOSE_PATH, "eval-suite", "--plans", FLOORPOSE_DEMO_PLAN, "--seeds", "1", "--length",
+       "40", "--methods", "ik", "best-fit", "--out", dir.string()},
+      (dir.string() + ".log"));
+  ASSERT_TRUE(suite.started());
+  ASSERT_EQ(suite.Wait(std::chrono::seconds(60)), 0) << Slurp(dir.string() + ".log");
+
+  // One JSON line per run: 5 scenarios x 2 methods on one plan and seed.
+  std::ifstream json(dir / "results.json");
+  int lines = 0;
+  for (std::string line; std::getline(json, line);) lines += !line.empty();
+  EXPECT_EQ(lines, 10);
+  EXPECT_GT(fs::file_size(dir / "calibration.csv"), 100u);
+
+  // Per cell means (first table), then the targets table, which must agree with them.
+  const std::string md = Slurp(dir / "results.md");
+  std::map<std::string, std::string> cell_mean;  // scenario -> ik's mean in the first table
+  std::map<std::string, std::vector<std::string>> target_row;
+  bool in_targets = false;
+  std::stringstream rows(md);
+  for (std::string row; std::getline(rows, row);) {
+    if (row.rfind("Against the Tracking targets (ik", 0) == 0) in_targets = true;
+    if (row.rfind("Reliability (", 0) == 0) in_targets = false;
+    const std::vector<std::string> c = Cells(row);
+    if (c.size() == 4 && c[0] == "office" && !in_targets) cell_mean[c[1]] = c[2];
+    if (c.size() == 7 && in_targets && c[0] != "scenario" && c[0][0] != '-') target_row[c[0]] = c;
+  }
+  for (const char* scenario : {"corridor", "office", "glass", "hall", "mismatch"}) {
+    SCOPED_TRACE(scenario);
+    ASSERT_EQ(target_row.count(scenario), 1u) << md;
+    const std::vector<std::string>& c = target_row[scenario];
+    EXPECT_EQ(c[1], cell_mean[scenario]);  // one cell: its mean is the scenario's
+    EXPECT_EQ(c[2], cell_mean[scenario]);  // ...and the worst cell
+    EXPECT_TRUE(c[3] == "0 of 1" || c[3] == "1 of 1") << c[3];
+    EXPECT_NE(c[6], "-");  // best-fit ran, so the comparison is made
+  }
+  fs::remove_all(dir);
+  fs::remove(dir.string() + ".log");
+}
+
+}  // namespace
+}  // namespace floorpose
