@@ -174,12 +174,7 @@ TEST_F(TrackerTest, OfferAcceptsBetterRejectsWorseAndStale) {
   tracker_.SetPlan(index_);
   // The pick is 2 degrees and 15 cm off the truth.
   const Se2 picked = Se2{Deg(2), {0.1, -0.1}} * truth_;
-  const Se2 T_slam_plan = picked.Inverse();
-  const Eigen::Vector2d plan_point(4, 2), plan_normal(1, 0);
-  ASSERT_EQ(
-      tracker_.ApplyWallPick(
-          {T_slam_plan * plan_point, T_slam_plan.R() * plan_normal, plan_point, plan_normal}, 1),
-      "");
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(picked, {4, 2}, {1, 0}), 1), "");
   const uint64_t v1 = tracker_.alignment().version;
   const auto cloud = Cloud();
 
@@ -238,12 +233,7 @@ TEST_F(TrackerTest, OfferAcceptsBetterRejectsWorseAndStale) {
 TEST_F(TrackerTest, AmbiguousResultAfterAPickIsRefused) {
   tracker_.SetPlan(index_);
   const Se2 picked = Se2{Deg(2), {0.3, -0.2}} * truth_;
-  const Se2 T_slam_plan = picked.Inverse();
-  const Eigen::Vector2d plan_point(4, 2), plan_normal(1, 0);
-  ASSERT_EQ(
-      tracker_.ApplyWallPick(
-          {T_slam_plan * plan_point, T_slam_plan.R() * plan_normal, plan_point, plan_normal}, 1),
-      "");
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(picked, {4, 2}, {1, 0}), 1), "");
   const uint64_t v1 = tracker_.alignment().version;
   const auto cloud = Cloud();
   // Another place scored within 5% of this one: the pick stays until the walls decide.
@@ -263,11 +253,7 @@ TEST_F(TrackerTest, AmbiguousPlaceIsTakenOnceLaterResultsKeepLandingOnIt) {
   tracker_.SetPlan(index_);
   const Se2 picked = Se2{Deg(2), {0.3, -0.2}} * truth_;
   const Se2 T_slam_plan = picked.Inverse();
-  const Eigen::Vector2d plan_point(4, 2), plan_normal(1, 0);
-  ASSERT_EQ(
-      tracker_.ApplyWallPick(
-          {T_slam_plan * plan_point, T_slam_plan.R() * plan_normal, plan_point, plan_normal}, 1),
-      "");
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(picked, {4, 2}, {1, 0}), 1), "");
   const auto cloud = Cloud();
   RegistrationResult r = ResultFor(truth_, cloud);
   r.ambiguity = 0.95;
@@ -286,12 +272,7 @@ TEST_F(TrackerTest, AmbiguousPlaceIsTakenOnceLaterResultsKeepLandingOnIt) {
 
 TEST_F(TrackerTest, FirstRegistrationNeedsMostWallPointsToFit) {
   tracker_.SetPlan(index_);
-  const Se2 T_slam_plan = truth_.Inverse();
-  const Eigen::Vector2d plan_point(4, 2), plan_normal(1, 0);
-  ASSERT_EQ(
-      tracker_.ApplyWallPick(
-          {T_slam_plan * plan_point, T_slam_plan.R() * plan_normal, plan_point, plan_normal}, 1),
-      "");
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
   const auto cloud = Cloud();
   RegistrationResult r = ResultFor(truth_, cloud);
   r.inliers = r.points / 2;  // as a place that explains half the walls would report
