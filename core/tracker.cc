@@ -147,11 +147,14 @@ std::string Tracker::FirstRegistrationDoubt(const RegistrationResult& result) co
   return {};
 }
 
+bool Tracker::Agrees(const Se2& T, const std::optional<Se2>& earlier) const {
+  if (!earlier) return false;
+  const Eigen::Vector3d apart = Difference(T, *earlier, filter_.pivot());
+  return apart.tail<2>().norm() <= options_.confirm_m && std::abs(apart(0)) <= options_.confirm_rad;
+}
+
 bool Tracker::PlaceConfirmed(const RegistrationResult& result, double walk_m) {
-  const Eigen::Vector3d apart =
-      pending_place_ ? Difference(result.T_plan_slam, *pending_place_, filter_.pivot())
-                     : Eigen::Vector3d::Constant(1e9);
-  if (apart.tail<2>().norm() > options_.confirm_m || std::abs(apart(0)) > options_.confirm_rad) {
+  if (!Agrees(result.T_plan_slam, pending_place_)) {
     pending_place_ = result.T_plan_slam;
     place_walk_m_ = 0;
     return false;
@@ -225,11 +228,7 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
       // when registrations keep landing on it while the wearer walks on (snapshots a few
       // seconds apart share most of their points, so one more agreeing result proves
       // little), and when it fits clearly better than the alignment in use.
-      const Eigen::Vector3d apart =
-          pending_jump_ ? Difference(result.T_plan_slam, *pending_jump_, filter_.pivot())
-                        : Eigen::Vector3d::Constant(1e9);
-      const bool agrees = apart.tail<2>().norm() <= options_.confirm_m &&
-                          std::abs(apart(0)) <= options_.confirm_rad;
+      const bool agrees = Agrees(result.T_plan_slam, pending_jump_);
       if (!agrees) pending_walk_m_ = 0;
       if (agrees && pending_walk_m_ >= options_.confirm_walk_m &&
           new_score < options_.jump_score_ratio * old_score) {

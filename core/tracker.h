@@ -180,6 +180,8 @@ class Tracker {
   // Why a result after a pick or flip is not to be trusted yet (ambiguous, or too few
   // of its points fit), or empty.
   std::string FirstRegistrationDoubt(const RegistrationResult& result) const;
+  // Whether T lands within confirm_m / confirm_rad of an earlier result at the wearer.
+  bool Agrees(const Se2& T, const std::optional<Se2>& earlier) const;
   // Whether the results since this place was first seen kept landing on it (confirm_m,
   // confirm_rad) while the wearer walked walk_m; starts over at a new place.
   bool PlaceConfirmed(const RegistrationResult& result, double walk_m);
