@@ -28,6 +28,7 @@ bool Daemon::Start(std::string* error) {
     alignment_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kAlignment);
     status_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kStatus);
     track_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kPlanTrack);
+    reply_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kCommandReply);
     waiter_ = std::make_unique<platform::Waiter>(*participant_);
     waiter_->Attach(*mesh_reader_);
     waiter_->Attach(*pose_reader_);
@@ -157,11 +158,12 @@ void Daemon::WorkerLoop() {
 }
 
 void Daemon::Publish(Topic topic, const google::protobuf::Message& msg) {
-  platform::Writer* writer = topic == Topic::kPlanPose    ? plan_pose_writer_.get()
-                             : topic == Topic::kAlignment ? alignment_writer_.get()
-                             : topic == Topic::kStatus    ? status_writer_.get()
-                             : topic == Topic::kPlanTrack ? track_writer_.get()
-                                                          : nullptr;
+  platform::Writer* writer = topic == Topic::kPlanPose       ? plan_pose_writer_.get()
+                             : topic == Topic::kAlignment    ? alignment_writer_.get()
+                             : topic == Topic::kStatus       ? status_writer_.get()
+                             : topic == Topic::kPlanTrack    ? track_writer_.get()
+                             : topic == Topic::kCommandReply ? reply_writer_.get()
+                                                             : nullptr;
   if (!writer) return;
   platform::Envelope e;
   e.device_id = config_.dds().device_id();

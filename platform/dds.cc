@@ -15,7 +15,7 @@ struct TopicSpec {
   int32_t depth;  // keep-last depth; 0 = keep-all
 };
 
-constexpr std::array<TopicSpec, 7> kSpecs = {{
+constexpr std::array<TopicSpec, 8> kSpecs = {{
     {Topic::kMeshDelta, "floorpose/v1/mesh_delta", false, 0},
     {Topic::kHeadsetPose, "floorpose/v1/headset_pose", false, 64},
     {Topic::kCommand, "floorpose/v1/command", false, 0},
@@ -23,6 +23,9 @@ constexpr std::array<TopicSpec, 7> kSpecs = {{
     {Topic::kAlignment, "floorpose/v1/alignment", true, 1},
     {Topic::kStatus, "floorpose/v1/status", true, 1},
     {Topic::kPlanTrack, "floorpose/v1/plan_track", true, 1},
+    // Volatile: a reply is for the app that asked, now; a later app must not get old
+    // replies whose request ids it may reuse.
+    {Topic::kCommandReply, "floorpose/v1/command_reply", false, 0},
 }};
 
 const TopicSpec& Spec(Topic t) { return kSpecs[static_cast<size_t>(t)]; }

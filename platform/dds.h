@@ -18,17 +18,18 @@ namespace floorpose::platform {
 
 // Topic names and their QoS.
 enum class Topic {
-  kMeshDelta,    // headset -> daemon: reliable, keep-all (bounded), volatile
-  kHeadsetPose,  // headset -> daemon: reliable, keep-last 64, volatile
-  kCommand,      // app -> daemon: reliable, keep-all (bounded), volatile
-  kPlanPose,     // daemon -> all: reliable, transient-local, keep-last 1 per device
-  kAlignment,    // daemon -> all: reliable, transient-local, keep-last 1 per device
-  kStatus,       // daemon -> all: reliable, transient-local, keep-last 1 per device
-  kPlanTrack,    // daemon -> all: reliable, transient-local, keep-last 1 per device
+  kMeshDelta,     // headset -> daemon: reliable, keep-all (bounded), volatile
+  kHeadsetPose,   // headset -> daemon: reliable, keep-last 64, volatile
+  kCommand,       // app -> daemon: reliable, keep-all (bounded), volatile
+  kPlanPose,      // daemon -> all: reliable, transient-local, keep-last 1 per device
+  kAlignment,     // daemon -> all: reliable, transient-local, keep-last 1 per device
+  kStatus,        // daemon -> all: reliable, transient-local, keep-last 1 per device
+  kPlanTrack,     // daemon -> all: reliable, transient-local, keep-last 1 per device
+  kCommandReply,  // daemon -> app: reliable, keep-all (bounded), volatile
 };
 inline constexpr Topic kAllTopics[] = {Topic::kMeshDelta, Topic::kHeadsetPose, Topic::kCommand,
                                        Topic::kPlanPose,  Topic::kAlignment,   Topic::kStatus,
-                                       Topic::kPlanTrack};
+                                       Topic::kPlanTrack, Topic::kCommandReply};
 const char* TopicName(Topic topic);
 std::optional<Topic> TopicFromName(std::string_view name);
 

@@ -247,23 +247,50 @@ void Engine::PublishTrack() {
   publish_(Topic::kPlanTrack, track);
 }
 
+namespace {
+
+const char* CommandName(v1::Command::CommandCase c) {
+  switch (c) {
+    case v1::Command::kLoadPlan: return "load_plan";
+    case v1::Command::kWallPick: return "wall_pick";
+    case v1::Command::kFlip: return "flip";
+    case v1::Command::kReset: return "reset";
+    case v1::Command::kGetState: return "get_state";
+    case v1::Command::COMMAND_NOT_SET: break;
+  }
+  return "";
+}
+
+}  // namespace
+
 void Engine::OnCommand(const Envelope& e) {
   if (!Mine(e)) return;
   counters_.set_commands_in(counters_.commands_in() + 1);
   v1::Command cmd;
   std::string error = DecodeCommand(e.payload, &cmd);
+  v1::CommandReply reply;
+  reply.set_request_id(cmd.request_id());
+  reply.set_command(CommandName(cmd.command_case()));
   std::string done;
   if (error.empty()) {
     switch (cmd.command_case()) {
-      case v1::Command::kLoadPlan:
-        error =
-            LoadPlan(cmd.load_plan().path(),
-                     cmd.load_plan().floor().empty() ? config_.floor() : cmd.load_plan().floor());
+      case v1::Command::kLoadPlan: {
+        const auto& load = cmd.load_plan();
+        std::string path = load.path();
+        if (!load.plan_id().empty() && !load.path().empty())
+          error = "give plan_id or path, not both";
+        else if (load.plan_id().empty() && load.path().empty())
+          error = "load_plan without plan_id or path";
+        else if (!load.plan_id().empty())
+          FindPlanFile(config_.plan_dir(), load.plan_id(), &path, &error);
+        if (error.empty())
+          error = LoadPlan(path, load.floor().empty() ? config_.floor() : load.floor());
         if (error.empty()) {
           store_.TakeNewPoints();  // the store is kept: the walls are the same walls
-          done = "plan loaded: " + cmd.load_plan().path();
+          done = "plan loaded: " + path;
         }
         break;
+      }
       case v1::Command::kWallPick: {
         const auto& p = cmd.wall_pick();
         const Eigen::Vector3d point = PointToSlam(
@@ -287,23 +314,36 @@ void Engine::OnCommand(const Envelope& e) {
         store_.Clear();
         done = "reset: alignment and wall store cleared";
         break;
+      case v1::Command::kGetState:
+        for (std::string& id : ListPlanIds(config_.plan_dir())) reply.add_plans(std::move(id));
+        done = "state";
+        break;
       case v1::Command::COMMAND_NOT_SET: break;
     }
   }
   const std::string prefix = "request " + std::to_string(cmd.request_id()) + ": ";
+  reply.set_ok(error.empty());
   if (!error.empty()) {
     counters_.set_commands_refused(counters_.commands_refused() + 1);
     spdlog::warn("command refused: {}{}", prefix, error);
-    PublishStatus(prefix + "refused: " + error);
+    reply.set_message(error);
+    *reply.mutable_status() = Status(prefix + "refused: " + error);
+    publish_(Topic::kStatus, reply.status());
+    publish_(Topic::kCommandReply, reply);
     return;
   }
-  spdlog::info("command: {}{}", prefix, done);
-  // Always: after a reset or a new plan, version 0 tells late joiners the old one is void.
-  PublishAlignment();
-  if (cmd.command_case() == v1::Command::kReset || cmd.command_case() == v1::Command::kLoadPlan)
-    recent_.clear();  // that track belonged to the old alignment or plan
-  PublishTrack();
-  PublishStatus(prefix + done);
+  reply.set_message(done);
+  if (cmd.command_case() != v1::Command::kGetState) {
+    spdlog::info("command: {}{}", prefix, done);
+    // Always: after a reset or a new plan, version 0 tells late joiners the old one is void.
+    PublishAlignment();
+    if (cmd.command_case() == v1::Command::kReset || cmd.command_case() == v1::Command::kLoadPlan)
+      recent_.clear();  // that track belonged to the old alignment or plan
+    PublishTrack();
+  }
+  *reply.mutable_status() = Status(prefix + done);
+  publish_(Topic::kStatus, reply.status());
+  publish_(Topic::kCommandReply, reply);
 }
 
 std::optional<Engine::Job> Engine::TakeDueJob() {
@@ -374,6 +414,10 @@ void Engine::PublishAlignment() {
 }
 
 void Engine::PublishStatus(const std::string& message) {
+  publish_(Topic::kStatus, Status(message));
+}
+
+v1::DaemonStatus Engine::Status(const std::string& message) const {
   v1::DaemonStatus s;
   s.set_state(ToProto(tracker_.state()));
   s.set_plan_id(tracker_.has_plan() ? tracker_.index()->plan().id : "");
@@ -390,7 +434,7 @@ void Engine::PublishStatus(const std::string& message) {
   s.set_stamp_ns(now_ns_());
   s.set_message(message);
   *s.mutable_reliability() = ToProto(tracker_.CurrentReliability());
-  publish_(Topic::kStatus, s);
+  return s;
 }
 
 std::string Engine::StatusLine() const {

@@ -74,6 +74,7 @@ class Engine {
 
   // Publishes a status (message: a command's result, or empty).
   void PublishStatus(const std::string& message);
+  v1::DaemonStatus Status(const std::string& message) const;
   std::string StatusLine() const;
 
   const v1::DaemonStatus::Counters& counters() const { return counters_; }

@@ -1,5 +1,7 @@
 #include "platform/floor_plan_io.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -11,6 +13,15 @@ namespace floorpose::platform {
 namespace {
 
 constexpr size_t kMaxPlanBytes = 256u << 20;  // larger files are not floor plans
+constexpr const char* kPlanExtensions[] = {".geojson", ".json", ".txt"};
+
+bool ValidPlanId(const std::string& id) {
+  if (id.empty() || id.size() > 128 || id[0] == '.') return false;
+  for (char c : id)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.')
+      return false;
+  return true;
+}
 
 using Json = nlohmann::json;
 
@@ -155,6 +166,45 @@ FloorPlanParse LoadFloorPlan(const std::string& path) {
   }
   if (!out.ok()) out.error = path + ": " + out.error;
   return out;
+}
+
+std::vector<std::string> ListPlanIds(const std::string& dir) {
+  std::vector<std::string> ids;
+  std::error_code ec;
+  if (dir.empty()) return ids;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::filesystem::path& p = entry.path();
+    const std::string ext = p.extension().string();
+    if (!entry.is_regular_file(ec) || !ValidPlanId(p.stem().string())) continue;
+    if (std::find(std::begin(kPlanExtensions), std::end(kPlanExtensions), ext) !=
+        std::end(kPlanExtensions))
+      ids.push_back(p.stem().string());
+  }
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  return ids;
+}
+
+bool FindPlanFile(const std::string& dir, const std::string& id, std::string* path,
+                  std::string* error) {
+  if (!ValidPlanId(id)) {
+    *error = "invalid plan id '" + id.substr(0, 64) + "' (letters, digits, '-', '_', '.')";
+    return false;
+  }
+  if (dir.empty()) {
+    *error = "no plan directory configured (plan_dir)";
+    return false;
+  }
+  std::error_code ec;
+  for (const char* ext : kPlanExtensions) {
+    const std::filesystem::path p = std::filesystem::path(dir) / (id + ext);
+    if (std::filesystem::is_regular_file(p, ec)) {
+      *path = p.string();
+      return true;
+    }
+  }
+  *error = "no plan '" + id + "' in " + dir;
+  return false;
 }
 
 }  // namespace floorpose::platform

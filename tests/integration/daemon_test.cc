@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -246,29 +247,90 @@ TEST_F(DaemonTest, RegistrationCorrectsAnImpreciseWallPick) {
   EXPECT_EQ(link_->plan_poses.back().reliability().flag(), v1::Reliability::RELIABLE);
 }
 
-TEST_F(DaemonTest, RefusesBadCommandsWithAReason) {
+TEST_F(DaemonTest, RefusesBadCommandsWithACorrelatedReason) {
   StartDaemon();
   v1::Command flip;
-  flip.set_request_id(3);
   flip.mutable_flip();
-  link_->Send(Topic::kCommand, flip, 0);
+  const auto flipped = link_->Request(flip, seconds(5));
+  ASSERT_TRUE(flipped.has_value());
+  EXPECT_FALSE(flipped->ok());
+  EXPECT_EQ(flipped->command(), "flip");
+  EXPECT_EQ(flipped->message(), "no alignment to flip");
   v1::Command load;
-  load.set_request_id(4);
   load.mutable_load_plan()->set_path((dir_ / "missing.geojson").string());
-  link_->Send(Topic::kCommand, load, 0);
-  ASSERT_TRUE(WaitForStatus(
-      [](const v1::DaemonStatus& s) { return s.counters().commands_refused() == 2; }));
-  bool saw_flip = false, saw_load = false;
-  for (const std::string& m : link_->status_messages) {
-    saw_flip |= m.rfind("request 3: refused", 0) == 0;
-    saw_load |=
-        m.rfind("request 4: refused", 0) == 0 && m.find("missing.geojson") != std::string::npos;
+  const auto loaded = link_->Request(load, seconds(5));
+  ASSERT_TRUE(loaded.has_value());
+  EXPECT_FALSE(loaded->ok());
+  EXPECT_NE(loaded->message().find("missing.geojson"), std::string::npos) << loaded->message();
+  // The plan it had is still loaded, and the reply says so.
+  EXPECT_EQ(loaded->status().state(), v1::DaemonStatus::WAITING_FOR_ALIGNMENT);
+  EXPECT_EQ(loaded->status().plan_id(), "room");
+  EXPECT_EQ(loaded->status().counters().commands_refused(), 2u);
+  // The status topic tells dashboards the same, prefixed with the request id.
+  ASSERT_TRUE(link_->WaitUntil(
+      [&] {
+        return std::count(link_->status_messages.begin(), link_->status_messages.end(),
+                          "request " + std::to_string(loaded->request_id()) +
+                              ": refused: " + loaded->message()) == 1;
+      },
+      seconds(5)));
+  // A payload that is not a Command is refused with request id 0, not dropped silently.
+  platform::Participant& p = link_->participant();
+  platform::Writer raw(p, Topic::kCommand);
+  ASSERT_TRUE(link_->WaitUntil([&] { return raw.MatchedReaders() > 0; }, seconds(5)));
+  ASSERT_TRUE(raw.Write({"hl-test", 1, 0, "\xff\xff\xff"}));
+  ASSERT_TRUE(link_->WaitUntil(
+      [&] {
+        return std::any_of(link_->replies.begin(), link_->replies.end(), [](const auto& r) {
+          return r.request_id() == 0 && !r.ok() && r.message() == "malformed Command protobuf";
+        });
+      },
+      seconds(5)));
+}
+
+TEST_F(DaemonTest, LoadsPlansByIdFromItsPlanDirectory) {
+  const fs::path plans = dir_ / "plans";
+  fs::create_directories(plans);
+  fs::copy_file(plan_path_, plans / "annex.geojson");
+  fs::copy_file(FLOORPOSE_DEMO_PLAN, plans / "office.geojson");
+  std::ofstream(plans / "notes.md") << "not a plan";
+  StartDaemon("plan_dir: \"" + plans.string() + "\"\n");
+
+  v1::Command get_state;
+  get_state.mutable_get_state();
+  const auto state = link_->Request(get_state, seconds(5));
+  ASSERT_TRUE(state.has_value());
+  EXPECT_TRUE(state->ok());
+  EXPECT_EQ(state->command(), "get_state");
+  EXPECT_EQ(std::vector<std::string>(state->plans().begin(), state->plans().end()),
+            (std::vector<std::string>{"annex", "office"}));
+  EXPECT_EQ(state->status().plan_id(), "room");
+  EXPECT_EQ(state->status().state(), v1::DaemonStatus::WAITING_FOR_ALIGNMENT);
+
+  v1::Command load;
+  load.mutable_load_plan()->set_plan_id("office");
+  load.mutable_load_plan()->set_floor("2");
+  const auto loaded = link_->Request(load, seconds(5));
+  ASSERT_TRUE(loaded.has_value());
+  EXPECT_TRUE(loaded->ok()) << loaded->message();
+  EXPECT_EQ(loaded->status().plan_id(), "office");
+
+  // Ids are names in the directory, never paths out of it.
+  for (const char* bad : {"../room", "/etc/passwd", ".hidden", "no-such-plan", ""}) {
+    v1::Command c;
+    c.mutable_load_plan()->set_plan_id(bad);
+    const auto reply = link_->Request(c, seconds(5));
+    ASSERT_TRUE(reply.has_value()) << bad;
+    EXPECT_FALSE(reply->ok()) << bad;
+    EXPECT_FALSE(reply->message().empty());
+    EXPECT_EQ(reply->status().plan_id(), "office") << bad;
   }
-  EXPECT_TRUE(saw_flip);
-  EXPECT_TRUE(saw_load);
-  // The plan it had is still loaded.
-  EXPECT_EQ(link_->status->state(), v1::DaemonStatus::WAITING_FOR_ALIGNMENT);
-  EXPECT_EQ(link_->status->plan_id(), "room");
+  v1::Command both;
+  both.mutable_load_plan()->set_plan_id("annex");
+  both.mutable_load_plan()->set_path(plan_path_);
+  const auto refused = link_->Request(both, seconds(5));
+  ASSERT_TRUE(refused.has_value());
+  EXPECT_EQ(refused->message(), "give plan_id or path, not both");
 }
 
 TEST(FloorposedProcess, PrintConfigRoundTrips) {

@@ -16,17 +16,18 @@ HeadsetLink::HeadsetLink(uint32_t domain_id, const std::string& cyclone_config,
   plan_pose_ = std::make_unique<platform::Reader>(*participant_, Topic::kPlanPose);
   alignment_ = std::make_unique<platform::Reader>(*participant_, Topic::kAlignment);
   status_ = std::make_unique<platform::Reader>(*participant_, Topic::kStatus);
+  reply_ = std::make_unique<platform::Reader>(*participant_, Topic::kCommandReply);
   waiter_ = std::make_unique<platform::Waiter>(*participant_);
-  waiter_->Attach(*plan_pose_);
-  waiter_->Attach(*alignment_);
-  waiter_->Attach(*status_);
+  for (const platform::Reader* r :
+       {plan_pose_.get(), alignment_.get(), status_.get(), reply_.get()})
+    waiter_->Attach(*r);
 }
 
 bool HeadsetLink::WaitForDaemon(std::chrono::milliseconds timeout) {
   return WaitUntil(
       [&] {
         return mesh_->MatchedReaders() > 0 && pose_->MatchedReaders() > 0 &&
-               command_->MatchedReaders() > 0 && status.has_value();
+               command_->MatchedReaders() > 0 && reply_->MatchedWriters() > 0 && status.has_value();
       },
       timeout);
 }
@@ -45,39 +46,45 @@ bool HeadsetLink::Send(Topic topic, const google::protobuf::Message& msg, int64_
   return w->Write(e);
 }
 
+std::optional<v1::CommandReply> HeadsetLink::Request(v1::Command command,
+                                                     std::chrono::milliseconds timeout) {
+  command.set_request_id(++last_request_id_);
+  if (!Send(Topic::kCommand, command, 0)) return std::nullopt;
+  const uint64_t id = command.request_id();
+  auto find = [&]() -> const v1::CommandReply* {
+    for (const v1::CommandReply& r : replies)
+      if (r.request_id() == id) return &r;
+    return nullptr;
+  };
+  if (!WaitUntil([&] { return find() != nullptr; }, timeout)) return std::nullopt;
+  return *find();
+}
+
 void HeadsetLink::Poll() {
-  auto take = [&](platform::Reader& reader, auto&& handle) {
+  // Parses the device's envelopes of one reader into handle(message).
+  auto take = [&]<typename Message>(platform::Reader& reader, auto&& handle) {
     for (const platform::Envelope& e : reader.Take(1024)) {
       if (e.device_id != device_id_) {
         ++foreign_envelopes;
         continue;
       }
-      handle(e.payload);
+      Message m;
+      if (m.ParseFromString(e.payload))
+        handle(std::move(m));
+      else
+        ++malformed_envelopes;
     }
   };
-  take(*plan_pose_, [&](const std::string& bytes) {
-    v1::PlanPose p;
-    if (p.ParseFromString(bytes))
-      plan_poses.push_back(std::move(p));
-    else
-      ++malformed_envelopes;
-  });
-  take(*alignment_, [&](const std::string& bytes) {
-    v1::Alignment a;
-    if (a.ParseFromString(bytes))
-      alignments.push_back(std::move(a));
-    else
-      ++malformed_envelopes;
-  });
-  take(*status_, [&](const std::string& bytes) {
-    v1::DaemonStatus s;
-    if (!s.ParseFromString(bytes)) {
-      ++malformed_envelopes;
-      return;
-    }
+  take.operator()<v1::PlanPose>(*plan_pose_,
+                                [&](v1::PlanPose p) { plan_poses.push_back(std::move(p)); });
+  take.operator()<v1::Alignment>(*alignment_,
+                                 [&](v1::Alignment a) { alignments.push_back(std::move(a)); });
+  take.operator()<v1::DaemonStatus>(*status_, [&](v1::DaemonStatus s) {
     if (!s.message().empty()) status_messages.push_back(s.message());
     status = std::move(s);
   });
+  take.operator()<v1::CommandReply>(*reply_,
+                                    [&](v1::CommandReply r) { replies.push_back(std::move(r)); });
 }
 
 }  // namespace floorpose::tools

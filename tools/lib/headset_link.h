@@ -25,13 +25,16 @@ class HeadsetLink {
   bool WaitUntil(Pred pred, std::chrono::milliseconds timeout);
 
   bool Send(platform::Topic topic, const google::protobuf::Message& msg, int64_t stamp_ns);
+  // Sends the command with the next request id and waits for its reply.
+  std::optional<v1::CommandReply> Request(v1::Command command, std::chrono::milliseconds timeout);
   void Poll();  // drains the output readers into the fields below
 
   std::vector<v1::PlanPose> plan_poses;
   std::vector<v1::Alignment> alignments;
   std::optional<v1::DaemonStatus> status;
   std::vector<std::string> status_messages;  // every non-empty DaemonStatus.message
-  size_t foreign_envelopes = 0;              // outputs of other devices, ignored
+  std::vector<v1::CommandReply> replies;
+  size_t foreign_envelopes = 0;  // outputs of other devices, ignored
   size_t malformed_envelopes = 0;
 
   platform::Participant& participant() { return *participant_; }
@@ -41,7 +44,8 @@ class HeadsetLink {
   std::string device_id_;
   std::unique_ptr<platform::Participant> participant_;
   std::unique_ptr<platform::Writer> mesh_, pose_, command_;
-  std::unique_ptr<platform::Reader> plan_pose_, alignment_, status_;
+  std::unique_ptr<platform::Reader> plan_pose_, alignment_, status_, reply_;
+  uint64_t last_request_id_ = 0;
   std::unique_ptr<platform::Waiter> waiter_;
 };
 
