@@ -14,6 +14,11 @@ packages=(build-essential cmake pkg-config clang-format
   cyclonedds-dev cyclonedds-tools libprotobuf-dev protobuf-compiler libeigen3-dev
   libspdlog-dev libgtest-dev libgmock-dev libbenchmark-dev libsystemd-dev
   libcli11-dev nlohmann-json3-dev systemd)
+# The tests also talk to clients that are not ours (label interop): a Fast DDS app and
+# the Python example client.
+if [ "${1:-build}" = test ]; then
+  packages+=(libfastrtps-dev fastddsgen python3-protobuf)
+fi
 
 missing=()
 for p in "${packages[@]}"; do
