@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <optional>
 
 #include "platform/config.h"
 #include "platform/floor_plan_io.h"
@@ -14,7 +15,7 @@ namespace floorpose::tools {
 namespace {
 
 struct EvalOptions {
-  std::string plan, recording, baseline, config, svg, track;
+  std::string plan, recording, baseline, config, svg, track, session;
   std::string method = v1::RegistrationConfig().method();  // the daemon's default
   bool json = false;
 };
@@ -38,9 +39,21 @@ int RunEval(const EvalOptions& o) {
   const Baseline baseline = o.baseline == "best-fit" ? Baseline::kBestFit
                             : o.baseline == "none"   ? Baseline::kNoAlgorithm
                                                      : Baseline::kNone;
+  std::optional<platform::RecordingWriter> session;
+  if (!o.session.empty()) {
+    session.emplace(o.session);
+    if (!session->ok()) {
+      spdlog::error("{}", session->error());
+      return 1;
+    }
+  }
   EvalReport report;
-  if (!Evaluate(config, o.recording, baseline, &report, &error)) {
+  if (!Evaluate(config, o.recording, baseline, &report, &error, session ? &*session : nullptr)) {
     spdlog::error("{}", error);
+    return 1;
+  }
+  if (session && (!session->Flush() || !session->ok())) {
+    spdlog::error("{}: {}", o.session, session->error());
     return 1;
   }
   if (!o.svg.empty()) {
@@ -69,6 +82,9 @@ Run AddEvalCommand(CLI::App& app) {
   app.add_flag("--json", o->json, "print one JSON object");
   app.add_option("--svg", o->svg, "draw the plan, both trajectories and the markers here");
   app.add_option("--track", o->track, "write every scored pose here as CSV");
+  app.add_option("--session", o->session,
+                 "write the inputs and all the daemon would have published here, as "
+                 "`floorpose record` records a live session");
   return [o] { return RunEval(*o); };
 }
 

@@ -36,7 +36,8 @@ double Percentile(std::vector<double> v, double q) {
 }
 
 bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& recording,
-              Baseline baseline, EvalReport* report, std::string* error) {
+              Baseline baseline, EvalReport* report, std::string* error,
+              platform::RecordingWriter* session) {
   *report = {};
   platform::RecordingReader reader(recording);
   if (!reader.ok()) {
@@ -90,10 +91,15 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
                    : baseline == Baseline::kBestFit   ? "best-fit"
                                                       : config.registration().method();
   int64_t virtual_now = 0;
+  uint64_t session_seq = 0;
   std::vector<v1::PlanPose>& plan_poses = report->plan_poses;
   platform::Engine engine(
       config,
       [&](Topic t, const google::protobuf::Message& m) {
+        if (session)
+          session->Append(
+              virtual_now, t,
+              {config.dds().device_id(), ++session_seq, virtual_now, m.SerializeAsString()});
         if (t == Topic::kPlanPose) plan_poses.push_back(static_cast<const v1::PlanPose&>(m));
         if (t == Topic::kPlanTrack) {
           ++report->plan_tracks;
@@ -117,6 +123,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
   std::optional<Latest> latest;  // the newest pose with ground truth
   for (const Input& in : inputs) {
     virtual_now = in.stamp_ns;
+    if (session) session->Append(virtual_now, in.topic, in.envelope);
     switch (in.topic) {
       case Topic::kCommand: engine.OnCommand(in.envelope); break;
       case Topic::kMeshDelta: engine.OnMeshDelta(in.envelope); break;

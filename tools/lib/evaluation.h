@@ -13,6 +13,7 @@
 #include "core/tracker.h"
 #include "floorpose/v1/config.pb.h"
 #include "floorpose/v1/floorpose.pb.h"
+#include "platform/recording.h"
 
 namespace floorpose::tools {
 
@@ -57,8 +58,10 @@ struct EvalReport {
 
 // Runs `recording` against the plan in config.plan_path() (config as the daemon's; the
 // device id is taken from the recording). False with a message on unreadable input.
+// With `session`, the inputs and everything the Engine publishes are written there as
+// `floorpose record` would have recorded the live session (receive stamps: the inputs').
 bool Evaluate(const v1::FloorposedConfig& config, const std::string& recording, Baseline baseline,
-              EvalReport* report, std::string* error);
+              EvalReport* report, std::string* error, platform::RecordingWriter* session = nullptr);
 
 // The q-quantile (0..1) of v, nearest rank; 0 for an empty v.
 double Percentile(std::vector<double> v, double q);
