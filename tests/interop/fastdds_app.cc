@@ -265,7 +265,7 @@ int Run(const Options& o) {
   if (!app.WaitForDaemon(std::chrono::seconds(20)))
     Fail("no daemon: no status of device '" + o.device + "' or no matched reader");
 
-  // The current state, and the plans the daemon can load.
+  // 3. The current state, and the plans the daemon can load.
   Command get_state;
   get_state.mutable_get_state();
   const CommandReply state = app.Request(get_state, std::chrono::seconds(5));
@@ -281,8 +281,9 @@ int Run(const Options& o) {
       Fail("load_plan: plan_id not in the reply's status");
   }
 
-  // 3 and 5. Stream poses and meshes at the recorded pace, the wall pick when the
-  // recording made it; collect the outputs as they come.
+  // 5 and 6. Stream poses and meshes at the recorded pace, the wall pick when the
+  // recording made it (the wearer picks after looking around); collect the outputs as
+  // they come.
   std::map<int64_t, std::pair<double, double>> truth;
   size_t poses_sent = 0, meshes_sent = 0;
   const auto start = Clock::now();
@@ -318,13 +319,13 @@ int Run(const Options& o) {
     }
   }
 
-  // 7. Every accepted pose gives exactly one plan pose; every command one reply.
+  // 8. Every accepted pose gives exactly one plan pose; every command one reply.
   app.WaitUntil(
       [&] {
         return app.plan_poses_.size() >= poses_sent && app.replies_.size() >= app.requests_.size();
       },
       std::chrono::seconds(30));
-  // 6. The state after the walk (the status is periodic).
+  // 7. The state after the walk (the status is periodic).
   app.WaitUntil([&] { return app.status_.state() == DaemonStatus::TRACKING; },
                 std::chrono::seconds(3));
 
