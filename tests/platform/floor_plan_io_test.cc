@@ -220,6 +220,32 @@ TEST_F(LoadFloorPlanTest, ReadFileHonoursTheSizeLimit) {
   EXPECT_EQ(contents, binary);
 }
 
+TEST_F(LoadFloorPlanTest, PlanDirectoryByIdOnly) {
+  Write("office.geojson", "{}");
+  Write("annex.txt", "0\n");
+  Write("annex.json", "{}");  // one id, whichever file comes first
+  Write("notes.md", "");
+  Write(".hidden.geojson", "{}");
+  std::filesystem::create_directories(dir_ / "sub.geojson");  // a directory, not a plan
+  EXPECT_EQ(ListPlanIds(dir_.string()), (std::vector<std::string>{"annex", "office"}));
+  EXPECT_TRUE(ListPlanIds(Path("missing")).empty());
+  EXPECT_TRUE(ListPlanIds("").empty());
+
+  std::string path, error;
+  ASSERT_TRUE(FindPlanFile(dir_.string(), "office", &path, &error)) << error;
+  EXPECT_EQ(path, Path("office.geojson"));
+  ASSERT_TRUE(FindPlanFile(dir_.string(), "annex", &path, &error)) << error;
+  EXPECT_EQ(path, Path("annex.json"));  // .geojson, .json, .txt, in that order
+  for (const char* bad : {"../office", "a/b", "/etc/passwd", ".hidden", "", "sub dir"}) {
+    EXPECT_FALSE(FindPlanFile(dir_.string(), bad, &path, &error)) << bad;
+    EXPECT_THAT(error, HasSubstr("invalid plan id")) << bad;
+  }
+  EXPECT_FALSE(FindPlanFile(dir_.string(), "sub", &path, &error));
+  EXPECT_THAT(error, HasSubstr("no plan 'sub'"));
+  EXPECT_FALSE(FindPlanFile("", "office", &path, &error));
+  EXPECT_THAT(error, HasSubstr("no plan directory configured"));
+}
+
 // The header of a thesis text file: the number of segments it lists.
 size_t HeaderCount(const std::filesystem::path& txt) {
   std::istringstream in(testing::ReadText(txt));
