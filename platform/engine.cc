@@ -323,17 +323,11 @@ void Engine::OnCommand(const Envelope& e) {
   }
   const std::string prefix = "request " + std::to_string(cmd.request_id()) + ": ";
   reply.set_ok(error.empty());
+  reply.set_message(error.empty() ? done : error);
   if (!error.empty()) {
     counters_.set_commands_refused(counters_.commands_refused() + 1);
     spdlog::warn("command refused: {}{}", prefix, error);
-    reply.set_message(error);
-    *reply.mutable_status() = Status(prefix + "refused: " + error);
-    publish_(Topic::kStatus, reply.status());
-    publish_(Topic::kCommandReply, reply);
-    return;
-  }
-  reply.set_message(done);
-  if (cmd.command_case() != v1::Command::kGetState) {
+  } else if (cmd.command_case() != v1::Command::kGetState) {
     spdlog::info("command: {}{}", prefix, done);
     // Always: after a reset or a new plan, version 0 tells late joiners the old one is void.
     PublishAlignment();
@@ -341,7 +335,7 @@ void Engine::OnCommand(const Envelope& e) {
       recent_.clear();  // that track belonged to the old alignment or plan
     PublishTrack();
   }
-  *reply.mutable_status() = Status(prefix + done);
+  *reply.mutable_status() = Status(prefix + (error.empty() ? done : "refused: " + error));
   publish_(Topic::kStatus, reply.status());
   publish_(Topic::kCommandReply, reply);
 }
