@@ -14,6 +14,7 @@
 #include "platform/config.h"
 #include "platform/dds.h"
 #include "platform/floor_plan_io.h"
+#include "tests/daemon_test_util.h"
 #include "tools/lib/headset_link.h"
 #include "tools/lib/headset_messages.h"
 #include "tools/lib/process.h"
@@ -38,12 +39,6 @@ const char* kRoomGeoJson = R"({"type": "FeatureCollection", "features": [
   {"type": "Feature", "properties": {"kind": "door"}, "geometry": {"type": "Point",
    "coordinates": [5, 0]}}]})";
 
-// A unique domain per test (and per test process), so parallel ctest runs stay apart.
-uint32_t UniqueDomain() {
-  static int counter = 0;
-  return 1 + static_cast<uint32_t>((getpid() * 7 + counter++) % 200);
-}
-
 class DaemonTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -53,7 +48,7 @@ class DaemonTest : public ::testing::Test {
     fs::create_directories(dir_);
     plan_path_ = (dir_ / "room.geojson").string();
     std::ofstream(plan_path_) << kRoomGeoJson;
-    domain_ = UniqueDomain();
+    domain_ = testing::UniqueDomain();
   }
 
   void StartDaemon(const std::string& extra_config = "") {

@@ -6,14 +6,12 @@
 #include <filesystem>
 #include <fstream>
 
-#include "core/sim/simulator.h"
 #include "platform/config.h"
 #include "platform/dds.h"
-#include "platform/floor_plan_io.h"
+#include "tests/daemon_test_util.h"
 #include "tools/lib/evaluation.h"
 #include "tools/lib/headset_link.h"
 #include "tools/lib/process.h"
-#include "tools/lib/simulate_recording.h"
 
 namespace floorpose {
 namespace {
@@ -25,17 +23,8 @@ TEST(ReplayTest, DaemonGivesTheSamePlanPosesAsEval) {
   const fs::path dir = fs::path(::testing::TempDir()) / ("replay-" + std::to_string(getpid()));
   fs::create_directories(dir);
   const std::string recording = (dir / "walk.rec").string();
-  const FloorPlanParse plan = platform::LoadFloorPlan(FLOORPOSE_DEMO_PLAN);
-  ASSERT_TRUE(plan.ok()) << plan.error;
-  sim::SimulatorOptions sim;
-  sim.seed = 5;
-  sim.scenario = sim::Scenario::kOffice;
-  sim.target_length_m = 60;
-  tools::SimulateRecordingResult simulated;
-  std::string error;
-  ASSERT_TRUE(
-      tools::SimulateToRecording(plan.plan, sim, nullptr, {}, recording, &simulated, &error))
-      << error;
+  std::string error = testing::SimulateOfficeWalk(FLOORPOSE_DEMO_PLAN, 5, 60, recording);
+  ASSERT_EQ(error, "");
 
   // The offline run.
   v1::FloorposedConfig config;
@@ -46,7 +35,7 @@ TEST(ReplayTest, DaemonGivesTheSamePlanPosesAsEval) {
   ASSERT_GT(report.accepted, 0u) << "the walk should exercise registration";
 
   // The live run: floorposed in deterministic mode, the recording replayed over DDS.
-  const uint32_t domain = 1 + static_cast<uint32_t>((getpid() * 7 + 101) % 200);
+  const uint32_t domain = testing::UniqueDomain();
   const std::string config_path = (dir / "floorposed.conf").string();
   std::ofstream(config_path) << "dds { domain_id: " << domain
                              << " device_id: \"sim-headset\" cyclonedds_uri: '"

@@ -9,11 +9,9 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "core/sim/simulator.h"
 #include "platform/dds.h"
-#include "platform/floor_plan_io.h"
+#include "tests/daemon_test_util.h"
 #include "tools/lib/process.h"
-#include "tools/lib/simulate_recording.h"
 
 namespace floorpose {
 namespace {
@@ -27,21 +25,11 @@ TEST(FastDdsInterop, AnAppOfAnotherVendorFollowsTheProtocolDocument) {
   fs::create_directories(dir / "plans");
   fs::copy_file(FLOORPOSE_DEMO_PLAN, dir / "plans" / "office.geojson");
 
-  const FloorPlanParse plan = platform::LoadFloorPlan(FLOORPOSE_DEMO_PLAN);
-  ASSERT_TRUE(plan.ok()) << plan.error;
-  sim::SimulatorOptions sim;
-  sim.seed = 7;
-  sim.scenario = sim::Scenario::kOffice;
-  sim.target_length_m = 60;
   const std::string recording = (dir / "walk.rec").string();
-  tools::SimulateRecordingResult simulated;
-  std::string error;
-  ASSERT_TRUE(
-      tools::SimulateToRecording(plan.plan, sim, nullptr, {}, recording, &simulated, &error))
-      << error;
+  ASSERT_EQ(testing::SimulateOfficeWalk(FLOORPOSE_DEMO_PLAN, 7, 60, recording), "");
 
   // The daemon starts without a plan: the app has to load one (section 7, step 4).
-  const uint32_t domain = 1 + static_cast<uint32_t>((getpid() * 11 + 37) % 200);
+  const uint32_t domain = testing::UniqueDomain();
   const std::string config_path = (dir / "floorposed.conf").string();
   std::ofstream(config_path) << "dds { domain_id: " << domain
                              << " device_id: \"hl-fastdds\" cyclonedds_uri: '"

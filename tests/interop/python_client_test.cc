@@ -1,38 +1,26 @@
 // The Python example client (tools/python/plan_poses.py), with Debian's python3-protobuf
 // and the modules protoc generated, prints exactly the plan poses of a session recording.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <cmath>
-#include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <sstream>
 
-#include "core/sim/simulator.h"
-#include "platform/floor_plan_io.h"
 #include "platform/recording.h"
+#include "tests/daemon_test_util.h"
+#include "tests/test_util.h"
 #include "tools/lib/evaluation.h"
 #include "tools/lib/process.h"
-#include "tools/lib/simulate_recording.h"
 
 namespace floorpose {
 namespace {
 
-namespace fs = std::filesystem;
 using std::chrono::seconds;
 
-class PythonClientTest : public ::testing::Test {
+class PythonClientTest : public testing::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::path(::testing::TempDir()) / ("python-client-" + std::to_string(getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-
   // Runs the client on a recording; its exit code, and stdout and stderr in *out.
   std::optional<int> RunClient(const std::string& recording, std::string* out) {
-    const std::string log = (dir_ / "client.out").string();
+    const std::string log = Path("client.out");
     tools::ChildProcess client(
         {"/usr/bin/env", "PYTHONPATH=" FLOORPOSE_PYTHON_PROTO_DIR, PYTHON3_PATH,
          FLOORPOSE_SOURCE_DIR "/tools/python/plan_poses.py", recording},
@@ -42,24 +30,14 @@ class PythonClientTest : public ::testing::Test {
     *out = std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
     return code;
   }
-
-  fs::path dir_;
 };
 
 TEST_F(PythonClientTest, PrintsThePlanPosesOfASession) {
-  const FloorPlanParse plan = platform::LoadFloorPlan(FLOORPOSE_DEMO_PLAN);
-  ASSERT_TRUE(plan.ok()) << plan.error;
-  sim::SimulatorOptions sim;
-  sim.seed = 9;
-  sim.scenario = sim::Scenario::kOffice;
-  sim.target_length_m = 40;
-  const std::string walk = (dir_ / "walk.rec").string();
-  tools::SimulateRecordingResult simulated;
-  std::string error;
-  ASSERT_TRUE(tools::SimulateToRecording(plan.plan, sim, nullptr, {}, walk, &simulated, &error))
-      << error;
+  const std::string walk = Path("walk.rec");
+  std::string error = testing::SimulateOfficeWalk(FLOORPOSE_DEMO_PLAN, 9, 40, walk);
+  ASSERT_EQ(error, "");
   // The session as the daemon would have published it (replay_test shows that it does).
-  const std::string session_path = (dir_ / "session.rec").string();
+  const std::string session_path = Path("session.rec");
   v1::FloorposedConfig config;
   config.set_plan_path(FLOORPOSE_DEMO_PLAN);
   tools::EvalReport report;
@@ -104,14 +82,13 @@ TEST_F(PythonClientTest, PrintsThePlanPosesOfASession) {
 }
 
 TEST_F(PythonClientTest, SaysWhatIsWrongWithACorruptFile) {
-  const std::string bad = (dir_ / "bad.rec").string();
-  std::ofstream(bad) << "FPREC01\n\x7f"
-                     << "short";
+  const std::string bad = Write("bad.rec",
+                                "FPREC01\n\x7f"
+                                "short");
   std::string out;
   EXPECT_EQ(RunClient(bad, &out), 1);
   EXPECT_NE(out.find("runs past the end of the file"), std::string::npos) << out;
-  const std::string other = (dir_ / "other.txt").string();
-  std::ofstream(other) << "not a recording";
+  const std::string other = Write("other.txt", "not a recording");
   EXPECT_EQ(RunClient(other, &out), 1);
   EXPECT_NE(out.find("not a floorpose recording"), std::string::npos) << out;
 }
