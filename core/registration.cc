@@ -528,19 +528,51 @@ std::vector<Se2> CorrelativeSearch(const std::vector<Eigen::Vector2d>& points,
   }
   std::sort(all.begin(), all.end(),
             [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
-  // The best few that are not neighbours of a better one.
-  std::vector<Se2> corrections;
+  // The best few places: a candidate is the same place as a better one when it moves
+  // the sample points that fit a wall there less than kDistinctShiftM across their walls
+  // (WallNormalShift, on the sample): slid along a corridor, or a grid step off.
+  struct Kept {
+    Se2 T;
+    std::vector<std::pair<size_t, Eigen::Vector2d>> fitting;  // sample index, wall normal
+  };
+  std::vector<Kept> kept;
   for (const Candidate& c : all) {
-    if (corrections.size() >= options.search_candidates) break;
-    bool near = false;
-    for (const Se2& o : corrections)
-      near = near || (std::abs(WrapAngle(o.theta - c.T.theta)) < 2.5 * kStepRad &&
-                      (o * centroid - c.T * centroid).norm() < 2.5 * kStepM);
-    if (!near) corrections.push_back(c.T);
+    if (kept.size() >= options.search_candidates) break;
+    bool same = false;
+    for (const Kept& k : kept) {
+      double sum2 = 0;
+      for (const auto& [i, n] : k.fitting) {
+        const double across = n.dot(c.T * sample[i] - k.T * sample[i]);
+        sum2 += across * across;
+      }
+      same = same || sum2 <= kDistinctShiftM * kDistinctShiftM * k.fitting.size();
+    }
+    if (same) continue;
+    Kept k{c.T, {}};
+    for (size_t i = 0; i < sample.size(); ++i) {
+      const auto hit = index.Query(c.T * sample[i]);
+      if (hit && hit->distance < kSigma) k.fitting.emplace_back(i, hit->normal);
+    }
+    kept.push_back(std::move(k));
   }
   std::vector<Se2> out;
-  for (const Se2& c : corrections) out.push_back(c * initial);
+  for (const Kept& k : kept) out.push_back(k.T * initial);
   return out;
+}
+
+double WallNormalShift(const std::vector<Eigen::Vector2d>& points, const ClosestWallIndex& index,
+                       const Se2& T_a, const Se2& T_b, double inlier_threshold_m) {
+  double sum2 = 0;
+  size_t n = 0;
+  for (const Eigen::Vector2d& p : points) {
+    const Eigen::Vector2d a = T_a * p;
+    const auto hit = index.Query(a);
+    if (!hit || hit->distance > inlier_threshold_m) continue;
+    const double along_normal = hit->normal.dot(T_b * p - a);
+    sum2 += along_normal * along_normal;
+    ++n;
+  }
+  return n ? std::sqrt(sum2 / static_cast<double>(n)) : 0.0;
 }
 
 RegistrationResult Register(const std::vector<Eigen::Vector2d>& points,
@@ -630,10 +662,12 @@ RegistrationResult Register(const std::vector<Eigen::Vector2d>& points,
   RegistrationResult best = std::move(fits.front().second);
   best.iterations = iterations;
   for (size_t i = 1; i < fits.size(); ++i) {
-    const Se2& T = fits[i].second.T_plan_slam;
-    const bool distinct = (T * centre - best.T_plan_slam * centre).norm() > 0.5 ||
-                          std::abs(WrapAngle(T.theta - best.T_plan_slam.theta)) > 2 * M_PI / 180;
-    if (!distinct) continue;
+    // Another place only when it moves the walls that fit off their lines: the same
+    // corridor slid along its axis is not another place (the walls cannot tell, and the
+    // initial guess keeps its position along the axis).
+    if (WallNormalShift(*use_points, *use_index, best.T_plan_slam, fits[i].second.T_plan_slam,
+                        options.icp.inlier_threshold_m) <= kDistinctShiftM)
+      continue;
     best.ambiguity = fits[i].first > 0 ? std::min(1.0, fits.front().first / fits[i].first) : 1.0;
     break;
   }

@@ -14,6 +14,10 @@
 
 namespace floorpose {
 
+// Two fits are different places when they put the wall points this far apart across
+// their walls (RMS, metres).
+inline constexpr double kDistinctShiftM = 0.3;
+
 struct RegistrationResult {
   std::string method;
   Se2 T_plan_slam;
@@ -34,8 +38,9 @@ struct RegistrationResult {
   // and Singh 2016): the solution did not move along them.
   Eigen::Matrix3d eigenvectors = Eigen::Matrix3d::Identity();
   std::vector<Eigen::Vector3d> degenerate_directions;
-  // With a correlative search: the best fit's score over the best distinct other fit's
-  // (more than 0.5 m or 2 degrees apart at the cloud's centre), in (0, 1]; near 1, two
+  // With a correlative search: the best fit's score over the best other place's (one
+  // that moves the fitting points over kDistinctShiftM across their walls, see
+  // WallNormalShift), in (0, 1]; near 1, two
   // places explain the walls equally well. 0 when there was no search or no other fit.
   double ambiguity = 0.0;
   double time_ms = 0.0;  // filled by the caller, which owns the clock
@@ -134,6 +139,13 @@ RegistrationResult Register(const std::vector<Eigen::Vector2d>& points_slam,
                             const std::vector<Eigen::Vector2d>& normals_slam,
                             const ClosestWallIndex& index, const Se2& T_plan_slam_initial,
                             const RegistrationOptions& options);
+
+// How far T_b moves the points that fit a wall under T_a (within the inlier threshold)
+// across their walls: the RMS of the shift along each wall's normal, metres. Small when
+// the two differ only along the walls (a corridor slid along its axis).
+double WallNormalShift(const std::vector<Eigen::Vector2d>& points_slam,
+                       const ClosestWallIndex& index, const Se2& T_a, const Se2& T_b,
+                       double inlier_threshold_m);
 
 // Fit statistics of a transform on a cloud (no optimisation): fills points, matched,
 // inliers, rmse, inlier_rmse. `truncated_mse` (out, optional) is the mean of

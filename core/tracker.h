@@ -54,6 +54,9 @@ struct TrackerOptions {
   double max_ambiguity = 0.7;       // results after a pick with RegistrationResult::ambiguity above
                                     // this: refused until later ones confirm the place (as jumps)
   double first_inlier_ratio = 0.9;  // results after a pick with fewer inliers: refused
+  double clear_ambiguity = 0.3;     // a first result this unambiguous, with its inliers, and
+                                    // within the pick search of the pick at the wearer: taken
+                                    // at once (others wait for the next result to agree)
   double score_cap_m = 0.2;         // distances capped here in the "better fit" score
   double worse_fit_ratio = 1.25;  // results scoring worse than this times the one in use: rejected
   bool local_meshes = false;      // register only meshes new since the last run (thesis "local")
@@ -180,6 +183,8 @@ class Tracker {
   // Why a result after a pick or flip is not to be trusted yet (ambiguous, or too few
   // of its points fit), or empty.
   std::string FirstRegistrationDoubt(const RegistrationResult& result) const;
+  // Whether a first result after a pick or flip is clear enough to take at once.
+  bool FirstPlaceClear(const RegistrationResult& result) const;
   // Whether T lands within confirm_m / confirm_rad of an earlier result at the wearer.
   bool Agrees(const Se2& T, const std::optional<Se2>& earlier) const;
   // Whether the results since this place was first seen kept landing on it (confirm_m,

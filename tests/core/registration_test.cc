@@ -394,6 +394,44 @@ TEST_F(OneWallOfTwoTest, EqualPlacesAreToldApartByTheInitialGuess) {
   }
 }
 
+TEST(WallNormalShiftTest, SlidingAlongTheWallsIsNoShiftAcrossIsTheOffset) {
+  const auto plan = MakeFloorPlan("corridor", {{{0, 0}, {20, 0}}, {{0, 2}, {20, 2}}});
+  ASSERT_TRUE(plan.ok()) << plan.error;
+  const ClosestWallIndex index(plan.plan);
+  const FloorPlan seen{"", {{{5, 0}, {12, 0}}, {{5, 2}, {12, 2}}}, {}, {}};
+  const std::vector<Eigen::Vector2d> points = testing::SampleWalls(seen, 0.1);
+  const Se2 at{0.0, {0.0, 0.0}};
+  EXPECT_NEAR(WallNormalShift(points, index, at, Se2{0.0, {2.0, 0.0}}, 0.2), 0.0, 1e-9);
+  EXPECT_NEAR(WallNormalShift(points, index, at, Se2{0.0, {1.5, 0.7}}, 0.2), 0.7, 1e-9);
+  // Turned about the middle: each point moves across its wall by its lever arm.
+  const double shift = WallNormalShift(points, index, at, Se2{Deg(2), {0.0, 0.0}}, 0.2);
+  EXPECT_GT(shift, 0.1);
+  EXPECT_LT(shift, 0.5);
+}
+
+TEST(RegistrationAmbiguityTest, CorridorSlidAlongItselfIsNotAnotherPlace) {
+  // Both walls of a long corridor, no end in sight: every place along it fits equally,
+  // but that is one place for the walls; the guess keeps its position along the axis.
+  const auto plan = MakeFloorPlan("corridor", {{{0, 0}, {30, 0}}, {{0, 2}, {30, 2}}});
+  ASSERT_TRUE(plan.ok()) << plan.error;
+  const ClosestWallIndex index(plan.plan);
+  const FloorPlan seen{"", {{{10, 0}, {16, 0}}, {{10, 2}, {16, 2}}}, {}, {}};
+  std::vector<Eigen::Vector2d> points = testing::SampleWalls(seen, 0.05);
+  SplitMix64 rng(5);
+  for (Eigen::Vector2d& p : points) p += 0.02 * Eigen::Vector2d(rng.Gaussian(), rng.Gaussian());
+  RegistrationOptions options;
+  options.method = RegistrationMethod::kIk;
+  options.search_window_m = 2.5;
+  options.search_window_rad = Deg(10);
+  options.search_tie_ratio = 0.9;
+  const Se2 guess{Deg(3), {1.2, 0.6}};
+  const RegistrationResult r = Register(points, {}, index, guess, options);
+  ASSERT_TRUE(r.converged) << r.reason;
+  EXPECT_LT(r.ambiguity, 0.3);
+  EXPECT_NEAR(r.T_plan_slam.theta, 0.0, Deg(0.3));
+  EXPECT_NEAR(r.T_plan_slam.t.y(), 0.0, 0.05);
+}
+
 TEST(RegistrationAmbiguityTest, WholeRoomIsNotAmbiguous) {
   const FloorPlan plan = testing::AsymmetricRoom();
   const ClosestWallIndex index(plan);

@@ -201,8 +201,11 @@ TEST_F(TrackerTest, OfferAcceptsBetterRejectsWorseAndStale) {
   nan.T_plan_slam.theta = std::numeric_limits<double>::quiet_NaN();
   EXPECT_FALSE(tracker_.Offer(nan, cloud, v1, 4).accepted);
 
-  // The first place after a pick waits for the next result to land on it too.
-  d = tracker_.Offer(ResultFor(truth_, cloud), cloud, v1, 5);
+  // A first place after a pick that another place nearly matches (but not within
+  // max_ambiguity) waits for the next result to land on it too.
+  RegistrationResult first = ResultFor(truth_, cloud);
+  first.ambiguity = 0.5;
+  d = tracker_.Offer(first, cloud, v1, 5);
   EXPECT_FALSE(d.accepted);
   EXPECT_THAT(d.reason, HasSubstr("first place"));
   EXPECT_EQ(tracker_.alignment().version, v1);
@@ -210,7 +213,7 @@ TEST_F(TrackerTest, OfferAcceptsBetterRejectsWorseAndStale) {
   // Better and current: fused, a new version, and the fit makes it reliable. The pick
   // is 1.5 m and 5 degrees uncertain, the registration a few centimetres: the result
   // is taken almost whole.
-  d = tracker_.Offer(ResultFor(truth_, cloud), cloud, v1, 5);
+  d = tracker_.Offer(first, cloud, v1, 5);
   EXPECT_TRUE(d.accepted) << d.reason;
   EXPECT_GT(tracker_.alignment().version, v1);
   EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kRegistration);
@@ -270,6 +273,31 @@ TEST_F(TrackerTest, AmbiguousPlaceIsTakenOnceLaterResultsKeepLandingOnIt) {
   EXPECT_THAT(tracker_.alignment().T_plan_slam, IsNearlySe2(truth_, 0.01, 0.001));
 }
 
+TEST_F(TrackerTest, ClearFirstPlaceIsTakenAtOnceUnlessFarFromThePick) {
+  tracker_.SetPlan(index_);
+  const auto cloud = Cloud();
+  RegistrationResult r = ResultFor(truth_, cloud);
+  r.ambiguity = 0.1;
+  // The pick 1.5 m and 6 degrees off: within the pick search, so a clear result that
+  // fits is taken at once, the wearer's pose corrected from the next one on.
+  const Se2 picked = Se2{Deg(6), {1.2, -0.9}} * truth_;
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(picked, {4, 2}, {1, 0}), 1), "");
+  tracker_.Correct({truth_.Inverse() * Eigen::Vector2d(3, 3), 0.0, 0.0});
+  Tracker::Decision d = tracker_.Offer(r, cloud, tracker_.alignment().version, 2);
+  EXPECT_TRUE(d.accepted) << d.reason;
+  EXPECT_THAT(tracker_.alignment().T_plan_slam, IsNearlySe2(truth_, 0.05, 0.005));
+
+  // The pick 4 m off: further than a pick can be, so the same result waits for the
+  // next one to agree.
+  const Se2 far = Se2{0.0, {4.0, 0.0}} * truth_;
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(far, {4, 2}, {1, 0}), 3), "");
+  tracker_.Correct({truth_.Inverse() * Eigen::Vector2d(3, 3), 0.0, 0.0});
+  d = tracker_.Offer(r, cloud, tracker_.alignment().version, 4);
+  EXPECT_FALSE(d.accepted);
+  EXPECT_THAT(d.reason, HasSubstr("first place"));
+  EXPECT_TRUE(tracker_.Offer(r, cloud, tracker_.alignment().version, 5).accepted);
+}
+
 TEST_F(TrackerTest, FirstRegistrationNeedsMostWallPointsToFit) {
   tracker_.SetPlan(index_);
   ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
@@ -316,7 +344,7 @@ TEST_F(TrackerTest, PickThenIcpThenCorrectEndToEnd) {
   const uint64_t version = tracker_.alignment().version;
   const RegistrationResult r = RegisterIcp(
       cloud, *tracker_.index(), tracker_.alignment().T_plan_slam, tracker_.options().icp);
-  EXPECT_FALSE(tracker_.Offer(r, cloud, version, 3).accepted);  // a first place: once more
+  ASSERT_EQ(r.ambiguity, 0.0);  // no search: nothing else competes, taken at once
   ASSERT_TRUE(tracker_.Offer(r, cloud, version, 3).accepted);
   EXPECT_EQ(tracker_.state(), TrackState::kTracking);
   const Pose2 pose{truth_.Inverse() * Eigen::Vector2d(5, 5), 0.0, 1.6};
@@ -367,7 +395,6 @@ TEST(TrackerJumpTest, FarJumpWaitsForConfirmation) {
   RegistrationResult near;
   near.T_plan_slam = Se2{0.0, {0.03, 0}};  // slightly off, better than the pick
   near.matched = static_cast<uint32_t>(cloud.size());
-  EXPECT_FALSE(tracker.Offer(near, cloud, tracker.alignment().version, 2).accepted);
   ASSERT_TRUE(tracker.Offer(near, cloud, tracker.alignment().version, 2).accepted);
   tracker.Correct({{2, 1.5}, 0, 1.6});
   RegistrationResult far = near;

@@ -63,6 +63,7 @@ TEST(ConfigTest, ProtoDefaultsMatchTheCoreDefaults) {
   EXPECT_EQ(t.min_walk_m, core.min_walk_m);
   EXPECT_EQ(t.max_ambiguity, core.max_ambiguity);
   EXPECT_EQ(t.first_inlier_ratio, core.first_inlier_ratio);
+  EXPECT_EQ(t.clear_ambiguity, core.clear_ambiguity);
   EXPECT_EQ(t.pick_tie_ratio, core.pick_tie_ratio);
   const WallExtractionOptions w = ToWallExtractionOptions(c);
   const WallExtractionOptions core_w;
@@ -136,6 +137,7 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"tracking { max_ambiguity: 1.5 }", "max_ambiguity"},
            Case{"tracking { refine_window_s: -1 }", "refine_window_s"},
            Case{"tracking { first_inlier_ratio: 1.1 }", "first_inlier_ratio"},
+           Case{"tracking { clear_ambiguity: 0.8 }", "clear_ambiguity"},
            Case{"registration { pick_tie_ratio: -0.1 }", "pick_tie_ratio"},
            Case{"tracking { refine_window_s: inf }", "refine_window_s"},
            Case{"status_period_s: 0", "status_period_s"},
