@@ -23,10 +23,10 @@ namespace floorpose {
 // fit reported there.
 struct ReliabilityModel {
   static constexpr int kFeatures = 8;
-  double bias = -0.1237;
+  double bias = -2.444;
   // In the order of ReliabilityFeatures::Vector().
-  std::array<double, kFeatures> weights = {5.341,   -11.12,  -2.021,  0.4606,
-                                           -0.1218, -0.2167, 0.08587, -0.07514};
+  std::array<double, kFeatures> weights = {5.594,   -9.933,  -0.8121, 0.624,
+                                           -0.1456, -0.1583, 0.6382,  -0.3322};
   double reliable_probability = 0.9;  // RELIABLE at or above this
   double degraded_probability = 0.5;  // DEGRADED at or above this, else UNRELIABLE
 
@@ -36,7 +36,7 @@ struct ReliabilityModel {
 
 struct TrackerOptions {
   IcpOptions icp;
-  RegistrationMethod method = RegistrationMethod::kIk;
+  RegistrationMethod method = RegistrationMethod::kIcp;
   HoughOptions hough;
   AlignmentFilterOptions filter;
   ReliabilityModel reliability;

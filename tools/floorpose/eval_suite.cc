@@ -31,7 +31,7 @@ struct SuiteOptions {
   std::string out;
   std::vector<std::string> scenarios = {"corridor", "office", "glass", "hall", "mismatch"};
   // The daemon's default first: the reliability tables and the SVGs are of the first.
-  std::vector<std::string> methods = {"ik", "icp", "hough", "none", "best-fit"};
+  std::vector<std::string> methods = {"icp", "ik", "hough", "none", "best-fit"};
   double length_m = 0;  // 0: the simulator's default
   int jobs = 0;
   std::string config;  // floorposed configuration to evaluate with
