@@ -265,6 +265,36 @@ bool SmallStep(const Eigen::Vector3d& delta, const IcpOptions& o) {
          delta.tail<2>().norm() < o.converge_translation_m;
 }
 
+// The points that fit a wall under a reference transform (within a threshold), with
+// their walls' normals, found once: WallNormalShift of other transforms against it.
+class FittingPoints {
+ public:
+  FittingPoints(const std::vector<Eigen::Vector2d>& points, const ClosestWallIndex& index,
+                const Se2& T, double threshold_m)
+      : points_(&points), T_(T) {
+    for (size_t i = 0; i < points.size(); ++i) {
+      const auto hit = index.Query(T * points[i]);
+      if (hit && hit->distance <= threshold_m) fitting_.emplace_back(i, hit->normal);
+    }
+  }
+  const Se2& T() const { return T_; }
+  // RMS shift of the fitting points along their walls' normals under T_b, metres.
+  double ShiftTo(const Se2& T_b) const {
+    double sum2 = 0;
+    for (const auto& [i, n] : fitting_) {
+      const Eigen::Vector2d& p = (*points_)[i];
+      const double across = n.dot(T_b * p - T_ * p);
+      sum2 += across * across;
+    }
+    return fitting_.empty() ? 0.0 : std::sqrt(sum2 / static_cast<double>(fitting_.size()));
+  }
+
+ private:
+  const std::vector<Eigen::Vector2d>* points_;
+  Se2 T_;
+  std::vector<std::pair<size_t, Eigen::Vector2d>> fitting_;  // point index, wall normal
+};
+
 }  // namespace
 
 RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& points,
@@ -531,48 +561,21 @@ std::vector<Se2> CorrelativeSearch(const std::vector<Eigen::Vector2d>& points,
   // The best few places: a candidate is the same place as a better one when it moves
   // the sample points that fit a wall there less than kDistinctShiftM across their walls
   // (WallNormalShift, on the sample): slid along a corridor, or a grid step off.
-  struct Kept {
-    Se2 T;
-    std::vector<std::pair<size_t, Eigen::Vector2d>> fitting;  // sample index, wall normal
-  };
-  std::vector<Kept> kept;
+  std::vector<FittingPoints> kept;
   for (const Candidate& c : all) {
     if (kept.size() >= options.search_candidates) break;
     bool same = false;
-    for (const Kept& k : kept) {
-      double sum2 = 0;
-      for (const auto& [i, n] : k.fitting) {
-        const double across = n.dot(c.T * sample[i] - k.T * sample[i]);
-        sum2 += across * across;
-      }
-      same = same || sum2 <= kDistinctShiftM * kDistinctShiftM * k.fitting.size();
-    }
-    if (same) continue;
-    Kept k{c.T, {}};
-    for (size_t i = 0; i < sample.size(); ++i) {
-      const auto hit = index.Query(c.T * sample[i]);
-      if (hit && hit->distance < kSigma) k.fitting.emplace_back(i, hit->normal);
-    }
-    kept.push_back(std::move(k));
+    for (const FittingPoints& k : kept) same = same || k.ShiftTo(c.T) <= kDistinctShiftM;
+    if (!same) kept.emplace_back(sample, index, c.T, kSigma);
   }
   std::vector<Se2> out;
-  for (const Kept& k : kept) out.push_back(k.T * initial);
+  for (const FittingPoints& k : kept) out.push_back(k.T() * initial);
   return out;
 }
 
 double WallNormalShift(const std::vector<Eigen::Vector2d>& points, const ClosestWallIndex& index,
                        const Se2& T_a, const Se2& T_b, double inlier_threshold_m) {
-  double sum2 = 0;
-  size_t n = 0;
-  for (const Eigen::Vector2d& p : points) {
-    const Eigen::Vector2d a = T_a * p;
-    const auto hit = index.Query(a);
-    if (!hit || hit->distance > inlier_threshold_m) continue;
-    const double along_normal = hit->normal.dot(T_b * p - a);
-    sum2 += along_normal * along_normal;
-    ++n;
-  }
-  return n ? std::sqrt(sum2 / static_cast<double>(n)) : 0.0;
+  return FittingPoints(points, index, T_a, inlier_threshold_m).ShiftTo(T_b);
 }
 
 RegistrationResult Register(const std::vector<Eigen::Vector2d>& points,
@@ -661,13 +664,13 @@ RegistrationResult Register(const std::vector<Eigen::Vector2d>& points,
   }
   RegistrationResult best = std::move(fits.front().second);
   best.iterations = iterations;
+  // Another place only when it moves the walls that fit off their lines: the same
+  // corridor slid along its axis is not another place (the walls cannot tell, and the
+  // initial guess keeps its position along the axis).
+  const FittingPoints best_fit(*use_points, *use_index, best.T_plan_slam,
+                               options.icp.inlier_threshold_m);
   for (size_t i = 1; i < fits.size(); ++i) {
-    // Another place only when it moves the walls that fit off their lines: the same
-    // corridor slid along its axis is not another place (the walls cannot tell, and the
-    // initial guess keeps its position along the axis).
-    if (WallNormalShift(*use_points, *use_index, best.T_plan_slam, fits[i].second.T_plan_slam,
-                        options.icp.inlier_threshold_m) <= kDistinctShiftM)
-      continue;
+    if (best_fit.ShiftTo(fits[i].second.T_plan_slam) <= kDistinctShiftM) continue;
     best.ambiguity = fits[i].first > 0 ? std::min(1.0, fits.front().first / fits[i].first) : 1.0;
     break;
   }

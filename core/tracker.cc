@@ -148,20 +148,20 @@ std::string Tracker::FirstRegistrationDoubt(const RegistrationResult& result) co
 }
 
 bool Tracker::FirstPlaceClear(const RegistrationResult& result) const {
-  if (result.ambiguity > options_.clear_ambiguity || !FirstRegistrationDoubt(result).empty())
-    return false;
-  const Eigen::Vector3d apart =
-      Difference(result.T_plan_slam, alignment_.T_plan_slam, filter_.pivot());
   // Refinement may carry the best place a little beyond the search window.
   constexpr double kMargin = 1.25;
-  return apart.tail<2>().norm() <= kMargin * options_.pick_search_m &&
-         std::abs(apart(0)) <= kMargin * options_.pick_search_rad;
+  return result.ambiguity <= options_.clear_ambiguity &&
+         Within(result.T_plan_slam, alignment_.T_plan_slam, kMargin * options_.pick_search_m,
+                kMargin * options_.pick_search_rad);
+}
+
+bool Tracker::Within(const Se2& T, const Se2& other, double m, double rad) const {
+  const Eigen::Vector3d apart = Difference(T, other, filter_.pivot());
+  return apart.tail<2>().norm() <= m && std::abs(apart(0)) <= rad;
 }
 
 bool Tracker::Agrees(const Se2& T, const std::optional<Se2>& earlier) const {
-  if (!earlier) return false;
-  const Eigen::Vector3d apart = Difference(T, *earlier, filter_.pivot());
-  return apart.tail<2>().norm() <= options_.confirm_m && std::abs(apart(0)) <= options_.confirm_rad;
+  return earlier && Within(T, *earlier, options_.confirm_m, options_.confirm_rad);
 }
 
 bool Tracker::PlaceConfirmed(const RegistrationResult& result, double walk_m) {
@@ -213,7 +213,8 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
   } else if (new_score > old_score * options_.worse_fit_ratio) {
     d.reason = "fit worse than the alignment in use";
   } else if (const std::string doubt = FirstRegistrationDoubt(result);
-             alignment_.source != AlignmentSource::kRegistration && !FirstPlaceClear(result) &&
+             alignment_.source != AlignmentSource::kRegistration &&
+             !(doubt.empty() && FirstPlaceClear(result)) &&
              !PlaceConfirmed(result, doubt.empty() ? 0.0 : options_.confirm_walk_m)) {
     // The first place after a pick is taken when the next result lands on it too, or,
     // when in doubt, the results over confirm_walk_m.

@@ -183,8 +183,11 @@ class Tracker {
   // Why a result after a pick or flip is not to be trusted yet (ambiguous, or too few
   // of its points fit), or empty.
   std::string FirstRegistrationDoubt(const RegistrationResult& result) const;
-  // Whether a first result after a pick or flip is clear enough to take at once.
+  // Whether a first result after a pick or flip that raises no doubt is clear enough to
+  // take at once: unambiguous, and within the pick search of the pick.
   bool FirstPlaceClear(const RegistrationResult& result) const;
+  // Whether T lands within m metres at the wearer and rad radians of other.
+  bool Within(const Se2& T, const Se2& other, double m, double rad) const;
   // Whether T lands within confirm_m / confirm_rad of an earlier result at the wearer.
   bool Agrees(const Se2& T, const std::optional<Se2>& earlier) const;
   // Whether the results since this place was first seen kept landing on it (confirm_m,
