@@ -23,10 +23,14 @@ namespace floorpose {
 // fit reported there.
 struct ReliabilityModel {
   static constexpr int kFeatures = 8;
-  double bias = -2.444;
+  double bias = -1.121;
   // In the order of ReliabilityFeatures::Vector().
-  std::array<double, kFeatures> weights = {5.594,   -9.933,  -0.8121, 0.624,
-                                           -0.1456, -0.1583, 0.6382,  -0.3322};
+  std::array<double, kFeatures> weights = {5.033,   -11.77,  -0.04282, 0.0,
+                                           -0.1813, -0.2164, 0.5156,   -0.1334};
+  // The way each feature may move the probability (+1 up, -1 down): a fit that, say,
+  // rewards heading uncertainty because it happens to correlate with something else in
+  // the training walks would stay confident on a long walk without walls.
+  static constexpr std::array<int, kFeatures> kSigns = {+1, -1, -1, -1, -1, -1, +1, -1};
   double reliable_probability = 0.9;  // RELIABLE at or above this
   double degraded_probability = 0.5;  // DEGRADED at or above this, else UNRELIABLE
 

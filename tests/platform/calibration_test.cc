@@ -38,6 +38,29 @@ TEST(CalibrationTest, FitRecoversAKnownModel) {
     }
 }
 
+TEST(CalibrationTest, FitKeepsEachWeightToItsSign) {
+  // Data in which heading uncertainty (feature 3) goes with being right: the fit may not
+  // reward it, so it holds that weight at 0 and still finds the others.
+  ReliabilityModel truth;
+  truth.bias = 0.5;
+  truth.weights = {2.0, -8.0, -1.5, 1.0, 0.0, 0.0, 0.0, 0.0};
+  SplitMix64 rng(72);
+  std::vector<CalibrationSample> samples;
+  for (int i = 0; i < 20000; ++i) {
+    CalibrationSample s;
+    for (double& f : s.features) f = rng.Uniform(0, 2);
+    s.within_1m = rng.Uniform() < truth.Probability(s.features);
+    samples.push_back(s);
+  }
+  const ReliabilityModel fit = FitReliabilityModel(samples, ReliabilityModel{}, 1e-6);
+  for (int i = 0; i < ReliabilityModel::kFeatures; ++i)
+    EXPECT_GE(ReliabilityModel::kSigns[i] * fit.weights[i], 0.0) << ReliabilityFeatures::Name(i);
+  EXPECT_EQ(fit.weights[3], 0.0);
+  EXPECT_NEAR(fit.weights[0], 2.0, 0.3);
+  EXPECT_NEAR(fit.weights[1], -8.0, 0.5);
+  EXPECT_NEAR(fit.weights[2], -1.5, 0.3);
+}
+
 TEST(CalibrationTest, CsvRoundTripsAndRejectsGarbage) {
   CalibrationSample s;
   s.features = {0.9, 0.05, 0.2, 0.4, 0.3, 1.2, 2.0, 0.7};

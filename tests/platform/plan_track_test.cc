@@ -14,26 +14,32 @@
 namespace floorpose::tools {
 namespace {
 
-class PlanTrackTest : public testing::TempDirTest {};
+class PlanTrackTest : public testing::TempDirTest {
+ protected:
+  // A 60 m corridor walk through the synthetic office, and the daemon's configuration
+  // for it.
+  void Simulate(v1::FloorposedConfig* config, std::string* recording) {
+    const FloorPlan plan = testing::SyntheticOffice();
+    std::string text = std::to_string(plan.segments.size()) + "\n";
+    for (const Segment& s : plan.segments)
+      text += std::to_string(s.a.x()) + " " + std::to_string(s.a.y()) + " " +
+              std::to_string(s.b.x()) + " " + std::to_string(s.b.y()) + "\n";
+    sim::SimulatorOptions o;
+    o.seed = 3;
+    o.scenario = sim::Scenario::kCorridor;
+    o.target_length_m = 60.0;
+    SimulateRecordingResult simulated;
+    std::string error;
+    *recording = Path("walk.rec");
+    ASSERT_TRUE(SimulateToRecording(plan, o, nullptr, {}, *recording, &simulated, &error)) << error;
+    config->set_plan_path(Write("office.txt", text));
+  }
+};
 
 TEST_F(PlanTrackTest, RecentPosesAreReprojectedWithEveryNewAlignment) {
-  const FloorPlan plan = testing::SyntheticOffice();
-  std::string text = std::to_string(plan.segments.size()) + "\n";
-  for (const Segment& s : plan.segments)
-    text += std::to_string(s.a.x()) + " " + std::to_string(s.a.y()) + " " +
-            std::to_string(s.b.x()) + " " + std::to_string(s.b.y()) + "\n";
-  const std::string plan_path = Write("office.txt", text);
-  sim::SimulatorOptions o;
-  o.seed = 3;
-  o.scenario = sim::Scenario::kCorridor;
-  o.target_length_m = 60.0;
-  SimulateRecordingResult simulated;
-  std::string error;
-  const std::string recording = Path("walk.rec");
-  ASSERT_TRUE(SimulateToRecording(plan, o, nullptr, {}, recording, &simulated, &error)) << error;
-
   v1::FloorposedConfig config;
-  config.set_plan_path(plan_path);
+  std::string recording, error;
+  ASSERT_NO_FATAL_FAILURE(Simulate(&config, &recording));
   config.mutable_tracking()->set_track_history_s(30.0);
   EvalReport report;
   ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &report, &error)) << error;
@@ -68,6 +74,38 @@ TEST_F(PlanTrackTest, RecentPosesAreReprojectedWithEveryNewAlignment) {
     EXPECT_EQ(p.reliability().flag(), it->second->reliability().flag());
   }
   EXPECT_LT(same_version, static_cast<size_t>(track.poses_size()));  // older ones moved
+}
+
+TEST_F(PlanTrackTest, ReportSplitsThePicksErrorFromTheErrorOnceRegistered) {
+  v1::FloorposedConfig config;
+  std::string recording, error;
+  ASSERT_NO_FATAL_FAILURE(Simulate(&config, &recording));
+  EvalReport report;
+  ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &report, &error)) << error;
+  ASSERT_GT(report.accepted, 0u);
+  ASSERT_FALSE(report.track.empty());
+  EXPECT_EQ(report.pick_error_m, report.track.front().error_m);
+  // The first pose under another alignment than the pick's, and the errors from there.
+  size_t first = 0;
+  while (report.track[first].alignment_version == report.track.front().alignment_version) ++first;
+  EXPECT_NEAR(report.first_fix_s,
+              static_cast<double>(report.track[first].stamp_ns - report.track[0].stamp_ns) * 1e-9,
+              1e-9);
+  double sum = 0, max = 0;
+  for (size_t i = first; i < report.track.size(); ++i) {
+    sum += report.track[i].error_m;
+    max = std::max(max, report.track[i].error_m);
+  }
+  EXPECT_NEAR(report.settled_mean_error_m, sum / static_cast<double>(report.track.size() - first),
+              1e-9);
+  EXPECT_EQ(report.settled_max_error_m, max);
+  EXPECT_LE(report.settled_max_error_m, report.max_error_m);
+
+  // The pick alone never registers: no first fix.
+  EvalReport none;
+  ASSERT_TRUE(Evaluate(config, recording, Baseline::kNoAlgorithm, &none, &error)) << error;
+  EXPECT_EQ(none.first_fix_s, -1.0);
+  EXPECT_EQ(none.settled_max_error_m, 0.0);
 }
 
 }  // namespace

@@ -16,8 +16,9 @@ struct CalibrationSample {
   bool within_1m = false;
 };
 
-// Maximum likelihood with a small ridge on the weights (Newton / IRLS); the thresholds
-// are copied from `start`.
+// Maximum likelihood with a small ridge on the weights (Newton / IRLS), each weight kept
+// to the sign ReliabilityModel::kSigns allows (0 when the data would have it the other
+// way); the thresholds are copied from `start`.
 ReliabilityModel FitReliabilityModel(const std::vector<CalibrationSample>& samples,
                                      const ReliabilityModel& start, double ridge = 1e-3);
 

@@ -224,6 +224,20 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     report->reliable_fraction = static_cast<double>(reliable) / static_cast<double>(errors.size());
     report->reliable_precision_1m =
         reliable ? static_cast<double>(reliable_ok) / static_cast<double>(reliable) : 0.0;
+    const std::vector<EvalPose>& t = report->track;
+    report->pick_error_m = t.front().error_m;
+    const auto fix = std::find_if(t.begin(), t.end(), [&](const EvalPose& p) {
+      return p.alignment_version != t.front().alignment_version;
+    });
+    if (!best_fit && fix != t.end()) {
+      report->first_fix_s = static_cast<double>(fix->stamp_ns - t.front().stamp_ns) * 1e-9;
+      double settled = 0;
+      for (auto p = fix; p != t.end(); ++p) {
+        settled += p->error_m;
+        report->settled_max_error_m = std::max(report->settled_max_error_m, p->error_m);
+      }
+      report->settled_mean_error_m = settled / static_cast<double>(t.end() - fix);
+    }
   }
   if (!marker_errors.empty()) {
     double sum = 0;
@@ -246,8 +260,12 @@ std::string ToJson(const EvalReport& r) {
     << ", \"p95_error_m\": " << r.p95_error_m << ", \"max_error_m\": " << r.max_error_m
     << ", \"final_error_m\": " << r.final_error_m
     << ", \"marker_mean_error_m\": " << r.marker_mean_error_m
-    << ", \"divergences\": " << r.divergences << ", \"registrations\": " << r.registrations
-    << ", \"accepted\": " << r.accepted << ", \"reg_time_ms_median\": " << r.reg_time_ms_median
+    << ", \"divergences\": " << r.divergences << ", \"pick_error_m\": " << r.pick_error_m
+    << ", \"first_fix_s\": " << r.first_fix_s
+    << ", \"settled_mean_error_m\": " << r.settled_mean_error_m
+    << ", \"settled_max_error_m\": " << r.settled_max_error_m
+    << ", \"registrations\": " << r.registrations << ", \"accepted\": " << r.accepted
+    << ", \"reg_time_ms_median\": " << r.reg_time_ms_median
     << ", \"reg_time_ms_max\": " << r.reg_time_ms_max
     << ", \"reliable_fraction\": " << r.reliable_fraction
     << ", \"reliable_precision_1m\": " << r.reliable_precision_1m << ", \"poses\": " << r.poses
@@ -267,6 +285,10 @@ std::string ToText(const EvalReport& r) {
     << "  final error                   " << r.final_error_m << " m\n"
     << "  mean error at the markers     " << r.marker_mean_error_m << " m\n"
     << "  divergences (> 5 m)           " << r.divergences << " poses\n"
+    << "  the pick's own error          " << r.pick_error_m << " m\n"
+    << "  first registered pose after   " << r.first_fix_s << " s (-1: none)\n"
+    << "  error mean / max since        " << r.settled_mean_error_m << " / "
+    << r.settled_max_error_m << " m\n"
     << "  registrations run / accepted  " << r.registrations << " / " << r.accepted << "\n"
     << "  registration time median/max  " << r.reg_time_ms_median << " / " << r.reg_time_ms_max
     << " ms\n"

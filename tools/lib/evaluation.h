@@ -46,6 +46,11 @@ struct EvalReport {
   double mean_error_m = 0, p95_error_m = 0, max_error_m = 0, final_error_m = 0;
   double marker_mean_error_m = 0;
   size_t divergences = 0;  // poses more than 5 m off
+  // The pick's own error (the first scored pose), and from the first pose whose alignment
+  // came from a registration on: its delay after the first scored pose (-1: never), and
+  // the mean and max error of the poses since (0 when none).
+  double pick_error_m = 0, first_fix_s = -1;
+  double settled_mean_error_m = 0, settled_max_error_m = 0;
   uint64_t registrations = 0, accepted = 0;
   double reg_time_ms_median = 0, reg_time_ms_max = 0;
   double reliable_fraction = 0;      // of poses flagged RELIABLE
