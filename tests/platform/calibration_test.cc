@@ -9,11 +9,9 @@
 namespace floorpose::tools {
 namespace {
 
-TEST(CalibrationTest, FitRecoversAKnownModel) {
-  ReliabilityModel truth;
-  truth.bias = 1.0;
-  truth.weights = {2.0, -8.0, -1.5, 0.0, 0.0, -0.5, 0.3, -0.4};
-  SplitMix64 rng(71);
+// Samples with uniform features in [0, 2) and labels drawn from `truth`.
+std::vector<CalibrationSample> DrawSamples(const ReliabilityModel& truth, uint64_t seed) {
+  SplitMix64 rng(seed);
   std::vector<CalibrationSample> samples;
   for (int i = 0; i < 20000; ++i) {
     CalibrationSample s;
@@ -21,6 +19,14 @@ TEST(CalibrationTest, FitRecoversAKnownModel) {
     s.within_1m = rng.Uniform() < truth.Probability(s.features);
     samples.push_back(s);
   }
+  return samples;
+}
+
+TEST(CalibrationTest, FitRecoversAKnownModel) {
+  ReliabilityModel truth;
+  truth.bias = 1.0;
+  truth.weights = {2.0, -8.0, -1.5, 0.0, 0.0, -0.5, 0.3, -0.4};
+  const std::vector<CalibrationSample> samples = DrawSamples(truth, 71);
   const ReliabilityModel fit = FitReliabilityModel(samples, ReliabilityModel{}, 1e-6);
   EXPECT_NEAR(fit.bias, truth.bias, 0.3);
   for (int i = 0; i < ReliabilityModel::kFeatures; ++i)
@@ -44,14 +50,7 @@ TEST(CalibrationTest, FitKeepsEachWeightToItsSign) {
   ReliabilityModel truth;
   truth.bias = 0.5;
   truth.weights = {2.0, -8.0, -1.5, 1.0, 0.0, 0.0, 0.0, 0.0};
-  SplitMix64 rng(72);
-  std::vector<CalibrationSample> samples;
-  for (int i = 0; i < 20000; ++i) {
-    CalibrationSample s;
-    for (double& f : s.features) f = rng.Uniform(0, 2);
-    s.within_1m = rng.Uniform() < truth.Probability(s.features);
-    samples.push_back(s);
-  }
+  const std::vector<CalibrationSample> samples = DrawSamples(truth, 72);
   const ReliabilityModel fit = FitReliabilityModel(samples, ReliabilityModel{}, 1e-6);
   for (int i = 0; i < ReliabilityModel::kFeatures; ++i)
     EXPECT_GE(ReliabilityModel::kSigns[i] * fit.weights[i], 0.0) << ReliabilityFeatures::Name(i);

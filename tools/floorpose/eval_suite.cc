@@ -25,6 +25,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The mean of a non-empty v.
+double Mean(const std::vector<double>& v) {
+  double sum = 0;
+  for (double x : v) sum += x;
+  return sum / static_cast<double>(v.size());
+}
+
 struct SuiteOptions {
   std::vector<std::string> plans;  // files or directories (searched for *.geojson)
   int seeds = 3;
@@ -190,9 +197,7 @@ int RunSuite(const SuiteOptions& o) {
         md << " - |";
         continue;
       }
-      double sum = 0;
-      for (double v : it->second) sum += v;
-      md << " " << sum / static_cast<double>(it->second.size()) << " |";
+      md << " " << Mean(it->second) << " |";
     }
     md << "\n";
   }
@@ -241,10 +246,7 @@ int RunSuite(const SuiteOptions& o) {
       if (key.second != scenario) continue;
       const auto mean_of = [&](const std::string& m) {
         auto it = methods.find(m);
-        if (it == methods.end() || it->second.empty()) return -1.0;
-        double total = 0;
-        for (double v : it->second) total += v;
-        return total / static_cast<double>(it->second.size());
+        return it == methods.end() || it->second.empty() ? -1.0 : Mean(it->second);
       };
       const double m = mean_of(first), best_fit = mean_of("best-fit");
       if (m < 0) continue;
@@ -267,11 +269,7 @@ int RunSuite(const SuiteOptions& o) {
       settled_above_max += r.settled_max_error_m > max_target;
     }
     size_t settled_above = 0;
-    for (const auto& [plan, means] : settled) {
-      double total = 0;
-      for (double v : means) total += v;
-      settled_above += total / static_cast<double>(means.size()) > mean_target;
-    }
+    for (const auto& [plan, means] : settled) settled_above += Mean(means) > mean_target;
     if (!cells) continue;
     md << "| " << scenario << " | " << sum / static_cast<double>(cells) << " | " << worst << " | "
        << above << " of " << cells << " | " << above_max << " | " << diverged << " | "

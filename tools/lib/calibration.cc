@@ -49,14 +49,9 @@ ReliabilityModel FitReliabilityModel(const std::vector<CalibrationSample>& sampl
     }
     // Projected Newton: a weight held at 0 by its sign stays there unless the gradient
     // pulls it the allowed way; the others take the Newton step and are clipped at 0.
-    std::array<bool, kF + 1> free{};
-    free[0] = true;
     for (int i = 1; i <= kF; ++i) {
       const int sign = ReliabilityModel::kSigns[i - 1];
-      free[i] = sign * w(i) > 0 || -sign * g(i) > 0;
-    }
-    for (int i = 0; i <= kF; ++i) {
-      if (free[i]) continue;
+      if (sign * w(i) > 0 || -sign * g(i) > 0) continue;  // free
       H.row(i).setZero();
       H.col(i).setZero();
       H(i, i) = 1.0;
@@ -64,9 +59,10 @@ ReliabilityModel FitReliabilityModel(const std::vector<CalibrationSample>& sampl
     }
     const Vec step = H.ldlt().solve(g);
     w -= step;
-    for (int i = 1; i <= kF; ++i)
-      w(i) =
-          ReliabilityModel::kSigns[i - 1] * std::max(0.0, ReliabilityModel::kSigns[i - 1] * w(i));
+    for (int i = 1; i <= kF; ++i) {
+      const int sign = ReliabilityModel::kSigns[i - 1];
+      w(i) = sign * std::max(0.0, sign * w(i));
+    }
     if (step.norm() < 1e-8) break;
   }
   // Back to raw features.
