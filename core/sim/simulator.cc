@@ -39,6 +39,7 @@ struct Surface {
   int nu = 1, nv = 1;
   Eigen::Vector2d centre;  // horizontal bounding circle, to skip far surfaces quickly
   double radius = 0.0;
+  int segment = -1;  // the plan wall it is, or -1 (not on the plan)
 };
 
 Surface MakeSurface(const Eigen::Vector3d& origin, const Eigen::Vector3d& u_edge,
@@ -317,6 +318,7 @@ std::vector<Surface> RealSurfaces(const FloorPlan& plan, const Reality& reality,
     if (!reality.plan_wall_present[i] || reality.plan_wall_glass[i] || s.Length() < 1e-3) continue;
     out.push_back(MakeSurface({s.a.x(), s.a.y(), 0.0}, {s.b.x() - s.a.x(), s.b.y() - s.a.y(), 0.0},
                               up, patch_m));
+    out.back().segment = static_cast<int>(i);
   }
   for (const Reality::Prism& p : reality.extras) {
     const auto& f = p.footprint;
@@ -631,6 +633,7 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
   // The sensor and the mesh.
   struct Chunk {
     std::set<PatchKey> seen;
+    std::set<PatchKey> meshed;  // the patches in the mesh the headset has now
     bool live = false, dirty = false;
     double emitted_s = 0.0;
     uint64_t id = 0;
@@ -643,6 +646,33 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
   const double ceiling = reality.ceiling_m;
   const double eye = o.eye_height_m;
   std::vector<size_t> near;
+  // The wall pick is a gaze hit on the mesh (thesis section 6.3.3): the first pose from
+  // pick_time_s on with a plan wall in the headset's mesh within sensor range; the wall
+  // patch nearest the wearer is the one picked.
+  const size_t earliest_pick =
+      std::min(n - 1, static_cast<size_t>(std::llround(o.pick_time_s / dt)));
+  struct MeshedWall {
+    size_t step = 0;
+    int segment = -1;
+    Eigen::Vector2d point;
+  };
+  std::optional<MeshedWall> picked;
+  auto try_pick = [&](size_t i) {
+    if (picked || i < earliest_pick) return;
+    double nearest = o.max_range_m;
+    for (const auto& [key, chunk] : chunks)
+      for (const auto& [surface, iu, iv] : chunk.meshed) {
+        if (surface < 0 || surfaces[surface].segment < 0) continue;
+        const Surface& f = surfaces[surface];
+        const Eigen::Vector2d c =
+            (f.origin + (iu + 0.5) * f.u_len / f.nu * f.u + (iv + 0.5) * f.v_len / f.nv * f.v)
+                .head<2>();
+        const double d = (c - head[i].position).norm();
+        if (d > nearest) continue;
+        nearest = d;
+        picked = MeshedWall{i, f.segment, c};
+      }
+  };
   for (size_t i = 0; i < n && o.mesh; ++i) {
     SimulatedStep& step = sim.steps[i];
     const Eigen::Vector3d eye_at(head[i].position.x(), head[i].position.y(), eye);
@@ -697,7 +727,10 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
       if (chunk.seen.insert(key).second) chunk.dirty = true;
     }
 
-    if (i % o.poses_per_mesh_tick != 0) continue;
+    if (i % o.poses_per_mesh_tick != 0) {
+      try_pick(i);
+      continue;
+    }
     const double now_s = i * dt;
     const Se2& T = step.T_slam_plan;
     for (auto& [key, chunk] : chunks) {
@@ -713,6 +746,7 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
           ++sim.counts.removed;
           chunk.live = false;
           chunk.seen.clear();
+          chunk.meshed.clear();
         }
         continue;
       }
@@ -724,6 +758,7 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
       chunk.live = true;
       chunk.dirty = false;
       chunk.emitted_s = now_s;
+      chunk.meshed = chunk.seen;
       // Every patch seen so far, re-meshed with fresh noise in today's SLAM frame.
       auto vertex = [&](const Eigen::Vector3d& p) {
         const Eigen::Vector3d noisy =
@@ -767,18 +802,27 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
       sim.counts.triangles += mesh.triangles.size() / 3;
       step.meshes.push_back(std::move(mesh));
     }
+    try_pick(i);
   }
 
-  // The wall pick (thesis section 6.3.4), made while scanning at the start: the plan side is
-  // the true nearest visible wall; the headset side is chosen so that AlignFromWallPick
-  // gives the truth composed with a random error of up to 9 degrees and 2.5 m about the
-  // wearer (thesis table 7.1), an error of the pick as a whole.
-  sim.pick_step = std::min(n - 1, static_cast<size_t>(std::llround(o.pick_time_s / dt)));
+  // The wall pick (thesis section 6.3.4): the plan side is the meshed wall picked above (or,
+  // without a mesh or a meshed wall, the true nearest visible wall at pick_time_s); the
+  // headset side is chosen so that AlignFromWallPick gives the truth composed with a random
+  // error of up to 9 degrees and 2.5 m about the wearer (thesis table 7.1), an error of the
+  // pick as a whole.
+  sim.pick_step = picked ? picked->step : earliest_pick;
   {
     const SimulatedStep& at = sim.steps[sim.pick_step];
     const Eigen::Vector2d wearer = at.true_plan.position;
     double nearest = 1e300;
-    for (size_t i = 0; i < plan.segments.size(); ++i) {
+    if (picked) {
+      const Segment& s = plan.segments[picked->segment];
+      nearest = (picked->point - wearer).norm();
+      sim.pick.plan_point = ClosestPointOnSegment(s, picked->point);
+      sim.pick.plan_normal = s.Normal();
+      if (sim.pick.plan_normal.dot(wearer - sim.pick.plan_point) < 0) sim.pick.plan_normal *= -1.0;
+    }
+    for (size_t i = 0; i < plan.segments.size() && !picked; ++i) {
       if (!reality.plan_wall_present[i] || reality.plan_wall_glass[i]) continue;
       const Eigen::Vector2d c = ClosestPointOnSegment(plan.segments[i], wearer);
       if ((c - wearer).norm() >= nearest) continue;
@@ -852,7 +896,9 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
                  100.0 * (scale - 1.0), bias / kDeg) +
           Format("heading walk %.4f rad/sqrt(m), yaw scale error %+.2f%%. ",
                  k * o.heading_walk_rad_per_sqrt_m, 100.0 * (yaw_scale - 1.0));
-  text += Format("Wall pick error: %.1f deg, %.2f m about the wearer.", angle_deg,
+  text += Format("Wall pick at %.1f s", sim.pick_step * dt);
+  if (o.mesh && !picked) text += " (no plan wall ever meshed: an unseen one)";
+  text += Format(", error: %.1f deg, %.2f m about the wearer.", angle_deg,
                  (sim.pick_error * sim.steps[sim.pick_step].true_plan.position -
                   sim.steps[sim.pick_step].true_plan.position)
                      .norm());

@@ -20,8 +20,9 @@
 //   a few hundred metres end about 1% of the distance off and the best SE(2) fit of the
 //   whole walk leaves about 0.8 m mean error (Huebner et al. 2020: 2.4 m over 287 m;
 //   thesis table 7.2: 0.79 m).
-// - The wall pick (initial alignment) is off by up to 9 degrees and 2.5 m (thesis table
-//   7.1).
+// - The wall pick (initial alignment) is a gaze hit on a wall in the mesh (thesis section
+//   6.3.3), so it waits until one is meshed within sensor range; it is off by up to 9
+//   degrees and 2.5 m (thesis table 7.1).
 //
 // Deterministic: the same plan, options and seed give the same output, bit for bit
 // (SplitMix64 only, no std distributions, ordered containers only; only the platform's
@@ -112,8 +113,10 @@ struct SimulatorOptions {
   double position_walk_m_per_sqrt_m = 0.03;
   double jitter_m = 0.01, jitter_rad = 0.002;
 
-  // The wall pick: done at this time, off by a uniform angle up to max_pick_error_rad and
-  // a uniform offset up to max_pick_offset_m about the wearer (thesis table 7.1).
+  // The wall pick: at the first pose from this time on with a plan wall in the mesh within
+  // max_range_m (the wall patch nearest the wearer is picked); off by a uniform angle up to
+  // max_pick_error_rad and a uniform offset up to max_pick_offset_m about the wearer
+  // (thesis table 7.1). Without a mesh, at this time, on the nearest visible plan wall.
   double pick_time_s = 3.0;
   double max_pick_error_rad = 9.0 * M_PI / 180.0;
   double max_pick_offset_m = 2.5;

@@ -424,6 +424,37 @@ TEST(SimulatorTest, WallPickIsOffAsTable71Allows) {
   EXPECT_GT(largest_offset, 1.5);
 }
 
+// Thesis section 6.3.3: the headset side of a pick is a gaze hit on the spatial mesh, so
+// the picked wall is in the mesh the headset has at the pick, even where the walk starts
+// far from every wall (hall).
+TEST(SimulatorTest, WallPickIsOnAWallInTheMeshAtThePick) {
+  const FloorPlan plan = SyntheticOffice();
+  for (const Scenario scenario : {Scenario::kCorridor, Scenario::kHall, Scenario::kMismatch})
+    for (uint64_t seed = 1; seed <= 4; ++seed) {
+      SCOPED_TRACE(std::string(ToString(scenario)) + " seed " + std::to_string(seed));
+      const SimulatorOptions o = Options(scenario, seed, 60);
+      const Simulation sim = Simulate(plan, o);
+      ASSERT_TRUE(sim.ok()) << sim.error;
+      EXPECT_GE(sim.pick_step, static_cast<size_t>(std::llround(o.pick_time_s / o.pose_period_s)));
+      std::map<uint64_t, const SimMesh*> live;  // the headset's mesh right after the pick
+      for (size_t i = 0; i <= sim.pick_step; ++i)
+        for (const SimMesh& m : sim.steps[i].meshes) {
+          if (m.change == MeshChange::kRemoved)
+            live.erase(m.id);
+          else
+            live[m.id] = &m;
+        }
+      const SimulatedStep& at = sim.steps[sim.pick_step];
+      const Eigen::Vector2d picked = at.T_slam_plan * sim.pick.plan_point;  // truly, in slam
+      double nearest = 1e300;
+      for (const auto& [id, m] : live)
+        for (const Eigen::Vector3f& v : m->vertices_slam)
+          nearest = std::min(nearest, (v.head<2>().cast<double>() - picked).norm());
+      EXPECT_LT(nearest, 0.5);  // a patch is at most 0.5 m wide
+      EXPECT_LT((sim.pick.plan_point - at.true_plan.position).norm(), o.max_range_m + 0.5);
+    }
+}
+
 TEST(SimulatorTest, TenMarkersAlongTheWalk) {
   const Simulation sim = Simulate(SyntheticOffice(), Options(Scenario::kOffice, 9, 90, false));
   ASSERT_TRUE(sim.ok()) << sim.error;
