@@ -541,7 +541,8 @@ std::vector<Se2> CorrelativeSearch(const std::vector<Eigen::Vector2d>& points,
   std::vector<Candidate> all;
   std::vector<Eigen::Vector2d> rotated(sample.size());
   for (int ir = -nr; ir <= nr; ++ir) {
-    const Se2 rotation = AboutCentre(ir * kStepRad, centroid, Eigen::Vector2d::Zero());
+    const Se2 rotation = AboutCentre(ir * kStepRad, options.search_pivot.value_or(centroid),
+                                     Eigen::Vector2d::Zero());
     for (size_t i = 0; i < sample.size(); ++i) rotated[i] = rotation * sample[i];
     for (int ix = -nt; ix <= nt; ++ix) {
       for (int iy = -nt; iy <= nt; ++iy) {
@@ -647,10 +648,12 @@ RegistrationResult Register(const std::vector<Eigen::Vector2d>& points,
   std::stable_sort(fits.begin(), fits.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
   // Places that score about the same are told apart by the initial guess: the nearest
-  // at the cloud's centre wins (a wall seen alone fits every place along it equally).
+  // at the search's pivot, else at the cloud's centre, wins (a wall seen alone fits every
+  // place along it equally).
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
   for (const Eigen::Vector2d& p : *use_points) centre += p;
   centre /= static_cast<double>(std::max<size_t>(1, use_points->size()));
+  if (options.search_pivot) centre = initial.Inverse() * *options.search_pivot;
   if (options.search_tie_ratio > 0) {
     const Eigen::Vector2d guess = initial * centre;
     size_t nearest = 0;

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -95,6 +96,10 @@ struct RegistrationOptions {
   // when the guess can be metres off (a wall pick); 0 skips it.
   double search_window_m = 0.0;
   double search_window_rad = 0.0;
+  // Rotations of the search turn about this plan point: where the guess is known best (a
+  // wall pick's point, whose error a heading error swings into metres at the wearer).
+  // Without it, about the cloud's centroid.
+  std::optional<Eigen::Vector2d> search_pivot;
   uint32_t search_candidates = 4;
   // Refined places scoring within this ratio of the best (0.9: 10% worse) are told apart
   // by the initial guess: the nearest wins. 0 = the best score always wins.

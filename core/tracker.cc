@@ -22,7 +22,8 @@ std::optional<Se2> AlignFromWallPick(const WallPick& pick) {
   return T;
 }
 
-RegistrationOptions ToRegistrationOptions(const TrackerOptions& t, AlignmentSource from) {
+RegistrationOptions ToRegistrationOptions(const TrackerOptions& t, AlignmentSource from,
+                                          const std::optional<Eigen::Vector2d>& pivot) {
   RegistrationOptions r;
   r.method = t.method;
   r.icp = t.icp;
@@ -33,6 +34,7 @@ RegistrationOptions ToRegistrationOptions(const TrackerOptions& t, AlignmentSour
     r.search_window_m = t.pick_search_m;
     r.search_window_rad = t.pick_search_rad;
     r.search_tie_ratio = t.pick_tie_ratio;
+    r.search_pivot = pivot;
   }
   return r;
 }
@@ -73,6 +75,7 @@ void Tracker::SetAlignment(const Se2& T, AlignmentSource source, int64_t stamp_n
     // A pick or a flip: start the filter over, as uncertain as a pick is.
     const Eigen::Vector2d pivot = pick_plan_point_.value_or(
         last_plan_position_.value_or(T * last_slam_position_.value_or(Eigen::Vector2d::Zero())));
+    start_pivot_ = pivot;
     const double sm = options_.pick_sigma_m, sr = options_.pick_sigma_rad;
     filter_ = AlignmentFilter(options_.filter);
     filter_.Reset(T, Eigen::Vector3d(sr * sr, sm * sm, sm * sm).asDiagonal(), pivot);
@@ -152,11 +155,12 @@ bool Tracker::FirstPlaceClear(const RegistrationResult& result) const {
   constexpr double kMargin = 1.25;
   return result.ambiguity <= options_.clear_ambiguity &&
          Within(result.T_plan_slam, alignment_.T_plan_slam, kMargin * options_.pick_search_m,
-                kMargin * options_.pick_search_rad);
+                kMargin * options_.pick_search_rad, start_pivot_);
 }
 
-bool Tracker::Within(const Se2& T, const Se2& other, double m, double rad) const {
-  const Eigen::Vector3d apart = Difference(T, other, filter_.pivot());
+bool Tracker::Within(const Se2& T, const Se2& other, double m, double rad,
+                     const std::optional<Eigen::Vector2d>& at) const {
+  const Eigen::Vector3d apart = Difference(T, other, at.value_or(filter_.pivot()));
   return apart.tail<2>().norm() <= m && std::abs(apart(0)) <= rad;
 }
 

@@ -87,8 +87,9 @@ enum class TrackState { kWaitingForPlan, kWaitingForAlignment, kTracking, kDegra
 enum class AlignmentSource { kNone, kWallPick, kFlip, kRegistration };
 
 // The registration options for a run starting from an alignment of the given source:
-// after a pick or flip, with the correlative search.
-RegistrationOptions ToRegistrationOptions(const TrackerOptions& options, AlignmentSource from);
+// after a pick or flip, with the correlative search, its rotations about `pivot` (plan).
+RegistrationOptions ToRegistrationOptions(const TrackerOptions& options, AlignmentSource from,
+                                          const std::optional<Eigen::Vector2d>& pivot = {});
 
 // What the tracker knows about the alignment in use at a pose: the inputs of the
 // reliability model.
@@ -143,6 +144,11 @@ class Tracker {
   const AlignmentState& alignment() const { return alignment_; }
   const std::shared_ptr<const ClosestWallIndex>& index() const { return index_; }
   const TrackerOptions& options() const { return options_; }
+  // The registration options for the next run (after a pick or flip: the correlative
+  // search, its rotations about the pick's point).
+  RegistrationOptions NextRegistrationOptions() const {
+    return ToRegistrationOptions(options_, alignment_.source, start_pivot_);
+  }
 
   // Returns an error message, or empty on success.
   std::string ApplyWallPick(const WallPick& pick, int64_t stamp_ns);
@@ -188,10 +194,11 @@ class Tracker {
   // of its points fit), or empty.
   std::string FirstRegistrationDoubt(const RegistrationResult& result) const;
   // Whether a first result after a pick or flip that raises no doubt is clear enough to
-  // take at once: unambiguous, and within the pick search of the pick.
+  // take at once: unambiguous, and within the pick search of the pick at the pick's point.
   bool FirstPlaceClear(const RegistrationResult& result) const;
-  // Whether T lands within m metres at the wearer and rad radians of other.
-  bool Within(const Se2& T, const Se2& other, double m, double rad) const;
+  // Whether T lands within m metres at `at` (default: the wearer) and rad radians of other.
+  bool Within(const Se2& T, const Se2& other, double m, double rad,
+              const std::optional<Eigen::Vector2d>& at = {}) const;
   // Whether T lands within confirm_m / confirm_rad of an earlier result at the wearer.
   bool Agrees(const Se2& T, const std::optional<Se2>& earlier) const;
   // Whether the results since this place was first seen kept landing on it (confirm_m,
@@ -208,6 +215,7 @@ class Tracker {
   AlignmentState alignment_;
   uint64_t next_version_ = 1;
   std::optional<Eigen::Vector2d> pick_plan_point_;
+  Eigen::Vector2d start_pivot_ = Eigen::Vector2d::Zero();  // of the latest pick or flip
   std::optional<Eigen::Vector2d> last_plan_position_;
   std::optional<Se2> pending_jump_;   // a gated result waiting for later ones to agree
   double pending_walk_m_ = 0;         // walked since it was first seen

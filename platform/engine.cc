@@ -364,7 +364,7 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
   }
   last_run_generation_ = store_.generation();
   job.index = tracker_.index();
-  job.options = ToRegistrationOptions(options, tracker_.alignment().source);
+  job.options = tracker_.NextRegistrationOptions();
   job.initial = tracker_.alignment().T_plan_slam;
   job.version = tracker_.alignment().version;
   job.stamp_ns = latest_stamp_ns_;

@@ -447,5 +447,32 @@ TEST(RegistrationAmbiguityTest, WholeRoomIsNotAmbiguous) {
   EXPECT_LT(r.ambiguity, 0.3);
 }
 
+// A wall pick 65 m back with its heading 8 degrees off puts the room seen here 9 m off,
+// onto the identical room next door: a search turning about the cloud finds that room,
+// one turning about the pick's point (where its error is small) finds the right one.
+TEST(RegistrationSearchTest, TurnsAboutThePivotWhereTheGuessIsKnownBest) {
+  const FloorPlan room = testing::AsymmetricRoom();  // 10 x 7 m
+  std::vector<Segment> rooms;
+  for (int k = -2; k <= 2; ++k)
+    for (const Segment& s : room.segments)
+      rooms.push_back({s.a + Eigen::Vector2d(0, 9.0 * k), s.b + Eigen::Vector2d(0, 9.0 * k)});
+  const FloorPlanParse plan = MakeFloorPlan("rooms", rooms);
+  ASSERT_TRUE(plan.ok()) << plan.error;
+  const ClosestWallIndex index(plan.plan);
+  const std::vector<Eigen::Vector2d> points = SlamCloud(room, Se2{}, 0.02, 9);  // truth: identity
+  const Eigen::Vector2d pick(69.7, 3.5);
+  const Se2 guess = Se2{0.0, pick} * Se2{Deg(8), {0, 0}} * Se2{0.0, -pick};
+  RegistrationOptions options;
+  options.search_window_m = 2.5;
+  options.search_window_rad = Deg(10);
+  options.search_tie_ratio = 0.9;  // as the tracker: equal fits told apart by the guess
+  const RegistrationResult about_cloud = Register(points, {}, index, guess, options);
+  EXPECT_NEAR(about_cloud.T_plan_slam.t.y(), -9.0, 0.1);  // the room next door
+  options.search_pivot = pick;
+  const RegistrationResult about_pick = Register(points, {}, index, guess, options);
+  ASSERT_TRUE(about_pick.converged) << about_pick.reason;
+  EXPECT_THAT(about_pick.T_plan_slam, IsNearlySe2(Se2{}, 0.02, Deg(0.2)));
+}
+
 }  // namespace
 }  // namespace floorpose
