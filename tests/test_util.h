@@ -6,6 +6,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -116,18 +118,24 @@ inline std::string ReadText(const std::filesystem::path& path) {
   return ss.str();
 }
 
-// A fresh directory per test under ::testing::TempDir(), removed afterwards.
+// A fresh directory per test (and process) under ::testing::TempDir(), removed afterwards,
+// or kept with a line saying where when the test failed (daemon logs, recordings).
 class TempDirTest : public ::testing::Test {
  protected:
   void SetUp() override {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string("floorpose_") + info->test_suite_name() + "_" + info->name();
+    std::string name = std::string("floorpose_") + info->test_suite_name() + "_" + info->name() +
+                       "_" + std::to_string(getpid());
     std::replace(name.begin(), name.end(), '/', '_');  // parameterised test names
     dir_ = std::filesystem::path(::testing::TempDir()) / name;
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
   }
   void TearDown() override {
+    if (HasFailure()) {
+      std::cerr << "test files kept in " << dir_.string() << "\n";
+      return;
+    }
     std::error_code ec;
     std::filesystem::remove_all(dir_, ec);
   }

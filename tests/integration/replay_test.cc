@@ -9,6 +9,7 @@
 #include "platform/config.h"
 #include "platform/dds.h"
 #include "tests/daemon_test_util.h"
+#include "tests/test_util.h"
 #include "tools/lib/evaluation.h"
 #include "tools/lib/headset_link.h"
 #include "tools/lib/process.h"
@@ -19,9 +20,10 @@ namespace {
 namespace fs = std::filesystem;
 using std::chrono::seconds;
 
-TEST(ReplayTest, DaemonGivesTheSamePlanPosesAsEval) {
-  const fs::path dir = fs::path(::testing::TempDir()) / ("replay-" + std::to_string(getpid()));
-  fs::create_directories(dir);
+class ReplayTest : public testing::TempDirTest {};
+
+TEST_F(ReplayTest, DaemonGivesTheSamePlanPosesAsEval) {
+  const fs::path& dir = dir_;
   const std::string recording = (dir / "walk.rec").string();
   std::string error = testing::SimulateOfficeWalk(FLOORPOSE_DEMO_PLAN, 5, 60, recording);
   ASSERT_EQ(error, "");

@@ -11,6 +11,7 @@
 
 #include "platform/dds.h"
 #include "tests/daemon_test_util.h"
+#include "tests/test_util.h"
 #include "tools/lib/process.h"
 
 namespace floorpose {
@@ -19,9 +20,10 @@ namespace {
 namespace fs = std::filesystem;
 using std::chrono::seconds;
 
-TEST(FastDdsInterop, AnAppOfAnotherVendorFollowsTheProtocolDocument) {
-  const fs::path dir = fs::path(::testing::TempDir()) / ("fastdds-" + std::to_string(getpid()));
-  fs::remove_all(dir);
+class FastDdsInterop : public testing::TempDirTest {};
+
+TEST_F(FastDdsInterop, AnAppOfAnotherVendorFollowsTheProtocolDocument) {
+  const fs::path& dir = dir_;
   fs::create_directories(dir / "plans");
   fs::copy_file(FLOORPOSE_DEMO_PLAN, dir / "plans" / "office.geojson");
 
