@@ -650,11 +650,14 @@ RegistrationResult Register(const std::vector<Eigen::Vector2d>& points,
   // Places that score about the same are told apart by the initial guess: the nearest
   // at the search's pivot, else at the cloud's centre, wins (a wall seen alone fits every
   // place along it equally).
-  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-  for (const Eigen::Vector2d& p : *use_points) centre += p;
-  centre /= static_cast<double>(std::max<size_t>(1, use_points->size()));
-  if (options.search_pivot) centre = initial.Inverse() * *options.search_pivot;
   if (options.search_tie_ratio > 0) {
+    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+    if (options.search_pivot) {
+      centre = initial.Inverse() * *options.search_pivot;
+    } else {
+      for (const Eigen::Vector2d& p : *use_points) centre += p;
+      centre /= static_cast<double>(std::max<size_t>(1, use_points->size()));
+    }
     const Eigen::Vector2d guess = initial * centre;
     size_t nearest = 0;
     for (size_t i = 1; i < fits.size(); ++i) {

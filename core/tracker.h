@@ -89,7 +89,7 @@ enum class AlignmentSource { kNone, kWallPick, kFlip, kRegistration };
 // The registration options for a run starting from an alignment of the given source:
 // after a pick or flip, with the correlative search, its rotations about `pivot` (plan).
 RegistrationOptions ToRegistrationOptions(const TrackerOptions& options, AlignmentSource from,
-                                          const std::optional<Eigen::Vector2d>& pivot = {});
+                                          const std::optional<Eigen::Vector2d>& pivot);
 
 // What the tracker knows about the alignment in use at a pose: the inputs of the
 // reliability model.

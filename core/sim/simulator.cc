@@ -40,6 +40,11 @@ struct Surface {
   Eigen::Vector2d centre;  // horizontal bounding circle, to skip far surfaces quickly
   double radius = 0.0;
   int segment = -1;  // the plan wall it is, or -1 (not on the plan)
+
+  // The horizontal centre of patch (iu, iv).
+  Eigen::Vector2d PatchCentre(int iu, int iv) const {
+    return (origin + (iu + 0.5) * u_len / nu * u + (iv + 0.5) * v_len / nv * v).head<2>();
+  }
 };
 
 Surface MakeSurface(const Eigen::Vector3d& origin, const Eigen::Vector3d& u_edge,
@@ -663,14 +668,11 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
     for (const auto& [key, chunk] : chunks)
       for (const auto& [surface, iu, iv] : chunk.meshed) {
         if (surface < 0 || surfaces[surface].segment < 0) continue;
-        const Surface& f = surfaces[surface];
-        const Eigen::Vector2d c =
-            (f.origin + (iu + 0.5) * f.u_len / f.nu * f.u + (iv + 0.5) * f.v_len / f.nv * f.v)
-                .head<2>();
+        const Eigen::Vector2d c = surfaces[surface].PatchCentre(iu, iv);
         const double d = (c - head[i].position).norm();
         if (d > nearest) continue;
         nearest = d;
-        picked = MeshedWall{i, f.segment, c};
+        picked = MeshedWall{i, surfaces[surface].segment, c};
       }
   };
   for (size_t i = 0; i < n && o.mesh; ++i) {
@@ -720,8 +722,7 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
         const int iu = std::clamp(static_cast<int>(q.dot(f.u) / f.u_len * f.nu), 0, f.nu - 1);
         const int iv = std::clamp(static_cast<int>(q.dot(f.v) / f.v_len * f.nv), 0, f.nv - 1);
         key = {hit, iu, iv};
-        centre = (f.origin + (iu + 0.5) * f.u_len / f.nu * f.u + (iv + 0.5) * f.v_len / f.nv * f.v)
-                     .head<2>();
+        centre = f.PatchCentre(iu, iv);
       }
       Chunk& chunk = chunks[chunk_of(centre)];
       if (chunk.seen.insert(key).second) chunk.dirty = true;
@@ -814,30 +815,30 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
   {
     const SimulatedStep& at = sim.steps[sim.pick_step];
     const Eigen::Vector2d wearer = at.true_plan.position;
-    double nearest = 1e300;
     if (picked) {
       const Segment& s = plan.segments[picked->segment];
-      nearest = (picked->point - wearer).norm();
       sim.pick.plan_point = ClosestPointOnSegment(s, picked->point);
       sim.pick.plan_normal = s.Normal();
       if (sim.pick.plan_normal.dot(wearer - sim.pick.plan_point) < 0) sim.pick.plan_normal *= -1.0;
-    }
-    for (size_t i = 0; i < plan.segments.size() && !picked; ++i) {
-      if (!reality.plan_wall_present[i] || reality.plan_wall_glass[i]) continue;
-      const Eigen::Vector2d c = ClosestPointOnSegment(plan.segments[i], wearer);
-      if ((c - wearer).norm() >= nearest) continue;
-      nearest = (c - wearer).norm();
-      sim.pick.plan_point = c;
-      sim.pick.plan_normal = plan.segments[i].Normal();
-      if (sim.pick.plan_normal.dot(wearer - c) < 0) sim.pick.plan_normal *= -1.0;
-    }
-    if (nearest > 1e299) {  // every wall is glass or absent: pick the nearest plan wall
-      for (const Segment& s : plan.segments) {
-        const Eigen::Vector2d c = ClosestPointOnSegment(s, wearer);
+    } else {
+      double nearest = 1e300;
+      for (size_t i = 0; i < plan.segments.size(); ++i) {
+        if (!reality.plan_wall_present[i] || reality.plan_wall_glass[i]) continue;
+        const Eigen::Vector2d c = ClosestPointOnSegment(plan.segments[i], wearer);
         if ((c - wearer).norm() >= nearest) continue;
         nearest = (c - wearer).norm();
         sim.pick.plan_point = c;
-        sim.pick.plan_normal = s.Normal();
+        sim.pick.plan_normal = plan.segments[i].Normal();
+        if (sim.pick.plan_normal.dot(wearer - c) < 0) sim.pick.plan_normal *= -1.0;
+      }
+      if (nearest > 1e299) {  // every wall is glass or absent: pick the nearest plan wall
+        for (const Segment& s : plan.segments) {
+          const Eigen::Vector2d c = ClosestPointOnSegment(s, wearer);
+          if ((c - wearer).norm() >= nearest) continue;
+          nearest = (c - wearer).norm();
+          sim.pick.plan_point = c;
+          sim.pick.plan_normal = s.Normal();
+        }
       }
     }
     const double angle = pick_rng.Uniform(-o.max_pick_error_rad, o.max_pick_error_rad);
