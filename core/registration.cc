@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -540,6 +541,10 @@ std::vector<Se2> CorrelativeSearch(const std::vector<Eigen::Vector2d>& points,
   };
   std::vector<Candidate> all;
   std::vector<Eigen::Vector2d> rotated(sample.size());
+  std::optional<Eigen::Matrix3d> information;
+  if (options.search_covariance && options.search_pivot)
+    information = options.search_covariance->inverse();
+  const double max_d2 = options.search_max_sigmas * options.search_max_sigmas;
   for (int ir = -nr; ir <= nr; ++ir) {
     const Se2 rotation = AboutCentre(ir * kStepRad, options.search_pivot.value_or(centroid),
                                      Eigen::Vector2d::Zero());
@@ -547,6 +552,10 @@ std::vector<Se2> CorrelativeSearch(const std::vector<Eigen::Vector2d>& points,
     for (int ix = -nt; ix <= nt; ++ix) {
       for (int iy = -nt; iy <= nt; ++iy) {
         const Eigen::Vector2d t(ix * kStepM, iy * kStepM);
+        if (information) {
+          const Eigen::Vector3d delta(ir * kStepRad, t.x(), t.y());
+          if (delta.dot(*information * delta) > max_d2) continue;
+        }
         double score = 0;
         for (const Eigen::Vector2d& p : rotated) {
           const auto hit = index.Query(p + t);

@@ -39,6 +39,31 @@ RegistrationOptions ToRegistrationOptions(const TrackerOptions& t, AlignmentSour
   return r;
 }
 
+AlignmentFilter Tracker::FilterAtWearer() const {
+  AlignmentFilter at = filter_;
+  if (last_slam_position_)
+    at.Predict(alignment_.T_plan_slam * *last_slam_position_, walked_since_predict_m_);
+  return at;
+}
+
+RegistrationOptions Tracker::NextRegistrationOptions() const {
+  if (alignment_.source != AlignmentSource::kRegistration)
+    return ToRegistrationOptions(options_, alignment_.source, start_pivot_);
+  RegistrationOptions r = ToRegistrationOptions(options_, alignment_.source, std::nullopt);
+  if (options_.search_sigmas <= 0 || !last_slam_position_) return r;
+  const AlignmentFilter at = FilterAtWearer();
+  const double m = std::min(options_.pick_search_m, options_.search_sigmas * at.position_sigma_m());
+  if (m < options_.search_min_m) return r;
+  r.search_window_m = m;
+  r.search_window_rad =
+      std::min(options_.pick_search_rad, options_.search_sigmas * at.heading_sigma_rad());
+  r.search_tie_ratio = options_.search_tie_ratio;
+  r.search_pivot = at.pivot();
+  r.search_covariance = at.P();
+  r.search_max_sigmas = options_.search_sigmas;
+  return r;
+}
+
 void Tracker::SetPlan(std::shared_ptr<const ClosestWallIndex> index) {
   index_ = std::move(index);
   Reset();
@@ -293,10 +318,7 @@ ReliabilityFeatures Tracker::CurrentFeatures() const {
     f.inlier_ratio = static_cast<double>(current_fit_->inliers) / current_fit_->points;
     f.inlier_rmse_m = current_fit_->inlier_rmse;
   }
-  // The filter's uncertainty moved to the wearer, with the drift walked since.
-  AlignmentFilter at_wearer = filter_;
-  if (last_slam_position_)
-    at_wearer.Predict(alignment_.T_plan_slam * *last_slam_position_, walked_since_predict_m_);
+  const AlignmentFilter at_wearer = FilterAtWearer();
   f.position_sigma_m = at_wearer.position_sigma_m();
   f.heading_sigma_deg = at_wearer.heading_sigma_rad() * 180 / M_PI;
   f.weakest_direction = std::min(weakest_direction_, 10.0);

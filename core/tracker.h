@@ -44,12 +44,15 @@ struct TrackerOptions {
   HoughOptions hough;
   AlignmentFilterOptions filter;
   ReliabilityModel reliability;
-  double wall_buffer_m = 0.0;                // see RegistrationOptions
-  double clip_margin_m = 0.0;                // see RegistrationOptions
-  double pick_search_m = 2.5;                // correlative search after a pick or flip, metres
-  double pick_search_rad = 0.175;            // ...and radians
-  double pick_tie_ratio = 0.9;               // see RegistrationOptions::search_tie_ratio
-  double pick_sigma_m = 1.5;                 // uncertainty of a wall pick at its point, metres
+  double wall_buffer_m = 0.0;      // see RegistrationOptions
+  double clip_margin_m = 0.0;      // see RegistrationOptions
+  double pick_search_m = 2.5;      // correlative search after a pick or flip, metres
+  double pick_search_rad = 0.175;  // ...and radians
+  double pick_tie_ratio = 0.9;     // see RegistrationOptions::search_tie_ratio
+  double search_sigmas = 3.0;      // later runs search this many filter sigmas at the wearer...
+  double search_min_m = 1.5;       // ...when that reaches this far (at most the pick search)
+  double search_tie_ratio = 0.5;   // ...and tell places apart by nearness up to this ratio
+  double pick_sigma_m = 1.5;       // uncertainty of a wall pick at its point, metres
   double pick_sigma_rad = 5.0 * M_PI / 180;  // ...and of its heading
   double confirm_m = 0.5;                    // a gated result is taken when later ones land within
   double confirm_rad = 0.035;                // ...this of it...
@@ -144,11 +147,10 @@ class Tracker {
   const AlignmentState& alignment() const { return alignment_; }
   const std::shared_ptr<const ClosestWallIndex>& index() const { return index_; }
   const TrackerOptions& options() const { return options_; }
-  // The registration options for the next run (after a pick or flip: the correlative
-  // search, its rotations about the pick's point).
-  RegistrationOptions NextRegistrationOptions() const {
-    return ToRegistrationOptions(options_, alignment_.source, start_pivot_);
-  }
+  // The registration options for the next run: after a pick or flip, the correlative
+  // search with its rotations about the pick's point; later, a search as wide as the
+  // alignment is uncertain at the wearer (search_sigmas), when that is wide enough.
+  RegistrationOptions NextRegistrationOptions() const;
 
   // Returns an error message, or empty on success.
   std::string ApplyWallPick(const WallPick& pick, int64_t stamp_ns);
@@ -206,6 +208,8 @@ class Tracker {
   bool PlaceConfirmed(const RegistrationResult& result, double walk_m);
   // Moves the filter to the wearer, with the drift of the metres walked since.
   void PredictToWearer();
+  // The same on a copy: the uncertainty at the wearer now.
+  AlignmentFilter FilterAtWearer() const;
   // Clears what the registrations since the last pick told the filter and the
   // reliability features (a new pick or flip starts over).
   void ForgetRegistrations();

@@ -107,6 +107,12 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (!(c.registration().clip_margin_m() >= 0)) return "registration.clip_margin_m must be >= 0";
   if (!(c.registration().pick_tie_ratio() >= 0 && c.registration().pick_tie_ratio() <= 1))
     return "registration.pick_tie_ratio must be in [0, 1]";
+  if (!(c.registration().search_sigmas() >= 0 && std::isfinite(c.registration().search_sigmas())))
+    return "registration.search_sigmas must be >= 0";
+  if (!(c.registration().search_min_m() >= 0 && std::isfinite(c.registration().search_min_m())))
+    return "registration.search_min_m must be >= 0";
+  if (!(c.registration().search_tie_ratio() >= 0 && c.registration().search_tie_ratio() <= 1))
+    return "registration.search_tie_ratio must be in [0, 1]";
   if (!(c.icp().degeneracy_ratio() >= 0 && c.icp().degeneracy_ratio() < 1))
     return "icp.degeneracy_ratio must be in [0, 1)";
   const auto& k = c.tracking();
@@ -181,6 +187,9 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.pick_search_m = r.pick_search_m();
   t.pick_search_rad = r.pick_search_deg() * M_PI / 180.0;
   t.pick_tie_ratio = r.pick_tie_ratio();
+  t.search_sigmas = r.search_sigmas();
+  t.search_min_m = r.search_min_m();
+  t.search_tie_ratio = r.search_tie_ratio();
   t.local_meshes = r.meshes() == "local";
   t.hough.max_rotation_rad = r.hough_max_rotation_deg() * M_PI / 180.0;
   t.hough.bin_rad = r.hough_bin_deg() * M_PI / 180.0;

@@ -9,6 +9,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "core/alignment_filter.h"
 #include "core/random.h"
 #include "tests/test_util.h"
 
@@ -472,6 +473,40 @@ TEST(RegistrationSearchTest, TurnsAboutThePivotWhereTheGuessIsKnownBest) {
   const RegistrationResult about_pick = Register(points, {}, index, guess, options);
   ASSERT_TRUE(about_pick.converged) << about_pick.reason;
   EXPECT_THAT(about_pick.T_plan_slam, IsNearlySe2(Se2{}, 0.02, Deg(0.2)));
+}
+
+// A hall seen along one long wall and the foot of a cross wall: the guess is 2.4 m off
+// along the hall, where nothing pinned it, and well known across it. The plan has the
+// same corner again 2.4 m across the hall. With the guess's covariance the search looks
+// only along the hall (the ellipse) and finds the right corner; every candidate it
+// returns stays within the ellipse.
+TEST(RegistrationSearchTest, CovarianceKeepsTheSearchInsideItsEllipse) {
+  const std::vector<Segment> corner = {{{0, 0}, {20, 0}}, {{10, 0}, {10, 1.5}}};
+  std::vector<Segment> walls = corner;
+  for (const Segment& s : corner)
+    walls.push_back({s.a + Eigen::Vector2d(0, -2.4), s.b + Eigen::Vector2d(0, -2.4)});
+  const FloorPlanParse plan = MakeFloorPlan("halls", walls);
+  ASSERT_TRUE(plan.ok()) << plan.error;
+  const ClosestWallIndex index(plan.plan);
+  std::vector<Eigen::Vector2d> points;  // truth: identity; 6 m of wall and the cross wall
+  for (double x = 7; x <= 13; x += 0.05) points.emplace_back(x, 0);
+  for (double y = 0.05; y <= 1.5; y += 0.05) points.emplace_back(10, y);
+  const Se2 guess{0.0, {2.4, 0}};
+  RegistrationOptions options;
+  options.search_window_m = 2.5;
+  options.search_window_rad = Deg(3);
+  options.search_tie_ratio = 0.5;
+  options.search_pivot = Eigen::Vector2d(12.4, 0.5);  // the wearer, by the guess
+  // 1.5 m along the hall, 5 cm across it, a degree of heading.
+  options.search_covariance = Eigen::Vector3d(Deg(1) * Deg(1), 1.5 * 1.5, 0.05 * 0.05).asDiagonal();
+  options.search_max_sigmas = 3.0;
+  for (const Se2& start : CorrelativeSearch(points, index, guess, options)) {
+    const Eigen::Vector3d d = Difference(start, guess, *options.search_pivot);
+    EXPECT_LE(std::abs(d(2)), 3 * 0.05 + 1e-9) << "across the hall: " << d.transpose();
+  }
+  const RegistrationResult r = Register(points, {}, index, guess, options);
+  ASSERT_TRUE(r.converged) << r.reason;
+  EXPECT_THAT(r.T_plan_slam, IsNearlySe2(Se2{}, 0.02, Deg(0.2)));
 }
 
 }  // namespace

@@ -351,6 +351,40 @@ TEST_F(TrackerTest, PickThenIcpThenCorrectEndToEnd) {
   EXPECT_NEAR((tracker_.Correct(pose).pose.position - Eigen::Vector2d(5, 5)).norm(), 0.0, 0.02);
 }
 
+// After a pick the search covers the pick's error. Once registered on one wall only, the
+// direction along it is as uncertain as the pick left it: the next run searches along it
+// (with the filter's covariance). Once the whole room is fitted, no search.
+TEST_F(TrackerTest, LaterRunsSearchAsFarAsTheAlignmentIsUncertain) {
+  tracker_.SetPlan(index_);
+  // The pick is 1 m off along the bottom wall and 10 cm across it.
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(Se2{0.0, {1.0, 0.1}} * truth_, {2, 0}, {0, 1}), 1), "");
+  const Pose2 wearer{truth_.Inverse() * Eigen::Vector2d(2, 1.5), 0, 1.6};
+  tracker_.Correct(wearer);
+  const TrackerOptions& o = tracker_.options();
+  EXPECT_DOUBLE_EQ(tracker_.NextRegistrationOptions().search_window_m, o.pick_search_m);
+  std::vector<Eigen::Vector2d> bottom;  // the bottom wall, x 0 to 4 (the inner wall's foot)
+  for (double x = 0.0; x <= 3.9; x += 0.02)
+    bottom.push_back(truth_.Inverse() * Eigen::Vector2d(x, 0));
+  RegistrationResult along = ResultFor(truth_, bottom);
+  const Tracker::Decision d = tracker_.Offer(along, bottom, tracker_.alignment().version, 2);
+  ASSERT_TRUE(d.accepted) << d.reason;
+  tracker_.Correct(wearer);
+  const RegistrationOptions next = tracker_.NextRegistrationOptions();
+  ASSERT_TRUE(next.search_covariance.has_value());
+  EXPECT_DOUBLE_EQ(next.search_window_m, o.pick_search_m);  // 3 sigma of 1.5 m, capped
+  EXPECT_EQ(next.search_tie_ratio, o.search_tie_ratio);
+  const Eigen::Matrix3d& P = *next.search_covariance;
+  const Eigen::Vector2d along_wall = P.block<2, 2>(1, 1) * Eigen::Vector2d(1, 0);
+  EXPECT_GT(along_wall.x(), 1.0);                                   // along the wall: the pick's
+  EXPECT_LT(std::sqrt(P(2, 2)), o.search_min_m / o.search_sigmas);  // across: pinned
+  const auto room = Cloud();
+  ASSERT_TRUE(
+      tracker_.Offer(ResultFor(truth_, room), room, tracker_.alignment().version, 3).accepted);
+  tracker_.Correct(wearer);
+  EXPECT_EQ(tracker_.NextRegistrationOptions().search_window_m, 0.0);
+  EXPECT_FALSE(tracker_.NextRegistrationOptions().search_covariance.has_value());
+}
+
 TEST_F(TrackerTest, RegistrationDueFollowsPointsAndInjectedTime) {
   const TrackerOptions& o = tracker_.options();
   const int64_t s = 1'000'000'000;                                // one second in nanoseconds

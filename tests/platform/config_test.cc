@@ -65,6 +65,9 @@ TEST(ConfigTest, ProtoDefaultsMatchTheCoreDefaults) {
   EXPECT_EQ(t.first_inlier_ratio, core.first_inlier_ratio);
   EXPECT_EQ(t.clear_ambiguity, core.clear_ambiguity);
   EXPECT_EQ(t.pick_tie_ratio, core.pick_tie_ratio);
+  EXPECT_EQ(t.search_sigmas, core.search_sigmas);
+  EXPECT_EQ(t.search_min_m, core.search_min_m);
+  EXPECT_EQ(t.search_tie_ratio, core.search_tie_ratio);
   const WallExtractionOptions w = ToWallExtractionOptions(c);
   const WallExtractionOptions core_w;
   EXPECT_EQ(w.max_normal_up, core_w.max_normal_up);
@@ -139,6 +142,9 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"tracking { first_inlier_ratio: 1.1 }", "first_inlier_ratio"},
            Case{"tracking { clear_ambiguity: 0.8 }", "clear_ambiguity"},
            Case{"registration { pick_tie_ratio: -0.1 }", "pick_tie_ratio"},
+           Case{"registration { search_sigmas: -1 }", "search_sigmas"},
+           Case{"registration { search_min_m: nan }", "search_min_m"},
+           Case{"registration { search_tie_ratio: 2 }", "search_tie_ratio"},
            Case{"tracking { refine_window_s: inf }", "refine_window_s"},
            Case{"status_period_s: 0", "status_period_s"},
            Case{"log_level: \"loud\"", "log_level"},
