@@ -23,10 +23,10 @@ namespace floorpose {
 // fit reported there.
 struct ReliabilityModel {
   static constexpr int kFeatures = 8;
-  double bias = -1.121;
+  double bias = -0.4276;
   // In the order of ReliabilityFeatures::Vector().
-  std::array<double, kFeatures> weights = {5.033,   -11.77,  -0.04282, 0.0,
-                                           -0.1813, -0.2164, 0.5156,   -0.1334};
+  std::array<double, kFeatures> weights = {4.838,   -13.55,  -0.4593, 0.0,
+                                           -0.1403, -0.2397, 0.4154,  -0.0699};
   // The way each feature may move the probability (+1 up, -1 down): a fit that, say,
   // rewards heading uncertainty because it happens to correlate with something else in
   // the training walks would stay confident on a long walk without walls.
