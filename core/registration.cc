@@ -418,18 +418,11 @@ RegistrationResult RegisterIk(const std::vector<Eigen::Vector2d>& points,
   return result;
 }
 
-RegistrationResult RegisterHough(const std::vector<Eigen::Vector2d>& points,
-                                 const std::vector<Eigen::Vector2d>& normals,
-                                 const ClosestWallIndex& index, const Se2& initial,
-                                 const IcpOptions& o, const HoughOptions& h) {
-  RegistrationResult result;
-  result.method = "hough";
-  result.T_plan_slam = initial;
-  if (normals.size() != points.size() || points.size() < 3) {
-    result.reason = "Hough needs a normal for every point";
-    Finish(points, index, o, Step{}, &result);
-    return result;
-  }
+std::optional<double> HoughRotation(const std::vector<Eigen::Vector2d>& points,
+                                    const std::vector<Eigen::Vector2d>& normals,
+                                    const ClosestWallIndex& index, const Se2& initial,
+                                    const HoughOptions& h) {
+  if (normals.size() != points.size() || points.empty()) return std::nullopt;
   // Equation 4.6: a point with a normal is a line, theta = atan2(n.y, n.x); walls are
   // two-sided, so angles are taken modulo pi. Histograms of the cloud (in the plan frame
   // under the initial guess, one vote a point) and of the plan (wall length).
@@ -479,13 +472,35 @@ RegistrationResult RegisterHough(const std::vector<Eigen::Vector2d>& points,
     score[s + max_shift] = sum;
   }
   const int best = static_cast<int>(std::max_element(score.begin(), score.end()) - score.begin());
+  if (score[best] <= 0) return std::nullopt;
   double shift = best - max_shift;
   if (best > 0 && best + 1 < static_cast<int>(score.size())) {  // parabolic refinement
     const double l = score[best - 1], c = score[best], r = score[best + 1];
     const double denom = l - 2 * c + r;
     if (denom < 0) shift += 0.5 * (l - r) / denom;
   }
-  const double omega = shift * bin;
+  return shift * bin;
+}
+
+RegistrationResult RegisterHough(const std::vector<Eigen::Vector2d>& points,
+                                 const std::vector<Eigen::Vector2d>& normals,
+                                 const ClosestWallIndex& index, const Se2& initial,
+                                 const IcpOptions& o, const HoughOptions& h) {
+  RegistrationResult result;
+  result.method = "hough";
+  result.T_plan_slam = initial;
+  if (normals.size() != points.size() || points.size() < 3) {
+    result.reason = "Hough needs a normal for every point";
+    Finish(points, index, o, Step{}, &result);
+    return result;
+  }
+  const std::optional<double> rotation = HoughRotation(points, normals, index, initial, h);
+  if (!rotation) {
+    result.reason = "no wall directions to turn by";
+    Finish(points, index, o, Step{}, &result);
+    return result;
+  }
+  const double omega = *rotation;
   // Rotate about the cloud's centroid in the plan frame, so the rotation does not swing
   // the cloud away from where the initial guess put it.
   Eigen::Vector2d centroid = Eigen::Vector2d::Zero();

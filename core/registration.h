@@ -129,6 +129,15 @@ RegistrationResult RegisterIk(const std::vector<Eigen::Vector2d>& points_slam,
                               const ClosestWallIndex& index, const Se2& T_plan_slam_initial,
                               const IcpOptions& options);
 
+// Thesis Algorithm 4.6 alone: the rotation (plan frame, within +-h.max_rotation_rad) that
+// best lines the histogram of the cloud's wall normals under `initial` up with that of
+// the plan's walls near it (modulo pi: walls have two faces). It needs no position, only
+// wall directions. Nothing without normals or when nothing correlates.
+std::optional<double> HoughRotation(const std::vector<Eigen::Vector2d>& points_slam,
+                                    const std::vector<Eigen::Vector2d>& normals_slam,
+                                    const ClosestWallIndex& index, const Se2& T_plan_slam_initial,
+                                    const HoughOptions& hough);
+
 // Thesis Algorithms 4.6 and 4.7: the rotation from the histogram of point normal angles
 // correlated with the plan's wall angles (weighted by length, modulo pi since walls have
 // two faces), then translation-only ICP (point-to-line, a 2x2 solve per iteration).

@@ -305,6 +305,32 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
   return d;
 }
 
+bool Tracker::TurnToWalls(double omega_rad, uint64_t based_on_version, int64_t stamp_ns) {
+  if (!has_alignment() || alignment_.source == AlignmentSource::kRegistration ||
+      based_on_version != alignment_.version || !std::isfinite(omega_rad))
+    return false;
+  // A heading measurement of turn_sigma_rad against the heading the filter has: beyond
+  // 3 sigma it is another peak of the histogram (clutter, a wing at another angle), not
+  // a correction; within, weighted as a Kalman update.
+  const double var = FilterAtWearer().P()(0, 0);
+  const double meas = options_.turn_sigma_rad * options_.turn_sigma_rad;
+  if (omega_rad * omega_rad > 9.0 * (var + meas)) return false;
+  const double k = var / (var + meas);
+  const double omega = k * omega_rad;
+  const Se2 turn{omega, start_pivot_ - Se2{omega, {0, 0}}.R() * start_pivot_};
+  pending_jump_.reset();
+  alignment_.T_plan_slam = turn * alignment_.T_plan_slam;
+  alignment_.version = next_version_++;
+  alignment_.stamp_ns = stamp_ns;
+  // The pick's uncertainty at its point, with the heading's narrowed, but never below one
+  // measurement's: the next one sees mostly the same walls.
+  const double sm = options_.pick_sigma_m, hv = std::max((1 - k) * var, meas);
+  filter_.Reset(alignment_.T_plan_slam, Eigen::Vector3d(hv, sm * sm, sm * sm).asDiagonal(),
+                start_pivot_);
+  walked_since_predict_m_ = 0;
+  return true;
+}
+
 const char* ReliabilityFeatures::Name(int i) {
   static const char* const kNames[ReliabilityModel::kFeatures] = {
       "inlier_ratio",      "inlier_rmse_m", "position_sigma_m", "heading_sigma_deg",

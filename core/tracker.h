@@ -52,7 +52,8 @@ struct TrackerOptions {
   double search_sigmas = 3.0;      // later runs search this many filter sigmas at the wearer...
   double search_min_m = 1.5;       // ...when that reaches this far (at most the pick search)
   double search_tie_ratio = 0.5;   // ...and tell places apart by nearness up to this ratio
-  double pick_sigma_m = 1.5;       // uncertainty of a wall pick at its point, metres
+  double turn_sigma_rad = 1.0 * M_PI / 180;  // the walls' directions as a heading measurement
+  double pick_sigma_m = 1.5;                 // uncertainty of a wall pick at its point, metres
   double pick_sigma_rad = 5.0 * M_PI / 180;  // ...and of its heading
   double confirm_m = 0.5;                    // a gated result is taken when later ones land within
   double confirm_rad = 0.035;                // ...this of it...
@@ -180,6 +181,15 @@ class Tracker {
   // confirms it (the navigation app's rule for jumps).
   Decision Offer(const RegistrationResult& result, const std::vector<Eigen::Vector2d>& cloud,
                  uint64_t based_on_version, int64_t stamp_ns);
+
+  // Until a first place after a pick or flip is taken, the pick's heading error swings
+  // its error at the wearer into metres as they walk away from the pick. The walls' own
+  // directions (HoughRotation, within the pick search) fix the heading without a place:
+  // turns the alignment by omega_rad about the pick's point, keeping its position there
+  // (a measurement of turn_sigma_rad, fused with the filter's heading). Returns whether
+  // it turned: not when a first place was taken, the alignment changed since
+  // `based_on_version`, or omega is beyond 3 sigma of the two.
+  bool TurnToWalls(double omega_rad, uint64_t based_on_version, int64_t stamp_ns);
 
   TrackState state() const;
   Reliability CurrentReliability() const;

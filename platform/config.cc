@@ -132,6 +132,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
     return "tracking.max_ambiguity must be in (0, 1]";
   if (!(k.first_inlier_ratio() >= 0 && k.first_inlier_ratio() <= 1))
     return "tracking.first_inlier_ratio must be in [0, 1]";
+  if (!(k.turn_sigma_deg() > 0 && std::isfinite(k.turn_sigma_deg())))
+    return "tracking.turn_sigma_deg must be > 0";
   if (!(k.clear_ambiguity() >= 0 && k.clear_ambiguity() <= k.max_ambiguity()))
     return "tracking.clear_ambiguity must be in [0, max_ambiguity]";
   if (!(k.refine_window_s() >= 0 && std::isfinite(k.refine_window_s())))
@@ -209,6 +211,7 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.max_ambiguity = k.max_ambiguity();
   t.first_inlier_ratio = k.first_inlier_ratio();
   t.clear_ambiguity = k.clear_ambiguity();
+  t.turn_sigma_rad = k.turn_sigma_deg() * M_PI / 180.0;
   const double drift_rad = k.drift_heading_deg() * M_PI / 180.0;
   t.filter.heading_var_per_m = drift_rad * drift_rad;
   t.filter.position_var_per_m = k.drift_position_m() * k.drift_position_m();

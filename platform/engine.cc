@@ -65,6 +65,9 @@ v1::Alignment::Source ToProto(AlignmentSource s) {
   return v1::Alignment::SOURCE_UNSPECIFIED;
 }
 
+// Smaller turns onto the walls' directions are not worth a new alignment version.
+constexpr double kMinTurnRad = 0.1 * M_PI / 180;
+
 }  // namespace
 
 Engine::Engine(v1::FloorposedConfig config, Publish publish, std::function<int64_t()> now_ns)
@@ -101,6 +104,11 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
       done.result.ambiguity = whole.ambiguity;
       done.refined = done.result.converged;
       if (!done.refined) done.result = whole;
+    }
+    if (job.turn) {
+      HoughOptions h = job.options.hough;
+      h.max_rotation_rad = job.options.search_window_rad;
+      done.turn = HoughRotation(job.cloud, job.normals, *job.index, job.initial, h);
     }
     done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
   } else {
@@ -368,6 +376,8 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
   job.initial = tracker_.alignment().T_plan_slam;
   job.version = tracker_.alignment().version;
   job.stamp_ns = latest_stamp_ns_;
+  job.turn = config_.tracking().turn_to_walls() &&
+             tracker_.alignment().source != AlignmentSource::kRegistration;
   running_ = true;
   return job;
 }
@@ -385,6 +395,12 @@ void Engine::OnRegistrationDone(Done done) {
       d.accepted ? "accepted" : "rejected: ", d.reason);
   if (d.accepted) {
     counters_.set_registrations_accepted(counters_.registrations_accepted() + 1);
+    PublishAlignment();
+    PublishTrack();
+  } else if (done.turn && std::abs(*done.turn) >= kMinTurnRad &&
+             tracker_.TurnToWalls(*done.turn, done.job.version, done.job.stamp_ns)) {
+    spdlog::info("wall pick turned by {:.2f} deg about its point onto the walls' directions",
+                 *done.turn * 180 / M_PI);
     PublishAlignment();
     PublishTrack();
   }

@@ -46,11 +46,13 @@ class Engine {
     Se2 initial;
     uint64_t version = 0;
     int64_t stamp_ns = 0;
+    bool turn = false;  // also measure the walls' rotation (before a first place is taken)
   };
   struct Done {
     Job job;
     RegistrationResult result;
-    bool refined = false;  // the result is job.recent's
+    bool refined = false;        // the result is job.recent's
+    std::optional<double> turn;  // HoughRotation of job.cloud, when job.turn
   };
   // Runs a job; now_ns() is read before and after to fill result.time_ms.
   static Done Run(Job job, const std::function<int64_t()>& now_ns);

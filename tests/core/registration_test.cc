@@ -475,6 +475,26 @@ TEST(RegistrationSearchTest, TurnsAboutThePivotWhereTheGuessIsKnownBest) {
   EXPECT_THAT(about_pick.T_plan_slam, IsNearlySe2(Se2{}, 0.02, Deg(0.2)));
 }
 
+// Algorithm 4.6 alone: the walls' directions give the heading without any position. A
+// room seen 6 degrees turned and 3 m off: the rotation found undoes the 6 degrees
+// (whatever the offset), within a quarter of a degree; without normals, or with no plan
+// wall near the cloud, there is nothing to turn by.
+TEST(HoughRotationTest, WallDirectionsGiveTheHeadingWithoutAPlace) {
+  const FloorPlan room = testing::AsymmetricRoom();
+  const ClosestWallIndex index(room);
+  const Cloud cloud = SlamCloudWithNormals(room, Se2{}, 0.01, 5);  // truth: identity
+  HoughOptions h;
+  h.max_rotation_rad = Deg(10);
+  for (const Eigen::Vector2d& offset : {Eigen::Vector2d(0, 0), Eigen::Vector2d(3, -2)}) {
+    const Se2 guess{Deg(6), offset};
+    const std::optional<double> turn = HoughRotation(cloud.points, cloud.normals, index, guess, h);
+    ASSERT_TRUE(turn.has_value());
+    EXPECT_NEAR(*turn, Deg(-6), Deg(0.25)) << "offset " << offset.transpose();
+  }
+  EXPECT_FALSE(HoughRotation(cloud.points, {}, index, Se2{}, h).has_value());
+  EXPECT_FALSE(HoughRotation(cloud.points, cloud.normals, index, Se2{0.0, {500, 500}}, h));
+}
+
 // A hall seen along one long wall and the foot of a cross wall: the guess is 2.4 m off
 // along the hall, where nothing pinned it, and well known across it. The plan has the
 // same corner again 2.4 m across the hall. With the guess's covariance the search looks

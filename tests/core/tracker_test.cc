@@ -385,6 +385,37 @@ TEST_F(TrackerTest, LaterRunsSearchAsFarAsTheAlignmentIsUncertain) {
   EXPECT_FALSE(tracker_.NextRegistrationOptions().search_covariance.has_value());
 }
 
+// Before a first place is taken, the walls' directions turn the pick about its point: the
+// pick's point stays where it was picked, the heading moves (most of the way: the pick's
+// 5 degrees against the walls' 1), the heading sigma narrows, and the version changes.
+// Not on a stale version, not beyond 3 sigma, not once a registration is in use.
+TEST_F(TrackerTest, TurnToWallsTurnsThePickAboutItsPoint) {
+  tracker_.SetPlan(index_);
+  const Eigen::Vector2d point(4, 2), normal(1, 0);
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(Se2{Deg(4), {0, 0}} * truth_, point, normal), 1), "");
+  const Pose2 wearer{truth_.Inverse() * Eigen::Vector2d(2, 1.5), 0, 1.6};
+  tracker_.Correct(wearer);
+  const Se2 before = tracker_.alignment().T_plan_slam;
+  const uint64_t v = tracker_.alignment().version;
+  EXPECT_FALSE(tracker_.TurnToWalls(Deg(-4), v + 1, 2));  // stale
+  EXPECT_FALSE(tracker_.TurnToWalls(Deg(-20), v, 2));     // beyond 3 sigma of the pick's
+  ASSERT_TRUE(tracker_.TurnToWalls(Deg(-4), v, 2));
+  const Se2& after = tracker_.alignment().T_plan_slam;
+  EXPECT_GT(tracker_.alignment().version, v);
+  EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kWallPick);
+  const Eigen::Vector2d slam_point = before.Inverse() * point;
+  EXPECT_NEAR((after * slam_point - point).norm(), 0.0, 1e-9);  // the pick's point stays
+  const double s2 = std::pow(tracker_.options().pick_sigma_rad, 2);
+  const double m2 = std::pow(tracker_.options().turn_sigma_rad, 2);
+  EXPECT_NEAR(WrapAngle(after.theta - before.theta), Deg(-4) * s2 / (s2 + m2), 1e-9);
+  EXPECT_LT(tracker_.CurrentFeatures().heading_sigma_deg, 1.5);
+  // Once registered, the filter has the heading: no more turns.
+  const auto room = Cloud();
+  ASSERT_TRUE(
+      tracker_.Offer(ResultFor(truth_, room), room, tracker_.alignment().version, 3).accepted);
+  EXPECT_FALSE(tracker_.TurnToWalls(Deg(1), tracker_.alignment().version, 4));
+}
+
 TEST_F(TrackerTest, RegistrationDueFollowsPointsAndInjectedTime) {
   const TrackerOptions& o = tracker_.options();
   const int64_t s = 1'000'000'000;                                // one second in nanoseconds

@@ -68,6 +68,7 @@ TEST(ConfigTest, ProtoDefaultsMatchTheCoreDefaults) {
   EXPECT_EQ(t.search_sigmas, core.search_sigmas);
   EXPECT_EQ(t.search_min_m, core.search_min_m);
   EXPECT_EQ(t.search_tie_ratio, core.search_tie_ratio);
+  EXPECT_DOUBLE_EQ(t.turn_sigma_rad, core.turn_sigma_rad);
   const WallExtractionOptions w = ToWallExtractionOptions(c);
   const WallExtractionOptions core_w;
   EXPECT_EQ(w.max_normal_up, core_w.max_normal_up);
@@ -145,6 +146,7 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"registration { search_sigmas: -1 }", "search_sigmas"},
            Case{"registration { search_min_m: nan }", "search_min_m"},
            Case{"registration { search_tie_ratio: 2 }", "search_tie_ratio"},
+           Case{"tracking { turn_sigma_deg: 0 }", "turn_sigma_deg"},
            Case{"tracking { refine_window_s: inf }", "refine_window_s"},
            Case{"status_period_s: 0", "status_period_s"},
            Case{"log_level: \"loud\"", "log_level"},
