@@ -23,10 +23,10 @@ namespace floorpose {
 // fit reported there.
 struct ReliabilityModel {
   static constexpr int kFeatures = 8;
-  double bias = -0.4276;
+  double bias = -0.1983;
   // In the order of ReliabilityFeatures::Vector().
-  std::array<double, kFeatures> weights = {4.838,   -13.55,  -0.4593, 0.0,
-                                           -0.1403, -0.2397, 0.4154,  -0.0699};
+  std::array<double, kFeatures> weights = {4.827,   -11.76,  -0.6569, 0.0,
+                                           -0.1433, -0.2413, 0.3262,  -0.01431};
   // The way each feature may move the probability (+1 up, -1 down): a fit that, say,
   // rewards heading uncertainty because it happens to correlate with something else in
   // the training walks would stay confident on a long walk without walls.
