@@ -305,16 +305,17 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
   return d;
 }
 
-bool Tracker::TurnToWalls(double omega_rad, uint64_t based_on_version, int64_t stamp_ns) {
+std::optional<double> Tracker::TurnToWalls(double omega_rad, uint64_t based_on_version,
+                                           int64_t stamp_ns) {
   if (!has_alignment() || alignment_.source == AlignmentSource::kRegistration ||
       based_on_version != alignment_.version || !std::isfinite(omega_rad))
-    return false;
+    return std::nullopt;
   // A heading measurement of turn_sigma_rad against the heading the filter has: beyond
   // 3 sigma it is another peak of the histogram (clutter, a wing at another angle), not
   // a correction; within, weighted as a Kalman update.
   const double var = FilterAtWearer().P()(0, 0);
   const double meas = options_.turn_sigma_rad * options_.turn_sigma_rad;
-  if (omega_rad * omega_rad > 9.0 * (var + meas)) return false;
+  if (omega_rad * omega_rad > 9.0 * (var + meas)) return std::nullopt;
   const double k = var / (var + meas);
   const double omega = k * omega_rad;
   const Se2 turn{omega, start_pivot_ - Se2{omega, {0, 0}}.R() * start_pivot_};
@@ -328,7 +329,7 @@ bool Tracker::TurnToWalls(double omega_rad, uint64_t based_on_version, int64_t s
   filter_.Reset(alignment_.T_plan_slam, Eigen::Vector3d(hv, sm * sm, sm * sm).asDiagonal(),
                 start_pivot_);
   walked_since_predict_m_ = 0;
-  return true;
+  return omega;
 }
 
 const char* ReliabilityFeatures::Name(int i) {

@@ -186,10 +186,10 @@ class Tracker {
   // its error at the wearer into metres as they walk away from the pick. The walls' own
   // directions (HoughRotation, within the pick search) fix the heading without a place:
   // turns the alignment by omega_rad about the pick's point, keeping its position there
-  // (a measurement of turn_sigma_rad, fused with the filter's heading). Returns whether
-  // it turned: not when a first place was taken, the alignment changed since
+  // (a measurement of turn_sigma_rad, fused with the filter's heading). Returns the turn
+  // made: none when a first place was taken, the alignment changed since
   // `based_on_version`, or omega is beyond 3 sigma of the two.
-  bool TurnToWalls(double omega_rad, uint64_t based_on_version, int64_t stamp_ns);
+  std::optional<double> TurnToWalls(double omega_rad, uint64_t based_on_version, int64_t stamp_ns);
 
   TrackState state() const;
   Reliability CurrentReliability() const;

@@ -397,12 +397,14 @@ void Engine::OnRegistrationDone(Done done) {
     counters_.set_registrations_accepted(counters_.registrations_accepted() + 1);
     PublishAlignment();
     PublishTrack();
-  } else if (done.turn && std::abs(*done.turn) >= kMinTurnRad &&
-             tracker_.TurnToWalls(*done.turn, done.job.version, done.job.stamp_ns)) {
-    spdlog::info("wall pick turned by {:.2f} deg about its point onto the walls' directions",
-                 *done.turn * 180 / M_PI);
-    PublishAlignment();
-    PublishTrack();
+  } else if (done.turn && std::abs(*done.turn) >= kMinTurnRad) {
+    if (const auto turned = tracker_.TurnToWalls(*done.turn, done.job.version, done.job.stamp_ns)) {
+      spdlog::info(
+          "wall pick turned by {:.2f} deg about its point (the walls' directions say {:.2f})",
+          *turned * 180 / M_PI, *done.turn * 180 / M_PI);
+      PublishAlignment();
+      PublishTrack();
+    }
   }
 }
 

@@ -399,7 +399,8 @@ TEST_F(TrackerTest, TurnToWallsTurnsThePickAboutItsPoint) {
   const uint64_t v = tracker_.alignment().version;
   EXPECT_FALSE(tracker_.TurnToWalls(Deg(-4), v + 1, 2));  // stale
   EXPECT_FALSE(tracker_.TurnToWalls(Deg(-20), v, 2));     // beyond 3 sigma of the pick's
-  ASSERT_TRUE(tracker_.TurnToWalls(Deg(-4), v, 2));
+  const std::optional<double> turned = tracker_.TurnToWalls(Deg(-4), v, 2);
+  ASSERT_TRUE(turned.has_value());
   const Se2& after = tracker_.alignment().T_plan_slam;
   EXPECT_GT(tracker_.alignment().version, v);
   EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kWallPick);
@@ -407,7 +408,8 @@ TEST_F(TrackerTest, TurnToWallsTurnsThePickAboutItsPoint) {
   EXPECT_NEAR((after * slam_point - point).norm(), 0.0, 1e-9);  // the pick's point stays
   const double s2 = std::pow(tracker_.options().pick_sigma_rad, 2);
   const double m2 = std::pow(tracker_.options().turn_sigma_rad, 2);
-  EXPECT_NEAR(WrapAngle(after.theta - before.theta), Deg(-4) * s2 / (s2 + m2), 1e-9);
+  EXPECT_NEAR(*turned, Deg(-4) * s2 / (s2 + m2), 1e-9);
+  EXPECT_NEAR(WrapAngle(after.theta - before.theta), *turned, 1e-9);
   EXPECT_LT(tracker_.CurrentFeatures().heading_sigma_deg, 1.5);
   // Once registered, the filter has the heading: no more turns.
   const auto room = Cloud();
