@@ -101,11 +101,16 @@ void Tracker::SetAlignment(const Se2& T, AlignmentSource source, int64_t stamp_n
     const Eigen::Vector2d pivot = pick_plan_point_.value_or(
         last_plan_position_.value_or(T * last_slam_position_.value_or(Eigen::Vector2d::Zero())));
     start_pivot_ = pivot;
-    const double sm = options_.pick_sigma_m, sr = options_.pick_sigma_rad;
-    filter_ = AlignmentFilter(options_.filter);
-    filter_.Reset(T, Eigen::Vector3d(sr * sr, sm * sm, sm * sm).asDiagonal(), pivot);
+    StartFilterAtPick(options_.pick_sigma_rad * options_.pick_sigma_rad);
     ForgetRegistrations();
   }
+}
+
+void Tracker::StartFilterAtPick(double heading_var) {
+  const double sm = options_.pick_sigma_m;
+  filter_ = AlignmentFilter(options_.filter);
+  filter_.Reset(alignment_.T_plan_slam, Eigen::Vector3d(heading_var, sm * sm, sm * sm).asDiagonal(),
+                start_pivot_);
 }
 
 void Tracker::PredictToWearer() {
@@ -318,16 +323,14 @@ std::optional<double> Tracker::TurnToWalls(double omega_rad, uint64_t based_on_v
   if (omega_rad * omega_rad > 9.0 * (var + meas)) return std::nullopt;
   const double k = var / (var + meas);
   const double omega = k * omega_rad;
-  const Se2 turn{omega, start_pivot_ - Se2{omega, {0, 0}}.R() * start_pivot_};
   pending_jump_.reset();
-  alignment_.T_plan_slam = turn * alignment_.T_plan_slam;
+  alignment_.T_plan_slam =
+      Perturb(alignment_.T_plan_slam, Eigen::Vector3d(omega, 0, 0), start_pivot_);
   alignment_.version = next_version_++;
   alignment_.stamp_ns = stamp_ns;
-  // The pick's uncertainty at its point, with the heading's narrowed, but never below one
-  // measurement's: the next one sees mostly the same walls.
-  const double sm = options_.pick_sigma_m, hv = std::max((1 - k) * var, meas);
-  filter_.Reset(alignment_.T_plan_slam, Eigen::Vector3d(hv, sm * sm, sm * sm).asDiagonal(),
-                start_pivot_);
+  // The heading narrowed, but never below one measurement's: the next one sees mostly
+  // the same walls.
+  StartFilterAtPick(std::max((1 - k) * var, meas));
   walked_since_predict_m_ = 0;
   return omega;
 }

@@ -216,6 +216,9 @@ class Tracker {
   // Whether the results since this place was first seen kept landing on it (confirm_m,
   // confirm_rad) while the wearer walked walk_m; starts over at a new place.
   bool PlaceConfirmed(const RegistrationResult& result, double walk_m);
+  // Starts the filter over at the alignment in use, as uncertain as a pick at its point
+  // (start_pivot_), with this heading variance.
+  void StartFilterAtPick(double heading_var);
   // Moves the filter to the wearer, with the drift of the metres walked since.
   void PredictToWearer();
   // The same on a copy: the uncertainty at the wearer now.

@@ -107,10 +107,12 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (!(c.registration().clip_margin_m() >= 0)) return "registration.clip_margin_m must be >= 0";
   if (!(c.registration().pick_tie_ratio() >= 0 && c.registration().pick_tie_ratio() <= 1))
     return "registration.pick_tie_ratio must be in [0, 1]";
-  if (!(c.registration().search_sigmas() >= 0 && std::isfinite(c.registration().search_sigmas())))
-    return "registration.search_sigmas must be >= 0";
-  if (!(c.registration().search_min_m() >= 0 && std::isfinite(c.registration().search_min_m())))
-    return "registration.search_min_m must be >= 0";
+  for (const auto& [value, name] :
+       {std::pair{c.registration().search_sigmas(), "registration.search_sigmas"},
+        std::pair{c.registration().search_min_m(), "registration.search_min_m"},
+        std::pair{c.tracking().refine_window_s(), "tracking.refine_window_s"}}) {
+    if (!(value >= 0 && std::isfinite(value))) return std::string(name) + " must be >= 0";
+  }
   if (!(c.registration().search_tie_ratio() >= 0 && c.registration().search_tie_ratio() <= 1))
     return "registration.search_tie_ratio must be in [0, 1]";
   if (!(c.icp().degeneracy_ratio() >= 0 && c.icp().degeneracy_ratio() < 1))
@@ -121,7 +123,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
         std::pair{k.measurement_points(), "measurement_points"},
         std::pair{k.gate_chi2(), "gate_chi2"}, std::pair{k.pick_sigma_m(), "pick_sigma_m"},
         std::pair{k.pick_sigma_deg(), "pick_sigma_deg"},
-        std::pair{k.worse_fit_ratio(), "worse_fit_ratio"}}) {
+        std::pair{k.worse_fit_ratio(), "worse_fit_ratio"},
+        std::pair{k.turn_sigma_deg(), "turn_sigma_deg"}}) {
     if (!(value > 0 && std::isfinite(value)))
       return std::string("tracking.") + name + " must be positive";
   }
@@ -132,12 +135,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
     return "tracking.max_ambiguity must be in (0, 1]";
   if (!(k.first_inlier_ratio() >= 0 && k.first_inlier_ratio() <= 1))
     return "tracking.first_inlier_ratio must be in [0, 1]";
-  if (!(k.turn_sigma_deg() > 0 && std::isfinite(k.turn_sigma_deg())))
-    return "tracking.turn_sigma_deg must be > 0";
   if (!(k.clear_ambiguity() >= 0 && k.clear_ambiguity() <= k.max_ambiguity()))
     return "tracking.clear_ambiguity must be in [0, max_ambiguity]";
-  if (!(k.refine_window_s() >= 0 && std::isfinite(k.refine_window_s())))
-    return "tracking.refine_window_s must be >= 0";
   const auto& rel = k.reliability();
   if (rel.coefficients_size() != 0 && rel.coefficients_size() != ReliabilityModel::kFeatures + 1)
     return "tracking.reliability.coefficients needs " +
