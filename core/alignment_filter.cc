@@ -49,9 +49,10 @@ void AlignmentFilter::Reset(const Se2& T, const Eigen::Matrix3d& P, const Eigen:
   T_ = T;
   P_ = P;
   pivot_ = pivot;
+  net_turn_rad_ = peak_turn_rad_ = 0.0;
 }
 
-void AlignmentFilter::Predict(const Eigen::Vector2d& pivot, double metres) {
+void AlignmentFilter::Predict(const Eigen::Vector2d& pivot, double metres, double turned_rad) {
   // The same perturbation about the new pivot: u' = u + phi Perp(pivot' - pivot).
   Eigen::Matrix3d A = Eigen::Matrix3d::Identity();
   A.block<2, 1>(1, 0) = Perp(pivot - pivot_);
@@ -61,6 +62,15 @@ void AlignmentFilter::Predict(const Eigen::Vector2d& pivot, double metres) {
   P_(0, 0) += options_.heading_var_per_m * m;
   P_(1, 1) += options_.position_var_per_m * m;
   P_(2, 2) += options_.position_var_per_m * m;
+  // The yaw scale error is a bias: turning back undoes it (a head scanning left and right
+  // adds nothing), so the variance follows the largest net turn so far, squared.
+  if (std::isfinite(turned_rad)) {
+    net_turn_rad_ += turned_rad;
+    const double peak = std::max(peak_turn_rad_, std::abs(net_turn_rad_));
+    const double s = options_.yaw_scale_sigma;
+    P_(0, 0) += s * s * (peak * peak - peak_turn_rad_ * peak_turn_rad_);
+    peak_turn_rad_ = peak;
+  }
 }
 
 Eigen::Matrix3d AlignmentFilter::MeasurementCovariance(const Eigen::Matrix3d& information,
@@ -91,6 +101,7 @@ AlignmentFilter::Update AlignmentFilter::Fuse(const Se2& measured, const Eigen::
   const Eigen::Matrix3d I_K = Eigen::Matrix3d::Identity() - K;
   P_ = I_K * P_ * I_K.transpose() + K * R * K.transpose();
   P_ = 0.5 * (P_ + P_.transpose()).eval();
+  net_turn_rad_ = peak_turn_rad_ = 0.0;
   return u;
 }
 

@@ -24,6 +24,11 @@ struct AlignmentFilterOptions {
   // heading rad^2/m and position m^2/m at the wearer.
   double heading_var_per_m = (0.3 * M_PI / 180) * (0.3 * M_PI / 180);  // 3 deg after 100 m
   double position_var_per_m = 0.06 * 0.06;                             // 0.6 m after 100 m
+  // The SLAM's error in measuring its own turning, a fraction: its heading drifts by this
+  // times the net turn, so that a wearer circling a hall with no wall in range drifts
+  // degrees without walking far. Heading variance (this x the largest net turn since the
+  // last fused registration)^2.
+  double yaw_scale_sigma = 0.005;
   // A registration's covariance: sigma^2 / points_equivalent times the inverse of the
   // mean information of its wall points (so a corridor's axis gets no information).
   // The points of one snapshot share the drift and the plan's errors: they are worth a
@@ -54,9 +59,9 @@ class AlignmentFilter {
   // Starts over at T with covariance P about pivot.
   void Reset(const Se2& T, const Eigen::Matrix3d& P, const Eigen::Vector2d& pivot);
 
-  // The wearer walked `metres` and is now at `pivot` (plan): moves the covariance there
-  // and adds the drift of the walk.
-  void Predict(const Eigen::Vector2d& pivot, double metres);
+  // The wearer walked `metres`, turned by `turned_rad` (signed, slam) and is now at
+  // `pivot` (plan): moves the covariance there and adds the drift of the walk.
+  void Predict(const Eigen::Vector2d& pivot, double metres, double turned_rad = 0.0);
 
   // The covariance of a measurement from a registration: R about the current pivot.
   Eigen::Matrix3d MeasurementCovariance(const Eigen::Matrix3d& information, size_t inliers) const;
@@ -83,6 +88,8 @@ class AlignmentFilter {
   Se2 T_;
   Eigen::Matrix3d P_ = Eigen::Matrix3d::Identity();
   Eigen::Vector2d pivot_ = Eigen::Vector2d::Zero();
+  double net_turn_rad_ = 0.0;   // since Reset or the last fused measurement...
+  double peak_turn_rad_ = 0.0;  // ...and its largest magnitude
 };
 
 }  // namespace floorpose

@@ -42,7 +42,8 @@ RegistrationOptions ToRegistrationOptions(const TrackerOptions& t, AlignmentSour
 AlignmentFilter Tracker::FilterAtWearer() const {
   AlignmentFilter at = filter_;
   if (last_slam_position_)
-    at.Predict(alignment_.T_plan_slam * *last_slam_position_, walked_since_predict_m_);
+    at.Predict(alignment_.T_plan_slam * *last_slam_position_, walked_since_predict_m_,
+               turned_since_predict_rad_);
   return at;
 }
 
@@ -82,7 +83,7 @@ void Tracker::Reset() {
 }
 
 void Tracker::ForgetRegistrations() {
-  walked_since_predict_m_ = walked_since_fused_m_ = 0;
+  walked_since_predict_m_ = walked_since_fused_m_ = turned_since_predict_rad_ = 0;
   fused_ = 0;
   last_disagreement_ = weakest_direction_ = 0;
   pending_place_.reset();
@@ -116,8 +117,8 @@ void Tracker::StartFilterAtPick(double heading_var) {
 void Tracker::PredictToWearer() {
   const Eigen::Vector2d pivot =
       last_slam_position_ ? alignment_.T_plan_slam * *last_slam_position_ : filter_.pivot();
-  filter_.Predict(pivot, walked_since_predict_m_);
-  walked_since_predict_m_ = 0;
+  filter_.Predict(pivot, walked_since_predict_m_, turned_since_predict_rad_);
+  walked_since_predict_m_ = turned_since_predict_rad_ = 0;
 }
 
 std::string Tracker::ApplyWallPick(const WallPick& pick, int64_t stamp_ns) {
@@ -152,9 +153,12 @@ PlanPoseEstimate Tracker::Correct(const Pose2& pose_slam) {
       walked_since_start_m_ += step;
       pending_walk_m_ += step;
       place_walk_m_ += step;
+      if (std::isfinite(pose_slam.heading))
+        turned_since_predict_rad_ += WrapAngle(pose_slam.heading - last_slam_heading_);
     }
   }
   last_slam_position_ = pose_slam.position;
+  if (std::isfinite(pose_slam.heading)) last_slam_heading_ = pose_slam.heading;
   PlanPoseEstimate out;
   out.alignment_version = alignment_.version;
   out.reliability = CurrentReliability();
@@ -331,7 +335,7 @@ std::optional<double> Tracker::TurnToWalls(double omega_rad, uint64_t based_on_v
   // The heading narrowed, but never below one measurement's: the next one sees mostly
   // the same walls.
   StartFilterAtPick(std::max((1 - k) * var, meas));
-  walked_since_predict_m_ = 0;
+  walked_since_predict_m_ = turned_since_predict_rad_ = 0;
   return omega;
 }
 

@@ -241,7 +241,9 @@ class Tracker {
   int64_t last_start_ns_ = 0;
   AlignmentFilter filter_;
   std::optional<Eigen::Vector2d> last_slam_position_;
-  double walked_since_predict_m_ = 0;  // not yet in the filter
+  double last_slam_heading_ = 0;
+  double walked_since_predict_m_ = 0;  // not yet in the filter...
+  double turned_since_predict_rad_ = 0;
   double walked_since_fused_m_ = 0;
   double walked_since_start_m_ = 0;
   uint32_t fused_ = 0;            // registrations fused since the pick

@@ -128,8 +128,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
     if (!(value > 0 && std::isfinite(value)))
       return std::string("tracking.") + name + " must be positive";
   }
-  if (!(k.drift_heading_deg() >= 0 && k.drift_position_m() >= 0 && k.min_walk_m() >= 0 &&
-        k.confirm_m() >= 0 && k.confirm_deg() >= 0))
+  if (!(k.drift_heading_deg() >= 0 && k.drift_position_m() >= 0 && k.drift_turn() >= 0 &&
+        k.min_walk_m() >= 0 && k.confirm_m() >= 0 && k.confirm_deg() >= 0))
     return "tracking.drift_*, min_walk_m and confirm_* must be >= 0";
   if (!(k.max_ambiguity() > 0 && k.max_ambiguity() <= 1))
     return "tracking.max_ambiguity must be in (0, 1]";
@@ -214,6 +214,7 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   const double drift_rad = k.drift_heading_deg() * M_PI / 180.0;
   t.filter.heading_var_per_m = drift_rad * drift_rad;
   t.filter.position_var_per_m = k.drift_position_m() * k.drift_position_m();
+  t.filter.yaw_scale_sigma = k.drift_turn();
   t.filter.measurement_sigma_m = k.measurement_sigma_m();
   t.filter.measurement_points = k.measurement_points();
   t.filter.gate_chi2 = k.gate_chi2();

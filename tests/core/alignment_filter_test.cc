@@ -68,6 +68,31 @@ TEST(AlignmentFilterTest, UncertaintyGrowsWithWalkAndMovesWithTheWearer) {
   EXPECT_NEAR(filter.position_sigma_m(), 10 * Deg(1), 1e-9);
 }
 
+TEST(AlignmentFilterTest, HeadingDriftsWithTheNetTurnNotWithScanning) {
+  AlignmentFilter filter;
+  const double s = filter.options().yaw_scale_sigma;
+  ASSERT_GT(s, 0);
+  filter.Reset(Se2{}, Eigen::Matrix3d::Zero(), {0, 0});
+  // A head scanning 60 degrees left and right a hundred times, standing still: only the
+  // widest swing counts.
+  for (int i = 0; i < 100; ++i) {
+    filter.Predict({0, 0}, 0.0, Deg(60));
+    filter.Predict({0, 0}, 0.0, -Deg(60));
+  }
+  EXPECT_NEAR(filter.P()(0, 0), s * s * Deg(60) * Deg(60), 1e-12);
+  // Five laps of a hall one way: (s x 5 turns)^2.
+  filter.Reset(Se2{}, Eigen::Matrix3d::Zero(), {0, 0});
+  for (int i = 0; i < 5 * 36; ++i) filter.Predict({0, 0}, 0.0, Deg(10));
+  EXPECT_NEAR(std::sqrt(filter.P()(0, 0)), s * 5 * 2 * M_PI, 1e-9);
+  // A fused registration starts the count again.
+  const double before = filter.P()(0, 0);
+  ASSERT_FALSE(filter.Fuse(Se2{}, Eigen::Vector3d(Deg(1) * Deg(1), 0.01, 0.01).asDiagonal()).gated);
+  const double after = filter.P()(0, 0);
+  EXPECT_LT(after, before);
+  filter.Predict({0, 0}, 0.0, Deg(90));
+  EXPECT_NEAR(filter.P()(0, 0), after + s * s * Deg(90) * Deg(90), 1e-12);
+}
+
 TEST(AlignmentFilterTest, GatesAResultFarBeyondTheUncertainty) {
   AlignmentFilter filter;
   filter.Reset(Se2{}, Eigen::Vector3d(Deg(1) * Deg(1), 0.01, 0.01).asDiagonal(), {0, 0});

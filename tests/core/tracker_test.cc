@@ -418,6 +418,26 @@ TEST_F(TrackerTest, TurnToWallsTurnsThePickAboutItsPoint) {
   EXPECT_FALSE(tracker_.TurnToWalls(Deg(1), tracker_.alignment().version, 4));
 }
 
+TEST_F(TrackerTest, CirclingWithoutWallsWidensTheHeadingButScanningDoesNot) {
+  tracker_.SetPlan(index_);
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
+  const auto room = Cloud();
+  ASSERT_TRUE(
+      tracker_.Offer(ResultFor(truth_, room), room, tracker_.alignment().version, 2).accepted);
+  const Eigen::Vector2d spot = truth_.Inverse() * Eigen::Vector2d(2, 1.5);
+  const double fused_deg = tracker_.CurrentFeatures().heading_sigma_deg;
+  // Looking left and right for a while: the heading stays as sure as the registration left it.
+  for (int i = 0; i < 200; ++i) tracker_.Correct({spot, (i % 2 ? 1 : -1) * Deg(50), 1.6});
+  const double scanned_deg = tracker_.CurrentFeatures().heading_sigma_deg;
+  EXPECT_LT(scanned_deg, fused_deg + 0.6);
+  // Five laps on the spot, one way: the SLAM's own turning error, 5 x 360 x yaw_scale_sigma.
+  for (int i = 0; i <= 5 * 36; ++i) tracker_.Correct({spot, WrapAngle(Deg(10) * i), 1.6});
+  const double laps_deg = 5 * 360 * tracker_.options().filter.yaw_scale_sigma;
+  ASSERT_GT(laps_deg, 5.0);
+  EXPECT_NEAR(tracker_.CurrentFeatures().heading_sigma_deg,
+              std::sqrt(scanned_deg * scanned_deg + laps_deg * laps_deg), 1.0);
+}
+
 TEST_F(TrackerTest, RegistrationDueFollowsPointsAndInjectedTime) {
   const TrackerOptions& o = tracker_.options();
   const int64_t s = 1'000'000'000;                                // one second in nanoseconds

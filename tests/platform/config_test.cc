@@ -58,6 +58,7 @@ TEST(ConfigTest, ProtoDefaultsMatchTheCoreDefaults) {
   EXPECT_NEAR(t.pick_sigma_rad, core.pick_sigma_rad, 1e-4);
   EXPECT_NEAR(t.filter.heading_var_per_m, core.filter.heading_var_per_m, 1e-8);
   EXPECT_NEAR(t.filter.position_var_per_m, core.filter.position_var_per_m, 1e-12);
+  EXPECT_EQ(t.filter.yaw_scale_sigma, core.filter.yaw_scale_sigma);
   EXPECT_EQ(t.filter.measurement_points, core.filter.measurement_points);
   EXPECT_EQ(t.reliability.weights, core.reliability.weights);
   EXPECT_EQ(t.min_walk_m, core.min_walk_m);
@@ -147,6 +148,7 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"registration { search_min_m: nan }", "search_min_m"},
            Case{"registration { search_tie_ratio: 2 }", "search_tie_ratio"},
            Case{"tracking { turn_sigma_deg: 0 }", "turn_sigma_deg"},
+           Case{"tracking { drift_turn: -0.01 }", "drift_"},
            Case{"tracking { refine_window_s: inf }", "refine_window_s"},
            Case{"status_period_s: 0", "status_period_s"},
            Case{"log_level: \"loud\"", "log_level"},
