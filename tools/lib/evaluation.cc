@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 
 #include "core/sim/simulator.h"
@@ -115,6 +116,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
       ParseHeadsetFrame(config.headset_frame()).value_or(HeadsetFrame::kUnityLeftHandedYUp);
   std::map<int64_t, Pose2> slam_poses;  // for the best-fit baseline
   std::map<int64_t, std::array<double, ReliabilityModel::kFeatures>> features;
+  std::set<int64_t> registered;  // poses published under a registered alignment
   std::vector<double> reg_times;
   struct Latest {
     Eigen::Vector2d slam, plan;
@@ -130,9 +132,12 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
       case Topic::kHeadsetPose: {
         const size_t published = plan_poses.size();
         engine.OnHeadsetPose(in.envelope);
-        if (plan_poses.size() > published)
-          features[plan_poses.back().source_stamp_ns()] =
-              engine.tracker().CurrentFeatures().Vector();
+        if (plan_poses.size() > published) {
+          const int64_t stamp = plan_poses.back().source_stamp_ns();
+          features[stamp] = engine.tracker().CurrentFeatures().Vector();
+          if (engine.tracker().alignment().source == AlignmentSource::kRegistration)
+            registered.insert(stamp);
+        }
         platform::DecodedPose pose;
         if (platform::DecodeHeadsetPose(in.envelope.payload, frame, config.limits(), &pose)
                 .empty()) {
@@ -189,6 +194,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     e.y = p.y();
     e.heading = p.heading();
     e.alignment_version = p.alignment_version();
+    e.registered = registered.count(e.stamp_ns) > 0;
     e.reliable = p.reliability().flag() == v1::Reliability::RELIABLE;
     e.probability = p.reliability().probability();
     e.reason = p.reliability().reason();
@@ -226,9 +232,10 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
         reliable ? static_cast<double>(reliable_ok) / static_cast<double>(reliable) : 0.0;
     const std::vector<EvalPose>& t = report->track;
     report->pick_error_m = t.front().error_m;
-    const auto fix = std::find_if(t.begin(), t.end(), [&](const EvalPose& p) {
-      return p.alignment_version != t.front().alignment_version;
-    });
+    // The first pose under a registered alignment (turning the pick onto the walls'
+    // directions changes the version too, but is not a registration).
+    const auto fix =
+        std::find_if(t.begin(), t.end(), [](const EvalPose& p) { return p.registered; });
     if (!best_fit && fix != t.end()) {
       report->first_fix_s = static_cast<double>(fix->stamp_ns - t.front().stamp_ns) * 1e-9;
       double settled = 0;

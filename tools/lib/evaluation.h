@@ -35,6 +35,7 @@ struct EvalPose {
   std::array<double, ReliabilityModel::kFeatures> features{};
   uint32_t marker = 0;
   uint64_t alignment_version = 0;
+  bool registered = false;  // the alignment in use came from a registration
 };
 
 struct EvalReport {
