@@ -10,19 +10,13 @@
 #include <sstream>
 #include <string>
 
+#include "tests/test_util.h"
 #include "tools/lib/process.h"
 
 namespace floorpose {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string Slurp(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 // The cells of a markdown table row ("| a | b |" -> {"a", "b"}).
 std::vector<std::string> Cells(const std::string& row) {
@@ -45,7 +39,7 @@ TEST(EvalSuiteTest, WritesResultsAndTheTrackingTargets) {
        "40", "--methods", "ik", "best-fit", "--out", dir.string()},
       (dir.string() + ".log"));
   ASSERT_TRUE(suite.started());
-  ASSERT_EQ(suite.Wait(std::chrono::seconds(60)), 0) << Slurp(dir.string() + ".log");
+  ASSERT_EQ(suite.Wait(std::chrono::seconds(60)), 0) << testing::ReadText(dir.string() + ".log");
 
   // One JSON line per run: 5 scenarios x 2 methods on one plan and seed.
   std::ifstream json(dir / "results.json");
@@ -55,7 +49,7 @@ TEST(EvalSuiteTest, WritesResultsAndTheTrackingTargets) {
   EXPECT_GT(fs::file_size(dir / "calibration.csv"), 100u);
 
   // Per cell means (first table), then the targets table, which must agree with them.
-  const std::string md = Slurp(dir / "results.md");
+  const std::string md = testing::ReadText(dir / "results.md");
   std::map<std::string, std::string> cell_mean;  // scenario -> ik's mean in the first table
   std::map<std::string, std::vector<std::string>> target_row;
   bool in_targets = false;

@@ -11,7 +11,7 @@
 #include <google/protobuf/message.h>
 #include <google/protobuf/text_format.h>
 
-#include <fstream>
+#include <filesystem>
 #include <memory>
 #include <regex>
 #include <sstream>
@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "platform/config.h"
+#include "tests/test_util.h"
 
 #ifndef FLOORPOSE_SOURCE_DIR
 #error "FLOORPOSE_SOURCE_DIR (the source tree) must be defined, see tests/CMakeLists.txt"
@@ -33,11 +34,8 @@ namespace pb = google::protobuf;
 const char kShippedConfig[] = FLOORPOSE_SOURCE_DIR "/systemd/floorposed.conf";
 
 std::string ReadShippedConfig() {
-  std::ifstream in(kShippedConfig);
-  EXPECT_TRUE(in.good()) << "cannot read " << kShippedConfig;
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+  EXPECT_TRUE(std::filesystem::is_regular_file(kShippedConfig)) << "cannot read " << kShippedConfig;
+  return testing::ReadText(kShippedConfig);
 }
 
 std::vector<std::string> Lines(const std::string& text) {
