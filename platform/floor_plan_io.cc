@@ -9,11 +9,13 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "platform/raster_plan_io.h"
+
 namespace floorpose::platform {
 namespace {
 
 constexpr size_t kMaxPlanBytes = 256u << 20;  // larger files are not floor plans
-constexpr const char* kPlanExtensions[] = {".geojson", ".json", ".txt"};
+constexpr const char* kPlanExtensions[] = {".geojson", ".json", ".txt", ".yaml"};
 
 bool ValidPlanId(const std::string& id) {
   if (id.empty() || id.size() > 128 || id[0] == '.') return false;
@@ -151,18 +153,19 @@ FloorPlanParse ParseGeoJsonFloorPlan(std::string_view text, std::string id) {
 }
 
 FloorPlanParse LoadFloorPlan(const std::string& path) {
+  const std::filesystem::path p(path);
+  const std::string ext = p.extension().string();
+  if (ext == ".yaml" || ext == ".yml") return LoadRasterFloorPlan(path);
   FloorPlanParse out;
   std::string text;
   if (!ReadFile(path, kMaxPlanBytes, &text, &out.error)) return out;
-  const std::filesystem::path p(path);
-  const std::string ext = p.extension().string();
   const std::string id = p.stem().string();
   if (ext == ".geojson" || ext == ".json") {
     out = ParseGeoJsonFloorPlan(text, id);
   } else if (ext == ".txt") {
     out = ParseTextFloorPlan(text, id);
   } else {
-    out.error = "unknown floor plan format '" + ext + "' (expected .geojson or .txt)";
+    out.error = "unknown floor plan format '" + ext + "' (expected .geojson, .txt or .yaml)";
   }
   if (!out.ok()) out.error = path + ": " + out.error;
   return out;

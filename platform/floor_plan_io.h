@@ -1,5 +1,6 @@
 // Floor plan files: GeoJSON (LineString, MultiLineString, Polygon and MultiPolygon rings,
-// metres in a local frame) and the thesis' text format. Chosen by extension.
+// metres in a local frame), the thesis' text format and raster plans (.yaml beside an
+// image, platform/raster_plan_io.h). Chosen by extension.
 #pragma once
 
 #include <string>
@@ -15,7 +16,7 @@ FloorPlanParse LoadFloorPlan(const std::string& path);
 FloorPlanParse ParseGeoJsonFloorPlan(std::string_view text, std::string id);
 
 // A plan directory (the daemon's `plan_dir`): plans are addressed by id, the file name
-// without its extension (.geojson, .json or .txt). Ids are plain names (letters, digits,
+// without its extension (.geojson, .json, .txt or .yaml). Ids are plain names (letters, digits,
 // '-', '_', '.', not starting with '.'), so an id never leaves the directory.
 // Sorted ids of the plans in dir; empty when it is missing or unreadable.
 std::vector<std::string> ListPlanIds(const std::string& dir);

@@ -13,7 +13,7 @@ cd "$(dirname "$0")/.."
 packages=(build-essential cmake pkg-config clang-format
   cyclonedds-dev cyclonedds-tools libprotobuf-dev protobuf-compiler libeigen3-dev
   libspdlog-dev libgtest-dev libgmock-dev libbenchmark-dev libsystemd-dev
-  libcli11-dev nlohmann-json3-dev systemd)
+  libcli11-dev nlohmann-json3-dev libyaml-cpp-dev libpng-dev libgdal-dev systemd)
 # The tests also talk to clients that are not ours (label interop): a Fast DDS app and
 # the Python example client.
 if [ "${1:-build}" = test ]; then

@@ -1,6 +1,7 @@
 #include "tools/lib/simulate_recording.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -45,7 +46,7 @@ class SimRecorder {
 }  // namespace
 
 bool WriteSimulationRecording(const sim::Simulation& simulation, const std::string& plan_id,
-                              const sim::SimulatorOptions& options,
+                              const std::string& scenario, uint64_t seed,
                               const SimulateRecordingOptions& recording, const std::string& path,
                               size_t* records, std::string* error) {
   if (!simulation.ok() || simulation.steps.empty()) {
@@ -63,8 +64,8 @@ bool WriteSimulationRecording(const sim::Simulation& simulation, const std::stri
 
   v1::SimulationInfo info;
   info.set_plan_id(plan_id);
-  info.set_scenario(sim::ToString(options.scenario));
-  info.set_seed(options.seed);
+  info.set_scenario(scenario);
+  info.set_seed(seed);
   info.mutable_t_slam_plan_initial()->set_theta(simulation.T_slam_plan_initial.theta);
   info.mutable_t_slam_plan_initial()->set_x(simulation.T_slam_plan_initial.t.x());
   info.mutable_t_slam_plan_initial()->set_y(simulation.T_slam_plan_initial.t.y());
@@ -114,8 +115,8 @@ bool SimulateToRecording(const FloorPlan& plan, const sim::SimulatorOptions& opt
     return false;
   }
   result->drift = sim::MeasureDrift(result->simulation);
-  if (!WriteSimulationRecording(result->simulation, plan.id, options, recording, path,
-                                &result->records, error))
+  if (!WriteSimulationRecording(result->simulation, plan.id, sim::ToString(options.scenario),
+                                options.seed, recording, path, &result->records, error))
     return false;
   std::error_code ec;
   result->bytes = std::filesystem::file_size(path, ec);
@@ -159,6 +160,16 @@ bool ParseTumTrajectory(std::string_view text, std::vector<sim::TimedPose>* out,
     return false;
   }
   return true;
+}
+
+void PaceTrajectory(std::vector<sim::TimedPose>* trajectory, double pace_mps, double turn_rad_s) {
+  for (size_t i = 1; i < trajectory->size(); ++i) {
+    const sim::TimedPose& a = (*trajectory)[i - 1];
+    sim::TimedPose& b = (*trajectory)[i];
+    const double walk = (b.position - a.position).norm() / pace_mps;
+    const double turn = std::abs(WrapAngle(b.heading - a.heading)) / turn_rad_s;
+    b.t_s = a.t_s + std::max({walk, turn, 0.01});
+  }
 }
 
 }  // namespace floorpose::tools

@@ -35,7 +35,7 @@ struct SimulateRecordingResult {
 // step's pose. Every stamp (envelope, message and receive stamp) is the virtual time, so
 // the file depends on the simulation only. Envelope seq counts per topic from 1.
 bool WriteSimulationRecording(const sim::Simulation& simulation, const std::string& plan_id,
-                              const sim::SimulatorOptions& options,
+                              const std::string& scenario, uint64_t seed,
                               const SimulateRecordingOptions& recording, const std::string& path,
                               size_t* records, std::string* error);
 
@@ -50,5 +50,10 @@ bool SimulateToRecording(const FloorPlan& plan, const sim::SimulatorOptions& opt
 // (heading and pitch from it); z is not used (the simulator's eye height applies).
 bool ParseTumTrajectory(std::string_view text, std::vector<sim::TimedPose>* out,
                         std::string* error);
+
+// Re-times a trajectory whose clock is not seconds (a log's line numbers): each step
+// takes as long as walking it at pace_mps or turning it at turn_rad_s, whichever is
+// longer (at least 10 ms), starting at the first pose's time.
+void PaceTrajectory(std::vector<sim::TimedPose>* trajectory, double pace_mps, double turn_rad_s);
 
 }  // namespace floorpose::tools
