@@ -12,6 +12,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <deque>
 #include <vector>
 
 #include "core/closest_wall_index.h"
@@ -37,6 +38,16 @@ struct AlignmentFilterOptions {
   double measurement_points = 8.0;
   // Innovations beyond this Mahalanobis distance squared (chi^2, 3 dof) are outliers.
   double gate_chi2 = 16.3;  // 99.9%
+  // The heading drift above is a prior, not a fact: a wheel's odometry or a poor SLAM
+  // can drift ten times faster. Every registration tells how much heading drift would
+  // have made its heading innovation typical (the median of chi^2, 1 dof); the median of
+  // the last drift_window of those, at least 1 and at most max_drift_scale, multiplies
+  // the heading drift (adaptive noise estimation, Mehra 1970). The heading only: a
+  // registration sliding along a corridor whose walls are not all on the plan must not
+  // teach the filter that positions jump. A median, so a few wrong places in a row do
+  // not widen the gate; 0 turns it off.
+  int drift_window = 0;
+  double max_drift_scale = 400.0;
 };
 
 // The information (sum of J^T J over the points within inlier_threshold_m of a wall under
@@ -71,6 +82,7 @@ class AlignmentFilter {
     double mahalanobis2 = 0;
     bool gated = false;                                    // beyond gate_chi2: not applied
     Eigen::Vector3d correction = Eigen::Vector3d::Zero();  // what was applied
+    double drift_scale = 1;  // the drift this innovation asked for, times the prior's
   };
   // Fuses a measured alignment with covariance R (about the current pivot).
   Update Fuse(const Se2& measured, const Eigen::Matrix3d& R);
@@ -81,15 +93,25 @@ class AlignmentFilter {
   // One-sigma position and heading uncertainty at the pivot (largest axis), m and rad.
   double position_sigma_m() const;
   double heading_sigma_rad() const;
+  // What the heading drift prior is multiplied by now (1 until innovations say otherwise).
+  double drift_scale() const { return drift_scale_; }
   const AlignmentFilterOptions& options() const { return options_; }
 
  private:
+  // The heading drift scale that makes this innovation typical (see drift_window).
+  double AskedScale(const Eigen::Vector3d& innovation, const Eigen::Matrix3d& R) const;
+
   AlignmentFilterOptions options_;
   Se2 T_;
   Eigen::Matrix3d P_ = Eigen::Matrix3d::Identity();
   Eigen::Vector2d pivot_ = Eigen::Vector2d::Zero();
   double net_turn_rad_ = 0.0;   // since Reset or the last fused measurement...
   double peak_turn_rad_ = 0.0;  // ...and its largest magnitude
+  // The heading drift added since the last fused measurement at the prior's scale (moved
+  // with the pivot like P), and the drift scales the latest innovations asked for.
+  Eigen::Matrix3d drift_since_fused_ = Eigen::Matrix3d::Zero();
+  std::deque<double> asked_scales_;
+  double drift_scale_ = 1.0;
 };
 
 }  // namespace floorpose

@@ -197,6 +197,10 @@ class Tracker {
   // The model's probability and flag for given features (public for calibration).
   Reliability Assess(const ReliabilityFeatures& f) const;
 
+  // How much faster than the configured prior the SLAM drifts, as the filter learnt it
+  // from the registrations (AlignmentFilterOptions::drift_window).
+  double drift_scale() const { return filter_.drift_scale(); }
+
   // The latest accepted alignments, oldest first.
   const std::vector<AlignmentState>& history() const { return history_; }
 

@@ -131,6 +131,9 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (!(k.drift_heading_deg() >= 0 && k.drift_position_m() >= 0 && k.drift_turn() >= 0 &&
         k.min_walk_m() >= 0 && k.confirm_m() >= 0 && k.confirm_deg() >= 0))
     return "tracking.drift_*, min_walk_m and confirm_* must be >= 0";
+  if (!(k.max_drift_scale() >= 1 && k.max_drift_scale() <= 1e6))
+    return "tracking.max_drift_scale must be in [1, 1e6]";
+  if (k.drift_window() > 1000) return "tracking.drift_window must be at most 1000";
   if (!(k.max_ambiguity() > 0 && k.max_ambiguity() <= 1))
     return "tracking.max_ambiguity must be in (0, 1]";
   if (!(k.first_inlier_ratio() >= 0 && k.first_inlier_ratio() <= 1))
@@ -215,6 +218,8 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.filter.heading_var_per_m = drift_rad * drift_rad;
   t.filter.position_var_per_m = k.drift_position_m() * k.drift_position_m();
   t.filter.yaw_scale_sigma = k.drift_turn();
+  t.filter.drift_window = static_cast<int>(k.drift_window());
+  t.filter.max_drift_scale = k.max_drift_scale();
   t.filter.measurement_sigma_m = k.measurement_sigma_m();
   t.filter.measurement_points = k.measurement_points();
   t.filter.gate_chi2 = k.gate_chi2();

@@ -390,8 +390,9 @@ void Engine::OnRegistrationDone(Done done) {
                                              done.job.version, done.job.stamp_ns);
   last_registration_ = {r, d.accepted, d.reason};
   spdlog::info(
-      "registration: {} points, {} inliers, inlier RMSE {:.3f} m, {} iterations, {:.1f} ms: {}{}",
-      r.points, r.inliers, r.inlier_rmse, r.iterations, r.time_ms,
+      "registration: {} points, {} inliers, inlier RMSE {:.3f} m, {} iterations, {:.1f} ms, "
+      "drift x{:.1f}: {}{}",
+      r.points, r.inliers, r.inlier_rmse, r.iterations, r.time_ms, tracker_.drift_scale(),
       d.accepted ? "accepted" : "rejected: ", d.reason);
   if (d.accepted) {
     counters_.set_registrations_accepted(counters_.registrations_accepted() + 1);
