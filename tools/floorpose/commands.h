@@ -13,6 +13,7 @@ Run AddDemoCommand(CLI::App& app);
 Run AddReplayCommand(CLI::App& app);
 Run AddRecordCommand(CLI::App& app);
 Run AddSimulateCommand(CLI::App& app);
+Run AddImportCommand(CLI::App& app);
 Run AddImportCarmenCommand(CLI::App& app);
 Run AddEvalCommand(CLI::App& app);
 Run AddEvalSuiteCommand(CLI::App& app);

@@ -20,6 +20,8 @@ int main(int argc, char** argv) {
   add("record", "write every floorpose topic to a recording", floorpose::tools::AddRecordCommand);
   add("simulate", "write a simulated walk over a floor plan, with ground truth, as a recording",
       floorpose::tools::AddSimulateCommand);
+  add("import", "a CAD or GIS floor plan (DXF, GeoJSON, GeoPackage, Shapefile) as GeoJSON walls",
+      floorpose::tools::AddImportCommand);
   add("import-carmen", "a CARMEN laser log with odometry and ground truth as a recording",
       floorpose::tools::AddImportCarmenCommand);
   add("eval", "run a recording through the daemon's code and score it against ground truth",
