@@ -21,6 +21,7 @@ struct SimulateOptions {
   std::string out;
   std::string frame = "unity";
   bool no_mesh = false;
+  double pace_mps = 0.0;
   sim::SimulatorOptions sim;
   SimulateRecordingOptions recording;
 };
@@ -43,6 +44,7 @@ int RunSimulate(SimulateOptions o) {
       spdlog::error("{}: {}", o.trajectory, error);
       return 1;
     }
+    if (o.pace_mps > 0) PaceTrajectory(&trajectory, o.pace_mps, M_PI / 4);
   }
   SimulateRecordingResult result;
   std::string error;
@@ -84,6 +86,10 @@ Run AddSimulateCommand(CLI::App& app) {
       ->capture_default_str();
   app.add_option("--trajectory", o->trajectory,
                  "walk this TUM trajectory on the plan ('timestamp x y z qx qy qz qw')");
+  app.add_option("--pace", o->pace_mps,
+                 "re-time the trajectory at this walking speed, m/s (for logs whose "
+                 "timestamps are line numbers, such as CARMEN csail's ground truth)")
+      ->check(CLI::Range(0.05, 10.0));
   app.add_option("--out", o->out, "recording file to write")->required();
   app.add_option("--length", o->sim.target_length_m, "walk length, metres")->capture_default_str();
   app.add_option("--max-duration", o->sim.max_duration_s, "walk at most this long, seconds")
