@@ -218,11 +218,10 @@ TEST(CarmenDataTest, TheDataSetsLogsImport) {
     ASSERT_TRUE(
         ReadCarmenLog((dir / (std::string(name) + "-corrected.log.gz")).string(), &log, &error))
         << error;
-    ASSERT_TRUE(
-        ParseTumTrajectory(testing::ReadText(dir / (std::string(name) + "_gt.tum")), &gt, &error))
+    ASSERT_TRUE(ReadTumTrajectory((dir / (std::string(name) + "_gt.tum")).string(), &gt, &error))
         << error;
-    ASSERT_TRUE(ParseTumTrajectory(testing::ReadText(dir / (std::string(name) + "_odom.tum")),
-                                   &odom, &error))
+    ASSERT_TRUE(
+        ReadTumTrajectory((dir / (std::string(name) + "_odom.tum")).string(), &odom, &error))
         << error;
     sim::Simulation walk;
     CarmenImportReport report;

@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <memory>
 
-#include "platform/floor_plan_io.h"
 #include "tools/floorpose/commands.h"
 #include "tools/lib/carmen.h"
 #include "tools/lib/simulate_recording.h"
@@ -22,16 +21,6 @@ struct ImportCarmenOptions {
   SimulateRecordingOptions recording;
 };
 
-bool ReadTum(const std::string& path, std::vector<sim::TimedPose>* poses) {
-  std::string text, error;
-  if (!platform::ReadFile(path, 256 << 20, &text, &error) ||
-      !ParseTumTrajectory(text, poses, &error)) {
-    spdlog::error("{}: {}", path, error);
-    return false;
-  }
-  return true;
-}
-
 int RunImportCarmen(ImportCarmenOptions o) {
   CarmenLog log;
   std::string error;
@@ -40,7 +29,10 @@ int RunImportCarmen(ImportCarmenOptions o) {
     return 1;
   }
   std::vector<sim::TimedPose> odom, gt;
-  if (!ReadTum(o.odom, &odom) || !ReadTum(o.gt, &gt)) return 1;
+  if (!ReadTumTrajectory(o.odom, &odom, &error) || !ReadTumTrajectory(o.gt, &gt, &error)) {
+    spdlog::error("{}", error);
+    return 1;
+  }
   std::string name = std::filesystem::path(o.log).filename().string();
   for (const char* suffix : {".gz", ".log", "-corrected"})
     if (name.size() > std::strlen(suffix) && name.ends_with(suffix))

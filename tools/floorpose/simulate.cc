@@ -38,10 +38,9 @@ int RunSimulate(SimulateOptions o) {
   o.recording.frame = *ParseHeadsetFrame(o.frame);
   std::vector<sim::TimedPose> trajectory;
   if (!o.trajectory.empty()) {
-    std::string text, error;
-    if (!platform::ReadFile(o.trajectory, 256 << 20, &text, &error) ||
-        !ParseTumTrajectory(text, &trajectory, &error)) {
-      spdlog::error("{}: {}", o.trajectory, error);
+    std::string error;
+    if (!ReadTumTrajectory(o.trajectory, &trajectory, &error)) {
+      spdlog::error("{}", error);
       return 1;
     }
     if (o.pace_mps > 0) PaceTrajectory(&trajectory, o.pace_mps, M_PI / 4);

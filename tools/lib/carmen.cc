@@ -34,7 +34,7 @@ bool ToDouble(std::string_view s, double* v) {
   return ec == std::errc() && ptr == s.data() + s.size() && std::isfinite(*v);
 }
 
-Se2 ToSe2(const Pose2& p) { return {p.heading, p.position}; }
+Se2 ToSe2(const sim::TimedPose& p) { return {p.heading, p.position}; }
 Pose2 ToPose(const Se2& T, double z) { return {T.t, T.theta, z}; }
 
 // a + u (b - a) for poses, the heading the short way round.
@@ -49,21 +49,20 @@ class Track {
   Se2 At(double t) const {
     auto it = std::upper_bound(poses_.begin(), poses_.end(), t,
                                [](double v, const sim::TimedPose& p) { return v < p.t_s; });
-    if (it == poses_.begin()) return Pose(poses_.front());
-    if (it == poses_.end()) return Pose(poses_.back());
+    if (it == poses_.begin()) return ToSe2(poses_.front());
+    if (it == poses_.end()) return ToSe2(poses_.back());
     const sim::TimedPose& a = *(it - 1);
     const sim::TimedPose& b = *it;
-    return Lerp(Pose(a), Pose(b), (t - a.t_s) / (b.t_s - a.t_s));
+    return Lerp(ToSe2(a), ToSe2(b), (t - a.t_s) / (b.t_s - a.t_s));
   }
   // The last entry at or before t (the reading a scan was paired with), else the first.
   Se2 LastAt(double t) const {
     auto it = std::upper_bound(poses_.begin(), poses_.end(), t,
                                [](double v, const sim::TimedPose& p) { return v < p.t_s; });
-    return Pose(it == poses_.begin() ? poses_.front() : *(it - 1));
+    return ToSe2(it == poses_.begin() ? poses_.front() : *(it - 1));
   }
 
  private:
-  static Se2 Pose(const sim::TimedPose& p) { return {p.heading, p.position}; }
   const std::vector<sim::TimedPose>& poses_;
 };
 
@@ -76,75 +75,81 @@ double MapClock(const std::vector<double>& from, const std::vector<double>& to, 
   return to[i - 1] + u * (to[i] - to[i - 1]);
 }
 
-// The wall mesh of one scan in the odometry ("slam") frame; counts what was dropped.
-sim::SimMesh ScanMesh(const CarmenScan& scan, const Se2& T_slam_robot, double max_range,
-                      const CarmenImportOptions& o, uint64_t id, size_t* dropped) {
+// A scan's beam end points in the odometry ("slam") frame: which readings are usable
+// (not "no return", not too near) and which neighbours are joined into one wall (no
+// range jump between them).
+struct ScanEnds {
+  std::vector<Eigen::Vector2d> ends;
+  std::vector<uint8_t> valid;
+  std::vector<uint8_t> joined;  // end i to end i + 1
+  size_t dropped = 0;           // readings not valid
+};
+
+ScanEnds EndPoints(const CarmenScan& scan, const Se2& T_slam_robot, double max_range,
+                   const CarmenImportOptions& o) {
   const size_t n = scan.ranges.size();
   const double step = M_PI / static_cast<double>(n & ~size_t{1});  // 180/181: 1 deg, 360/361: 0.5
-  std::vector<Eigen::Vector2d> ends(n);
-  std::vector<uint8_t> valid(n, 0);
+  ScanEnds out;
+  out.ends.resize(n);
+  out.valid.assign(n, 0);
+  out.joined.assign(n, 0);
   for (size_t i = 0; i < n; ++i) {
     const double r = scan.ranges[i];
     if (!(r >= o.min_range_m && r < max_range)) {
-      ++*dropped;
+      ++out.dropped;
       continue;
     }
     const double bearing = -M_PI / 2 + static_cast<double>(i) * step;
-    ends[i] = T_slam_robot * Eigen::Vector2d(r * std::cos(bearing), r * std::sin(bearing));
-    valid[i] = 1;
+    out.ends[i] = T_slam_robot * Eigen::Vector2d(r * std::cos(bearing), r * std::sin(bearing));
+    out.valid[i] = 1;
   }
+  for (size_t i = 0; i + 1 < n; ++i) {
+    const double near = std::min(scan.ranges[i], scan.ranges[i + 1]);
+    out.joined[i] =
+        out.valid[i] && out.valid[i + 1] &&
+        (out.ends[i] - out.ends[i + 1]).norm() <= o.break_m + o.break_beams * step * near;
+  }
+  return out;
+}
+
+// The wall mesh of one scan: a quad from the floor to wall_height_m per joined pair.
+sim::SimMesh ScanMesh(const ScanEnds& scan, const CarmenImportOptions& o, uint64_t id) {
   sim::SimMesh mesh;
   mesh.id = id;
   mesh.change = sim::MeshChange::kAdded;
-  std::vector<int> vertex(n, -1);  // bottom vertex index of an end point; top is +1
+  std::vector<int> vertex(scan.ends.size(), -1);  // bottom vertex of an end point; top is +1
   auto vertex_of = [&](size_t i) {
     if (vertex[i] < 0) {
       vertex[i] = static_cast<int>(mesh.vertices_slam.size());
-      const Eigen::Vector2f p = ends[i].cast<float>();
+      const Eigen::Vector2f p = scan.ends[i].cast<float>();
       mesh.vertices_slam.emplace_back(p.x(), p.y(), 0.0f);
       mesh.vertices_slam.emplace_back(p.x(), p.y(), static_cast<float>(o.wall_height_m));
     }
     return static_cast<uint32_t>(vertex[i]);
   };
-  for (size_t i = 0; i + 1 < n; ++i) {
-    if (!valid[i] || !valid[i + 1]) continue;
-    const double near = std::min(scan.ranges[i], scan.ranges[i + 1]);
-    if ((ends[i] - ends[i + 1]).norm() > o.break_m + o.break_beams * step * near) continue;
+  for (size_t i = 0; i + 1 < scan.ends.size(); ++i) {
+    if (!scan.joined[i]) continue;
     const uint32_t a = vertex_of(i), b = vertex_of(i + 1);
     mesh.triangles.insert(mesh.triangles.end(), {a, b, b + 1, a, b + 1, a + 1});
   }
   return mesh;
 }
 
-// An exact wall pick on the first scan: the nearest end point (within pick_max_range_m)
-// whose neighbours on both sides are joined to it, with the normal of that stretch.
-bool ExactPick(const CarmenScan& scan, const Se2& T_slam_robot, const Se2& T_plan_slam,
-               double max_range, const CarmenImportOptions& o, WallPick* pick) {
-  const size_t n = scan.ranges.size();
-  const double step = M_PI / static_cast<double>(n & ~size_t{1});
-  auto end = [&](size_t i) {
-    const double r = scan.ranges[i], bearing = -M_PI / 2 + static_cast<double>(i) * step;
-    return Eigen::Vector2d(r * std::cos(bearing), r * std::sin(bearing));
-  };
+// An exact wall pick on a scan: the nearest end point (within pick_max_range_m) joined to
+// its neighbours on both sides, with the normal of that stretch.
+bool ExactPick(const CarmenScan& scan, const ScanEnds& ends, const Se2& T_plan_slam,
+               const CarmenImportOptions& o, WallPick* pick) {
   double best = o.pick_max_range_m;
   bool found = false;
-  for (size_t i = 1; i + 1 < n; ++i) {
-    const double r = scan.ranges[i];
-    if (!(r >= o.min_range_m && r < best)) continue;
-    bool ok = true;
-    for (size_t k : {i - 1, i + 1}) {
-      const double rk = scan.ranges[k];
-      ok = ok && rk >= o.min_range_m && rk < max_range &&
-           (end(k) - end(i)).norm() <= o.break_m + o.break_beams * step * std::min(r, rk);
-    }
-    if (!ok) continue;
-    const Eigen::Vector2d along = T_slam_robot.R() * (end(i + 1) - end(i - 1));
+  for (size_t i = 1; i + 1 < ends.ends.size(); ++i) {
+    if (!ends.joined[i - 1] || !ends.joined[i] || !(scan.ranges[i] < best)) continue;
+    const Eigen::Vector2d along = ends.ends[i + 1] - ends.ends[i - 1];
     if (along.norm() < 1e-3) continue;
-    pick->slam_point = T_slam_robot * end(i);
+    pick->slam_point = ends.ends[i];
     pick->slam_normal = Eigen::Vector2d(-along.y(), along.x()).normalized();
     pick->plan_point = T_plan_slam * pick->slam_point;
     pick->plan_normal = T_plan_slam.R() * pick->slam_normal;
-    best = r;
+    best = scan.ranges[i];
     found = true;
   }
   return found;
@@ -280,8 +285,7 @@ bool CarmenToSimulation(const CarmenLog& log, const std::vector<sim::TimedPose>&
   std::vector<Se2> odom_at_scan(n), T_plan_slam(n);
   for (size_t i = 0; i < n; ++i) {
     odom_at_scan[i] = odom.LastAt(clock[i]);
-    T_plan_slam[i] =
-        ToSe2({ground_truth[i].position, ground_truth[i].heading}) * odom_at_scan[i].Inverse();
+    T_plan_slam[i] = ToSe2(ground_truth[i]) * odom_at_scan[i].Inverse();
   }
   out->T_slam_plan_initial = T_plan_slam[0].Inverse();
 
@@ -304,8 +308,9 @@ bool CarmenToSimulation(const CarmenLog& log, const std::vector<sim::TimedPose>&
     step.T_slam_plan = T.Inverse();
     for (; next_scan < n && walk[next_scan] <= t_walk + 1e-9; ++next_scan) {
       const CarmenScan& scan = log.scans[next_scan];
-      step.meshes.push_back(ScanMesh(scan, odom_at_scan[next_scan], max_range, o, next_scan + 1,
-                                     &report->dropped_readings));
+      const ScanEnds ends = EndPoints(scan, odom_at_scan[next_scan], max_range, o);
+      report->dropped_readings += ends.dropped;
+      step.meshes.push_back(ScanMesh(ends, o, next_scan + 1));
       report->readings += scan.ranges.size();
       report->triangles += step.meshes.back().triangles.size() / 3;
       out->counts.added++;
@@ -316,7 +321,8 @@ bool CarmenToSimulation(const CarmenLog& log, const std::vector<sim::TimedPose>&
   }
   report->scans = next_scan;
 
-  if (!ExactPick(log.scans[0], odom_at_scan[0], T_plan_slam[0], max_range, o, &out->pick)) {
+  if (!ExactPick(log.scans[0], EndPoints(log.scans[0], odom_at_scan[0], max_range, o),
+                 T_plan_slam[0], o, &out->pick)) {
     *error =
         "the first scan has no wall within " + std::to_string(o.pick_max_range_m) + " m to pick";
     return false;

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -154,9 +155,8 @@ bool ImportPlan(const std::string& path, const PlanImportOptions& options, Floor
       return false;
     }
   }
-  std::string id = path.substr(path.find_last_of('/') + 1);
-  id = id.substr(0, id.find_last_of('.'));
-  FloorPlanParse parsed = MakeFloorPlan(id, std::move(raw));
+  FloorPlanParse parsed =
+      MakeFloorPlan(std::filesystem::path(path).stem().string(), std::move(raw));
   if (!parsed.ok()) {
     *error = path + ": " + parsed.error + " on the chosen layers";
     return false;

@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 
+#include "platform/floor_plan_io.h"
 #include "platform/recording.h"
 #include "tools/lib/headset_messages.h"
 
@@ -160,6 +161,15 @@ bool ParseTumTrajectory(std::string_view text, std::vector<sim::TimedPose>* out,
     return false;
   }
   return true;
+}
+
+bool ReadTumTrajectory(const std::string& path, std::vector<sim::TimedPose>* out,
+                       std::string* error) {
+  std::string text;
+  if (!platform::ReadFile(path, 256 << 20, &text, error)) return false;
+  if (ParseTumTrajectory(text, out, error)) return true;
+  *error = path + ": " + *error;
+  return false;
 }
 
 void PaceTrajectory(std::vector<sim::TimedPose>* trajectory, double pace_mps, double turn_rad_s) {

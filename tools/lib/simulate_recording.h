@@ -51,6 +51,10 @@ bool SimulateToRecording(const FloorPlan& plan, const sim::SimulatorOptions& opt
 bool ParseTumTrajectory(std::string_view text, std::vector<sim::TimedPose>* out,
                         std::string* error);
 
+// The same from a file (at most 256 MB); the error names the file.
+bool ReadTumTrajectory(const std::string& path, std::vector<sim::TimedPose>* out,
+                       std::string* error);
+
 // Re-times a trajectory whose clock is not seconds (a log's line numbers): each step
 // takes as long as walking it at pace_mps or turning it at turn_rad_s, whichever is
 // longer (at least 10 ms), starting at the first pose's time.
