@@ -39,13 +39,14 @@ struct AlignmentFilterOptions {
   // Innovations beyond this Mahalanobis distance squared (chi^2, 3 dof) are outliers.
   double gate_chi2 = 16.3;  // 99.9%
   // The heading drift above is a prior, not a fact: a wheel's odometry or a poor SLAM
-  // can drift ten times faster. Every registration tells how much heading drift would
-  // have made its heading innovation typical (the median of chi^2, 1 dof); the median of
-  // the last drift_window of those, at least 1 and at most max_drift_scale, multiplies
-  // the heading drift (adaptive noise estimation, Mehra 1970). The heading only: a
-  // registration sliding along a corridor whose walls are not all on the plan must not
-  // teach the filter that positions jump. A median, so a few wrong places in a row do
-  // not widen the gate; 0 turns it off.
+  // can drift ten times faster. Once the drift since the last fused registration rises
+  // above the registration's own noise, each registration tells the scale of the drift
+  // since then that would have made its innovation typical (the median of chi^2, 3 dof);
+  // the median of the last drift_window of those, at least 1 and at most
+  // max_drift_scale, multiplies the whole drift (adaptive noise estimation, Mehra 1970).
+  // A median, so a few wrong places in a row do not widen the gate; but a registration
+  // sliding along a corridor whose walls are not all on the plan asks for more drift
+  // result after result, so it is off by default (docs/evaluation.md); 0 turns it off.
   int drift_window = 0;
   double max_drift_scale = 400.0;
 };
