@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
-# Verifies systemd/floorposed.service and prints its systemd exposure score.
+# Verifies systemd/floorposed.service and checks its systemd exposure score (<= 2.0).
 #
 #   tools/check-unit.sh [UNIT]     (default: systemd/floorposed.service)
 #
 # `systemd-analyze verify` insists that the ExecStart binary exists, and floorposed is
 # usually not installed where this runs, so the check uses a temporary copy of the unit
 # whose ExecStart binary is replaced by /bin/true (arguments kept). Exits non-zero when
-# verification prints anything or fails. Needs systemd-analyze (Debian: apt-get install
+# verification prints anything or fails, or when `systemd-analyze security --offline=yes`
+# scores the unit above MAX_EXPOSURE (default 2.0). Needs systemd-analyze (apt-get install
 # systemd).
 set -euo pipefail
 
@@ -40,11 +41,21 @@ echo "verify: OK (no messages)"
 
 echo
 echo "== systemd-analyze security --offline=yes"
-# The score is informational: --threshold is not used so that a systemd upgrade that
-# rescores settings does not fail the check.
-SYSTEMD_LOG_COLOR=0 systemd-analyze security --offline=yes --no-pager "$copy" 2>&1 |
-  tee "$tmp/security.txt" | grep -E '^(→|->) Overall exposure level' ||
-  { cat "$tmp/security.txt"; echo "check-unit: no exposure score printed" >&2; exit 1; }
+# The exposure score must stay at or below MAX_EXPOSURE (lower is safer; 2.0 by default).
+max_exposure="${MAX_EXPOSURE:-2.0}"
+SYSTEMD_LOG_COLOR=0 systemd-analyze security --offline=yes --no-pager "$copy" >"$tmp/security.txt" 2>&1 || true
+score="$(sed -nE 's/^(→|->) Overall exposure level for [^:]+: ([0-9.]+).*/\2/p' "$tmp/security.txt")"
+if [[ -z "$score" ]]; then
+  cat "$tmp/security.txt"
+  echo "check-unit: no exposure score printed" >&2
+  exit 1
+fi
+echo "exposure: $score (at most $max_exposure)"
+if ! awk -v s="$score" -v m="$max_exposure" 'BEGIN { exit !(s <= m) }'; then
+  cat "$tmp/security.txt"
+  echo "check-unit: exposure $score is above $max_exposure" >&2
+  exit 1
+fi
 if [[ "${VERBOSE:-0}" != 0 ]]; then
   cat "$tmp/security.txt"
 fi
