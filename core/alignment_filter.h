@@ -94,8 +94,10 @@ class AlignmentFilter {
   // One-sigma position and heading uncertainty at the pivot (largest axis), m and rad.
   double position_sigma_m() const;
   double heading_sigma_rad() const;
-  // What the heading drift prior is multiplied by now (1 until innovations say otherwise).
+  // What the drift prior is multiplied by now (1 until innovations say otherwise), and
+  // setting it again after a restart.
   double drift_scale() const { return drift_scale_; }
+  void set_drift_scale(double scale) { drift_scale_ = scale; }
   const AlignmentFilterOptions& options() const { return options_; }
 
  private:

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <set>
 #include <tuple>
 
@@ -166,6 +167,22 @@ FloorPlanParse ParseTextFloorPlan(std::string_view text, std::string id) {
     return out;
   }
   return MakeFloorPlan(std::move(id), std::move(raw));
+}
+
+uint64_t FloorPlanDigest(const FloorPlan& plan) {
+  uint64_t h = 14695981039346656037ull;
+  auto mix = [&](double v) {
+    unsigned char bytes[sizeof v];
+    std::memcpy(bytes, &v, sizeof v);
+    for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
+  };
+  for (const Segment& s : plan.segments) {
+    mix(s.a.x());
+    mix(s.a.y());
+    mix(s.b.x());
+    mix(s.b.y());
+  }
+  return h;
 }
 
 }  // namespace floorpose

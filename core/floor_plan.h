@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -43,6 +44,10 @@ FloorPlanParse MakeFloorPlan(std::string id, std::vector<Segment> raw);
 // "floor plan clipped to the points' box + 2 m" (section 6.4.3). May be empty.
 FloorPlan ClipFloorPlan(const FloorPlan& plan, const Eigen::Vector2d& min,
                         const Eigen::Vector2d& max);
+
+// A fingerprint of the segments (FNV-1a over their coordinates): the same plan gives the
+// same digest whatever file it came from; any moved wall changes it.
+uint64_t FloorPlanDigest(const FloorPlan& plan);
 
 // The thesis' text format: the segment count, then `x1 y1 x2 y2` per line (section 6.4.2).
 FloorPlanParse ParseTextFloorPlan(std::string_view text, std::string id);

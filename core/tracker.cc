@@ -76,6 +76,7 @@ void Tracker::Reset() {
   pick_plan_point_.reset();
   last_plan_position_.reset();
   current_fit_.reset();
+  restored_ = false;
   last_start_ns_ = 0;
   walked_since_start_m_ = 0;
   ForgetRegistrations();
@@ -92,6 +93,7 @@ void Tracker::ForgetRegistrations() {
 
 void Tracker::SetAlignment(const Se2& T, AlignmentSource source, int64_t stamp_ns) {
   pending_jump_.reset();
+  restored_ = false;
   alignment_.T_plan_slam = T;
   alignment_.version = next_version_++;
   alignment_.source = source;
@@ -119,6 +121,50 @@ void Tracker::PredictToWearer() {
       last_slam_position_ ? alignment_.T_plan_slam * *last_slam_position_ : filter_.pivot();
   filter_.Predict(pivot, walked_since_predict_m_, turned_since_predict_rad_);
   walked_since_predict_m_ = turned_since_predict_rad_ = 0;
+}
+
+TrackerState Tracker::SaveState() const {
+  TrackerState s;
+  s.alignment = alignment_;
+  s.alignment.registration.reset();
+  s.next_version = next_version_;
+  s.P = filter_.P();
+  s.pivot = filter_.pivot();
+  s.drift_scale = filter_.drift_scale();
+  s.pick_plan_point = pick_plan_point_;
+  s.start_pivot = start_pivot_;
+  s.fused = fused_;
+  return s;
+}
+
+std::string Tracker::RestoreState(const TrackerState& s) {
+  if (!index_) return "no floor plan loaded";
+  const AlignmentState& a = s.alignment;
+  const bool finite = std::isfinite(a.T_plan_slam.theta) && a.T_plan_slam.t.allFinite() &&
+                      s.P.allFinite() && s.pivot.allFinite() && s.start_pivot.allFinite() &&
+                      (!s.pick_plan_point || s.pick_plan_point->allFinite());
+  if (!finite) return "values that are not finite";
+  if (a.version == 0 || s.next_version <= a.version)
+    return "no alignment, or versions out of order";
+  if (!(s.drift_scale >= 1.0 && s.drift_scale <= options_.filter.max_drift_scale))
+    return "a drift scale out of range";
+  const Eigen::Matrix3d sym = 0.5 * (s.P + s.P.transpose());
+  if ((s.P - sym).norm() > 1e-9 * (1 + s.P.norm()) ||
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(sym).eigenvalues()(0) < 0)
+    return "a covariance that is not symmetric and positive";
+  Reset();
+  alignment_ = a;
+  alignment_.registration.reset();
+  next_version_ = s.next_version;
+  pick_plan_point_ = s.pick_plan_point;
+  start_pivot_ = s.start_pivot;
+  filter_ = AlignmentFilter(options_.filter);
+  filter_.Reset(a.T_plan_slam, sym, s.pivot);
+  filter_.set_drift_scale(s.drift_scale);
+  fused_ = s.fused;
+  restored_ = true;
+  history_.push_back(alignment_);
+  return {};
 }
 
 std::string Tracker::ApplyWallPick(const WallPick& pick, int64_t stamp_ns) {
@@ -437,8 +483,9 @@ Reliability Tracker::CurrentReliability() const {
   if (!current_fit_) {
     // Aligned by hand, not yet checked against the walls: DEGRADED, whatever the odds.
     r.flag = ReliabilityFlag::kDegraded;
-    r.reason = alignment_.source == AlignmentSource::kFlip ? "flipped, not yet checked"
-                                                           : "wall pick, not yet checked";
+    r.reason = restored_                                     ? "restored, not yet checked"
+               : alignment_.source == AlignmentSource::kFlip ? "flipped, not yet checked"
+                                                             : "wall pick, not yet checked";
   }
   return r;
 }

@@ -135,6 +135,19 @@ struct AlignmentState {
   std::optional<RegistrationResult> registration;  // when source is kRegistration
 };
 
+// What a restart needs to resume the alignment where it was (platform/engine.h keeps it
+// in the state snapshot): the alignment without its registration, and the filter.
+struct TrackerState {
+  AlignmentState alignment;
+  uint64_t next_version = 1;
+  Eigen::Matrix3d P = Eigen::Matrix3d::Identity();  // filter covariance about pivot
+  Eigen::Vector2d pivot = Eigen::Vector2d::Zero();
+  double drift_scale = 1.0;
+  std::optional<Eigen::Vector2d> pick_plan_point;
+  Eigen::Vector2d start_pivot = Eigen::Vector2d::Zero();
+  uint32_t fused = 0;
+};
+
 class Tracker {
  public:
   explicit Tracker(TrackerOptions options) : options_(std::move(options)) {}
@@ -152,6 +165,12 @@ class Tracker {
   // search with its rotations about the pick's point; later, a search as wide as the
   // alignment is uncertain at the wearer (search_sigmas), when that is wide enough.
   RegistrationOptions NextRegistrationOptions() const;
+
+  TrackerState SaveState() const;
+  // Resumes a saved state on the plan in use; until the next registration checks it
+  // against the walls the flag says so (DEGRADED). Returns why not (no plan, values that
+  // are not finite or not a covariance), or empty.
+  std::string RestoreState(const TrackerState& state);
 
   // Returns an error message, or empty on success.
   std::string ApplyWallPick(const WallPick& pick, int64_t stamp_ns);
@@ -256,6 +275,7 @@ class Tracker {
   std::vector<AlignmentState> history_;
   // Fit of the alignment in use on the latest registration cloud.
   std::optional<RegistrationResult> current_fit_;
+  bool restored_ = false;  // the alignment in use came from a saved state
 };
 
 const char* ToString(ReliabilityFlag flag);

@@ -46,6 +46,11 @@ class WallStore {
                                         std::vector<Eigen::Vector2d>* normals = nullptr,
                                         uint64_t since_generation = 0,
                                         int64_t min_stamp_ns = INT64_MIN) const;
+  // Every live mesh as fn(mesh_id, points, stamp_ns), in no particular order.
+  template <typename Fn>
+  void ForEachMesh(Fn&& fn) const {
+    for (const auto& [id, mesh] : meshes_) fn(id, mesh.points, mesh.stamp_ns);
+  }
   // Increments on every Upsert; a mesh remembers the generation that last wrote it.
   uint64_t generation() const { return generation_; }
   // Live points within radius of a position (slam frame).

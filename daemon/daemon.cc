@@ -4,9 +4,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
+#include <filesystem>
 #include <vector>
 
 #include "platform/clock.h"
+#include "platform/state_file.h"
 
 namespace floorpose {
 
@@ -43,6 +46,17 @@ bool Daemon::Start(std::string* error) {
       config_, [this](Topic t, const google::protobuf::Message& m) { Publish(t, m); },
       platform::MonotonicNs);
   const std::string plan_error = engine_->Start();
+  std::string state_dir = config_.state_dir();
+  if (const char* systemd_dir = std::getenv("STATE_DIRECTORY"); state_dir.empty() && systemd_dir)
+    state_dir = std::string(systemd_dir).substr(0, std::string(systemd_dir).find(':'));
+  if (!state_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(state_dir, ec);
+    if (ec) spdlog::warn("state directory {}: {}", state_dir, ec.message());
+    snapshot_path_ = platform::SnapshotPath(state_dir, config_.dds().device_id());
+    ResumeFromSnapshot();
+    snapshot_thread_ = std::thread([this] { SnapshotLoop(); });
+  }
   engine_->PublishStatus(plan_error.empty() ? "started" : plan_error);
   running_ = true;
   io_heartbeat_ns_ = platform::MonotonicNs();
@@ -61,6 +75,15 @@ void Daemon::Stop() {
   waiter_->Wake();
   io_thread_.join();
   worker_thread_.join();
+  if (snapshot_thread_.joinable()) {
+    MaybeSnapshot(platform::MonotonicNs(), /*force=*/true);
+    {
+      std::lock_guard lock(snapshot_mu_);
+      snapshot_stop_ = true;
+    }
+    snapshot_cv_.notify_all();
+    snapshot_thread_.join();  // writes what is pending first
+  }
   engine_->PublishStatus("stopping");
   const auto& c = engine_->counters();
   spdlog::info("stopped: {} poses in, {} plan poses out, {} mesh deltas, {} rejected", c.poses_in(),
@@ -104,6 +127,7 @@ void Daemon::IoLoop() {
     }
     ApplyFinished(false);
     const int64_t now = platform::MonotonicNs();
+    MaybeSnapshot(now, false);
     if (now >= next_status_ns_) {
       engine_->PublishStatus({});
       next_status_ns_ = now + static_cast<int64_t>(config_.status_period_s() * 1e9);
@@ -173,6 +197,78 @@ void Daemon::Publish(Topic topic, const google::protobuf::Message& msg) {
   std::string error;
   if (!writer->Write(e, &error))
     spdlog::warn("publishing on {} failed: {}", platform::TopicName(topic), error);
+}
+
+void Daemon::ResumeFromSnapshot() {
+  v1::StateSnapshot snapshot;
+  std::string error;
+  switch (platform::ReadStateFile(snapshot_path_, &snapshot, &error)) {
+    case platform::StateRead::kMissing:
+      spdlog::info("no snapshot at {}: starting clean", snapshot_path_);
+      return;
+    case platform::StateRead::kBad: break;
+    case platform::StateRead::kOk:
+      error = engine_->RestoreState(snapshot);
+      if (error.empty()) {
+        const v1::DaemonStatus s = engine_->Status({});
+        const double age_s =
+            static_cast<double>(platform::WallClockNs() - snapshot.written_unix_ns()) * 1e-9;
+        spdlog::info(
+            "resumed from {} (written {:.1f} s ago): alignment version {}, {} meshes, "
+            "{} wall points",
+            snapshot_path_, age_s, snapshot.alignment().version(), s.live_meshes(),
+            s.wall_points());
+        saved_version_ = snapshot.alignment().version();
+        engine_->PublishAlignment();
+        return;
+      }
+      error = "a snapshot " + error;
+      break;
+  }
+  std::string aside_error;
+  const std::string aside = platform::SetAside(snapshot_path_, &aside_error);
+  spdlog::warn("snapshot {} not trusted: {}; {}; starting clean", snapshot_path_, error,
+               aside.empty() ? aside_error : "set aside as " + aside);
+}
+
+void Daemon::MaybeSnapshot(int64_t now_ns, bool force) {
+  if (snapshot_path_.empty()) return;
+  const uint64_t version = engine_->tracker().alignment().version;
+  const uint64_t deltas = engine_->counters().mesh_deltas_in();
+  const bool changed = version != saved_version_ || deltas != saved_deltas_;
+  if (!changed || (!force && now_ns < next_snapshot_ns_)) return;
+  v1::StateSnapshot snapshot = engine_->SaveState();
+  snapshot.set_written_unix_ns(platform::WallClockNs());
+  saved_version_ = version;
+  saved_deltas_ = deltas;
+  next_snapshot_ns_ = now_ns + static_cast<int64_t>(config_.snapshot_period_s() * 1e9);
+  {
+    std::lock_guard lock(snapshot_mu_);
+    snapshot_ = std::move(snapshot);
+  }
+  snapshot_cv_.notify_one();
+}
+
+void Daemon::SnapshotLoop() {
+  while (true) {
+    v1::StateSnapshot snapshot;
+    {
+      std::unique_lock lock(snapshot_mu_);
+      snapshot_cv_.wait(lock, [&] { return snapshot_stop_ || snapshot_.has_value(); });
+      if (!snapshot_) return;  // stopping with nothing left to write
+      snapshot = std::move(*snapshot_);
+      snapshot_.reset();
+    }
+    std::string error;
+    const int64_t t0 = platform::MonotonicNs();
+    if (platform::WriteStateFile(snapshot_path_, snapshot, &error)) {
+      spdlog::debug("snapshot: alignment version {}, {} meshes, written in {:.1f} ms",
+                    snapshot.alignment().version(), snapshot.meshes_size(),
+                    static_cast<double>(platform::MonotonicNs() - t0) * 1e-6);
+    } else {
+      spdlog::warn("snapshot not written: {}", error);
+    }
+  }
 }
 
 }  // namespace floorpose

@@ -40,6 +40,11 @@ class Daemon {
   void AfterInput();
   void ApplyFinished(bool wait);
   void Publish(platform::Topic topic, const google::protobuf::Message& msg);
+  // Crash safety: resume from the snapshot at start (a bad one is set aside), and hand a
+  // new one to the snapshot thread after a new alignment or, periodically, new walls.
+  void ResumeFromSnapshot();
+  void MaybeSnapshot(int64_t now_ns, bool force);
+  void SnapshotLoop();
 
   v1::FloorposedConfig config_;
   bool deterministic_;
@@ -58,6 +63,16 @@ class Daemon {
   std::optional<platform::Engine::Job> job_;
   std::optional<platform::Engine::Done> done_;
   bool stop_ = false;
+
+  // Io thread -> snapshot thread: the latest snapshot to write (latest wins).
+  std::string snapshot_path_;  // empty: no snapshots
+  std::mutex snapshot_mu_;
+  std::condition_variable snapshot_cv_;
+  std::optional<v1::StateSnapshot> snapshot_;
+  bool snapshot_stop_ = false;
+  uint64_t saved_version_ = 0, saved_deltas_ = 0;  // what the latest snapshot had seen
+  int64_t next_snapshot_ns_ = 0;
+  std::thread snapshot_thread_;
 
   std::atomic<bool> running_{false};
   std::atomic<int64_t> io_heartbeat_ns_{0};

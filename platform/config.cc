@@ -92,6 +92,7 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (c.icp().levels() > 8) return "icp.levels must be at most 8";
   if (!(c.tracking().snapshot_voxel_m() > 0)) return "tracking.snapshot_voxel_m must be positive";
   if (!(c.status_period_s() > 0)) return "status_period_s must be positive";
+  if (!(c.snapshot_period_s() > 0)) return "snapshot_period_s must be positive";
   RegistrationMethod method;
   if (!ParseRegistrationMethod(c.registration().method(), &method))
     return "registration.method must be icp, ik or hough, not \"" + c.registration().method() +

@@ -130,6 +130,8 @@ std::string Engine::LoadPlan(const std::string& path, const std::string& floor) 
                static_cast<double>(index->MemoryBytes()) / 1e6);
   tracker_.SetPlan(std::move(index));
   floor_ = floor;
+  plan_path_ = path;
+  plan_digest_ = FloorPlanDigest(parsed.plan);
   return {};
 }
 
@@ -453,6 +455,129 @@ v1::DaemonStatus Engine::Status(const std::string& message) const {
 std::string Engine::StatusLine() const {
   return std::string(ToString(tracker_.state())) + ", " + std::to_string(store_.points()) +
          " wall points, " + std::to_string(counters_.plan_poses_out()) + " plan poses";
+}
+
+v1::StateSnapshot Engine::SaveState() const {
+  v1::StateSnapshot s;
+  s.set_device_id(config_.dds().device_id());
+  s.set_plan_path(plan_path_);
+  s.set_plan_digest(plan_digest_);
+  s.set_floor(floor_);
+  s.set_latest_stamp_ns(latest_stamp_ns_);
+  const TrackerState t = tracker_.SaveState();
+  const AlignmentState& a = t.alignment;
+  v1::Alignment* out = s.mutable_alignment();
+  out->mutable_t_plan_slam()->set_theta(a.T_plan_slam.theta);
+  out->mutable_t_plan_slam()->set_x(a.T_plan_slam.t.x());
+  out->mutable_t_plan_slam()->set_y(a.T_plan_slam.t.y());
+  out->set_version(a.version);
+  out->set_source(ToProto(a.source));
+  out->set_floor(floor_);
+  out->set_stamp_ns(a.stamp_ns);
+  s.set_next_version(t.next_version);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) s.add_covariance(t.P(r, c));
+  s.set_pivot_x(t.pivot.x());
+  s.set_pivot_y(t.pivot.y());
+  s.set_drift_scale(t.drift_scale);
+  s.set_has_pick(t.pick_plan_point.has_value());
+  if (t.pick_plan_point) {
+    s.set_pick_x(t.pick_plan_point->x());
+    s.set_pick_y(t.pick_plan_point->y());
+  }
+  s.set_start_pivot_x(t.start_pivot.x());
+  s.set_start_pivot_y(t.start_pivot.y());
+  s.set_fused(t.fused);
+  store_.ForEachMesh([&](uint64_t id, const std::vector<WallPoint>& points, int64_t stamp_ns) {
+    v1::StateSnapshot::Mesh* m = s.add_meshes();
+    m->set_mesh_id(id);
+    m->set_stamp_ns(stamp_ns);
+    m->mutable_points()->Reserve(static_cast<int>(2 * points.size()));
+    m->mutable_normals()->Reserve(static_cast<int>(2 * points.size()));
+    for (const WallPoint& p : points) {
+      m->add_points(p.p.x());
+      m->add_points(p.p.y());
+      m->add_normals(p.n.x());
+      m->add_normals(p.n.y());
+    }
+  });
+  return s;
+}
+
+std::string Engine::RestoreState(const v1::StateSnapshot& s) {
+  if (s.device_id() != config_.dds().device_id())
+    return "of device '" + s.device_id() + "', not '" + config_.dds().device_id() + "'";
+  if (s.plan_path().empty()) return "without a floor plan";
+  // The app may have loaded another plan before the restart: that one again, and back to
+  // the configured one if the snapshot is refused after all.
+  const std::string configured_plan = plan_path_, configured_floor = floor_;
+  bool switched = false;
+  auto refuse = [&](const std::string& why) {
+    if (switched) {
+      if (configured_plan.empty()) {
+        tracker_.SetPlan(nullptr);
+        plan_path_.clear();
+        plan_digest_ = 0;
+      } else {
+        LoadPlan(configured_plan, configured_floor);
+      }
+    }
+    return why;
+  };
+  if (s.plan_path() != plan_path_ || s.floor() != floor_) {
+    if (const std::string e = LoadPlan(s.plan_path(), s.floor()); !e.empty())
+      return refuse("of plan " + s.plan_path() + ", which does not load now: " + e);
+    switched = true;
+  }
+  if (s.plan_digest() != plan_digest_)
+    return refuse("of plan " + s.plan_path() + " as it was before it changed");
+  // The wall store first, checked whole before anything is kept.
+  std::vector<std::pair<const v1::StateSnapshot::Mesh*, std::vector<WallPoint>>> meshes;
+  size_t total = 0;
+  for (const v1::StateSnapshot::Mesh& m : s.meshes()) {
+    if (m.points_size() % 2 != 0 || m.points_size() != m.normals_size())
+      return refuse("with mesh " + std::to_string(m.mesh_id()) + " malformed");
+    std::vector<WallPoint> points(static_cast<size_t>(m.points_size() / 2));
+    for (size_t i = 0; i < points.size(); ++i) {
+      const int k = static_cast<int>(2 * i);
+      points[i].p = {m.points(k), m.points(k + 1)};
+      points[i].n = {m.normals(k), m.normals(k + 1)};
+      if (!points[i].p.allFinite() || !points[i].n.allFinite())
+        return refuse("with mesh " + std::to_string(m.mesh_id()) + " not finite");
+    }
+    total += points.size();
+    meshes.emplace_back(&m, std::move(points));
+  }
+  if (total > config_.limits().max_wall_points())
+    return refuse(std::to_string(total) + " wall points, more than limits.max_wall_points");
+  if (s.alignment().version() > 0) {
+    TrackerState t;
+    const v1::Alignment& a = s.alignment();
+    t.alignment.T_plan_slam = {a.t_plan_slam().theta(), {a.t_plan_slam().x(), a.t_plan_slam().y()}};
+    t.alignment.version = a.version();
+    t.alignment.stamp_ns = a.stamp_ns();
+    switch (a.source()) {
+      case v1::Alignment::WALL_PICK: t.alignment.source = AlignmentSource::kWallPick; break;
+      case v1::Alignment::FLIP: t.alignment.source = AlignmentSource::kFlip; break;
+      case v1::Alignment::REGISTRATION: t.alignment.source = AlignmentSource::kRegistration; break;
+      default: return refuse("with an alignment of unknown source");
+    }
+    t.next_version = s.next_version();
+    if (s.covariance_size() != 9) return refuse("without the filter's covariance");
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) t.P(r, c) = s.covariance(3 * r + c);
+    t.pivot = {s.pivot_x(), s.pivot_y()};
+    t.drift_scale = s.drift_scale();
+    if (s.has_pick()) t.pick_plan_point = Eigen::Vector2d(s.pick_x(), s.pick_y());
+    t.start_pivot = {s.start_pivot_x(), s.start_pivot_y()};
+    t.fused = s.fused();
+    if (const std::string e = tracker_.RestoreState(t); !e.empty()) return refuse("with " + e);
+  }
+  store_.Clear();
+  for (auto& [m, points] : meshes) store_.Upsert(m->mesh_id(), std::move(points), m->stamp_ns());
+  store_.TakeNewPoints();
+  latest_stamp_ns_ = std::max(latest_stamp_ns_, s.latest_stamp_ns());
+  return {};
 }
 
 }  // namespace floorpose::platform

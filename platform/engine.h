@@ -79,6 +79,14 @@ class Engine {
   v1::DaemonStatus Status(const std::string& message) const;
   std::string StatusLine() const;
 
+  // Crash safety (state_dir): what to save, and resuming from it. RestoreState refuses,
+  // with the reason, a snapshot of another device, of a plan that is gone or changed, or
+  // with values out of range; on refusal nothing of it is kept.
+  v1::StateSnapshot SaveState() const;
+  std::string RestoreState(const v1::StateSnapshot& snapshot);
+  // Publishes the alignment in use (version 0: none), as after every change.
+  void PublishAlignment();
+
   const v1::DaemonStatus::Counters& counters() const { return counters_; }
   const Tracker& tracker() const { return tracker_; }
   const WallStore& store() const { return store_; }
@@ -86,7 +94,6 @@ class Engine {
 
  private:
   std::string LoadPlan(const std::string& path, const std::string& floor);
-  void PublishAlignment();
   // The recent trajectory under the alignment in use (PlanTrack).
   void PublishTrack();
   v1::PlanPose ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) const;
@@ -103,6 +110,8 @@ class Engine {
   Tracker tracker_;
   WallStore store_;
   std::string floor_;
+  std::string plan_path_;  // as loaded, with its FloorPlanDigest
+  uint64_t plan_digest_ = 0;
   v1::DaemonStatus::Counters counters_;
   struct LastRegistration {
     RegistrationResult result;

@@ -15,93 +15,13 @@
 #include "platform/dds.h"
 #include "platform/floor_plan_io.h"
 #include "tests/daemon_test_util.h"
+#include "tests/integration/daemon_fixture.h"
 #include "tools/lib/headset_link.h"
 #include "tools/lib/headset_messages.h"
 #include "tools/lib/process.h"
 
 namespace floorpose {
 namespace {
-
-namespace fs = std::filesystem;
-using platform::Topic;
-using std::chrono::seconds;
-
-constexpr HeadsetFrame kFrame = HeadsetFrame::kUnityLeftHandedYUp;
-
-// A 10 m x 6 m room with an inner wall and a pillar, so no direction is unconstrained.
-const char* kRoomGeoJson = R"({"type": "FeatureCollection", "features": [
-  {"type": "Feature", "properties": {"kind": "wall"}, "geometry": {"type": "Polygon",
-   "coordinates": [[[0, 0], [10, 0], [10, 6], [0, 6], [0, 0]]]}},
-  {"type": "Feature", "properties": {"kind": "wall"}, "geometry": {"type": "LineString",
-   "coordinates": [[4, 0], [4, 3.5]]}},
-  {"type": "Feature", "properties": {"kind": "wall"}, "geometry": {"type": "Polygon",
-   "coordinates": [[[7, 3], [7.5, 3], [7.5, 3.6], [7, 3.6], [7, 3]]]}},
-  {"type": "Feature", "properties": {"kind": "door"}, "geometry": {"type": "Point",
-   "coordinates": [5, 0]}}]})";
-
-class DaemonTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::path(::testing::TempDir()) /
-           ("floorposed-" + std::to_string(getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-    plan_path_ = (dir_ / "room.geojson").string();
-    std::ofstream(plan_path_) << kRoomGeoJson;
-    domain_ = testing::UniqueDomain();
-  }
-
-  void StartDaemon(const std::string& extra_config = "") {
-    const std::string config_path = (dir_ / "floorposed.conf").string();
-    std::ofstream(config_path) << "dds { domain_id: " << domain_
-                               << " device_id: \"hl-test\" cyclonedds_uri: '"
-                               << platform::LoopbackCycloneConfig() << "' }\n"
-                               << "plan_path: \"" << plan_path_ << "\"\n"
-                               << "status_period_s: 0.1\nlog_level: \"debug\"\n"
-                               << extra_config;
-    daemon_ = std::make_unique<tools::ChildProcess>(
-        std::vector<std::string>{FLOORPOSED_PATH, "--config", config_path},
-        (dir_ / "floorposed.log").string());
-    ASSERT_TRUE(daemon_->started());
-    link_ =
-        std::make_unique<tools::HeadsetLink>(domain_, platform::LoopbackCycloneConfig(), "hl-test");
-    ASSERT_TRUE(link_->WaitForDaemon(seconds(15))) << "floorposed did not come up; log in " << dir_;
-  }
-
-  void TearDown() override {
-    if (daemon_ && daemon_->Running()) {
-      const auto code = daemon_->Terminate(seconds(2));
-      EXPECT_EQ(code, 0) << "floorposed did not stop cleanly within 2 s after SIGTERM";
-    }
-  }
-
-  // Waits for a status that satisfies pred (statuses come every 0.1 s).
-  template <typename Pred>
-  bool WaitForStatus(Pred pred) {
-    return link_->WaitUntil([&] { return link_->status && pred(*link_->status); }, seconds(10));
-  }
-
-  sim::DemoWalk Walk(double pick_error_m, uint64_t seed) {
-    sim::DemoWalkOptions o;
-    o.seed = seed;
-    o.heading_drift_rad_per_m = 0;
-    o.scale_error = 0;
-    o.initial_theta_rad = 0.7;
-    o.initial_offset_m = {2.0, -3.0};
-    o.pick_point_error_m = pick_error_m;
-    o.pick_normal_error_rad = pick_error_m > 0 ? 0.05 : 0.0;
-    // The same room the daemon loads.
-    const FloorPlanParse plan = platform::ParseGeoJsonFloorPlan(kRoomGeoJson, "room");
-    return sim::SimulateDemoWalk(plan.plan,
-                                 {{1.5, 1.5}, {2.5, 4.8}, {6.0, 4.8}, {8.8, 2.0}, {6, 1.0}}, o);
-  }
-
-  fs::path dir_;
-  std::string plan_path_;
-  uint32_t domain_ = 0;
-  std::unique_ptr<tools::ChildProcess> daemon_;
-  std::unique_ptr<tools::HeadsetLink> link_;
-};
 
 TEST_F(DaemonTest, EveryPoseGivesAPlanPoseAndThePickSetsTheTransform) {
   StartDaemon();

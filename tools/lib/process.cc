@@ -34,7 +34,9 @@ ChildProcess::ChildProcess(const std::vector<std::string>& argv, const std::stri
   }
 }
 
-ChildProcess::~ChildProcess() {
+ChildProcess::~ChildProcess() { Kill(); }
+
+void ChildProcess::Kill() {
   if (pid_ > 0 && !exited_) {
     kill(pid_, SIGKILL);
     Reap(true);

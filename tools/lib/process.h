@@ -26,6 +26,8 @@ class ChildProcess {
   // Waits up to timeout for it to exit on its own (SIGKILL after). The exit code, or
   // nothing if it had to be killed or died by a signal.
   std::optional<int> Wait(std::chrono::milliseconds timeout);
+  // SIGKILL now (a crash or a power cut, as far as the child can tell), and reap it.
+  void Kill();
   // How long the last Terminate() took.
   std::chrono::milliseconds last_stop_time() const { return stop_time_; }
 

@@ -1,0 +1,149 @@
+#include "platform/state_file.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+namespace floorpose::platform {
+namespace {
+
+constexpr char kMagic[8] = {'F', 'P', 'S', 'N', 'A', 'P', '1', '\n'};
+constexpr size_t kHeader = sizeof kMagic + 8 + 4;  // magic, payload length, CRC-32
+constexpr uint64_t kMaxPayload = 1ull << 30;
+
+void PutLe(uint64_t v, int bytes, std::string* out) {
+  for (int i = 0; i < bytes; ++i) out->push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+}
+
+uint64_t GetLe(const std::string& in, size_t at, int bytes) {
+  uint64_t v = 0;
+  for (int i = 0; i < bytes; ++i) v |= uint64_t{static_cast<unsigned char>(in[at + i])} << (8 * i);
+  return v;
+}
+
+uint32_t Crc32(const std::string& data, size_t from) {
+  uLong crc = crc32(0L, Z_NULL, 0);
+  const auto* p = reinterpret_cast<const Bytef*>(data.data() + from);
+  for (size_t left = data.size() - from; left > 0;) {
+    const auto n = static_cast<uInt>(std::min<size_t>(left, 1u << 30));
+    crc = crc32(crc, p, n);
+    p += n;
+    left -= n;
+  }
+  return static_cast<uint32_t>(crc);
+}
+
+std::string Errno(const std::string& what) { return what + ": " + std::strerror(errno); }
+
+}  // namespace
+
+bool WriteStateFile(const std::string& path, const google::protobuf::MessageLite& message,
+                    std::string* error) {
+  std::string bytes(kMagic, sizeof kMagic);
+  std::string payload;
+  if (!message.SerializeToString(&payload)) {
+    *error = "cannot serialise the snapshot";
+    return false;
+  }
+  PutLe(payload.size(), 8, &bytes);
+  PutLe(Crc32(payload, 0), 4, &bytes);
+  bytes += payload;
+
+  const std::string tmp = path + ".tmp";
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  if (fd < 0) {
+    *error = Errno(tmp);
+    return false;
+  }
+  size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      *error = Errno("writing " + tmp);
+      ::close(fd);
+      ::unlink(tmp.c_str());
+      return false;
+    }
+    done += static_cast<size_t>(n);
+  }
+  if (::fsync(fd) != 0 || ::close(fd) != 0) {
+    *error = Errno("syncing " + tmp);
+    ::unlink(tmp.c_str());
+    return false;
+  }
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+    *error = Errno("renaming " + tmp);
+    ::unlink(tmp.c_str());
+    return false;
+  }
+  // The rename itself must reach the disk too.
+  const std::string dir = std::filesystem::path(path).parent_path().string();
+  const int dfd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd >= 0) {
+    ::fsync(dfd);
+    ::close(dfd);
+  }
+  return true;
+}
+
+StateRead ReadStateFile(const std::string& path, google::protobuf::MessageLite* message,
+                        std::string* error) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) return StateRead::kMissing;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    *error = Errno("cannot open");
+    return StateRead::kBad;
+  }
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (bytes.size() < kHeader || bytes.compare(0, sizeof kMagic, kMagic, sizeof kMagic) != 0) {
+    *error = "not a floorposed snapshot (no FPSNAP1 header)";
+    return StateRead::kBad;
+  }
+  const uint64_t length = GetLe(bytes, sizeof kMagic, 8);
+  if (length > kMaxPayload || length != bytes.size() - kHeader) {
+    *error = "truncated or padded: " + std::to_string(bytes.size() - kHeader) +
+             " payload bytes where the header says " + std::to_string(length);
+    return StateRead::kBad;
+  }
+  const auto crc = static_cast<uint32_t>(GetLe(bytes, sizeof kMagic + 8, 4));
+  if (Crc32(bytes, kHeader) != crc) {
+    *error = "checksum mismatch (corrupt)";
+    return StateRead::kBad;
+  }
+  if (!message->ParseFromArray(bytes.data() + kHeader, static_cast<int>(length))) {
+    *error = "checksum right but the payload does not parse (another version?)";
+    return StateRead::kBad;
+  }
+  return StateRead::kOk;
+}
+
+std::string SetAside(const std::string& path, std::string* error) {
+  const std::string aside = path + ".bad-" + std::to_string(std::time(nullptr));
+  if (::rename(path.c_str(), aside.c_str()) != 0) {
+    *error = Errno("cannot move " + path + " aside");
+    return {};
+  }
+  return aside;
+}
+
+std::string SnapshotPath(const std::string& dir, const std::string& device_id) {
+  std::string name;
+  for (char c : device_id)
+    name +=
+        std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-' ? c : '_';
+  if (name.empty() || name[0] == '.') name = "device" + name;
+  return (std::filesystem::path(dir) / (name + ".snapshot")).string();
+}
+
+}  // namespace floorpose::platform

@@ -1,0 +1,28 @@
+// The daemon's state snapshot on disk (state_dir): written atomically (a temporary file
+// beside it, fsync, rename, fsync of the directory), so a crash or a power cut leaves the
+// old snapshot or the new one, never half of one; and checked on reading (a magic, the
+// length and a CRC-32 of the payload), so a corrupt or foreign file is never trusted.
+#pragma once
+
+#include <google/protobuf/message_lite.h>
+
+#include <string>
+
+namespace floorpose::platform {
+
+bool WriteStateFile(const std::string& path, const google::protobuf::MessageLite& message,
+                    std::string* error);
+
+enum class StateRead { kOk, kMissing, kBad };
+// kMissing: no file (a first start). kBad: *error says what is wrong with it.
+StateRead ReadStateFile(const std::string& path, google::protobuf::MessageLite* message,
+                        std::string* error);
+
+// Moves a file that must not be trusted out of the way, as <path>.bad-<unix seconds>, for
+// a person to look at. Returns its new name, or empty with *error.
+std::string SetAside(const std::string& path, std::string* error);
+
+// <dir>/<device id>.snapshot, the device id reduced to [A-Za-z0-9._-].
+std::string SnapshotPath(const std::string& dir, const std::string& device_id);
+
+}  // namespace floorpose::platform
