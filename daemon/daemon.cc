@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "platform/clock.h"
+#include "platform/config.h"
 #include "platform/state_file.h"
 
 namespace floorpose {
@@ -22,8 +23,9 @@ Daemon::~Daemon() { Stop(); }
 
 bool Daemon::Start(std::string* error) {
   try {
-    participant_ = std::make_unique<platform::Participant>(config_.dds().domain_id(),
-                                                           config_.dds().cyclonedds_uri());
+    const std::optional<platform::DdsSecurity> security = platform::ToDdsSecurity(config_);
+    participant_ = std::make_unique<platform::Participant>(
+        config_.dds().domain_id(), config_.dds().cyclonedds_uri(), security ? &*security : nullptr);
     mesh_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kMeshDelta);
     pose_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kHeadsetPose);
     command_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kCommand);
@@ -40,8 +42,11 @@ bool Daemon::Start(std::string* error) {
     *error = std::string("DDS: ") + e.what();
     return false;
   }
-  spdlog::info("joined DDS domain {} as device '{}'{}", config_.dds().domain_id(),
-               config_.dds().device_id(), deterministic_ ? " (deterministic)" : "");
+  spdlog::info("joined DDS domain {} as device '{}'{}{}", config_.dds().domain_id(),
+               config_.dds().device_id(), deterministic_ ? " (deterministic)" : "",
+               config_.dds().security().identity_certificate().empty()
+                   ? ""
+                   : " with DDS Security as " + config_.dds().security().identity_certificate());
   engine_ = std::make_unique<platform::Engine>(
       config_, [this](Topic t, const google::protobuf::Message& m) { Publish(t, m); },
       platform::MonotonicNs);

@@ -4,7 +4,9 @@
 #include <google/protobuf/io/tokenizer.h>
 #include <google/protobuf/text_format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 
 #include "core/frames.h"
 #include "platform/floor_plan_io.h"
@@ -83,6 +85,16 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (!ParseHeadsetFrame(c.headset_frame()))
     return "headset_frame must be \"unity\" or \"zup\", not \"" + c.headset_frame() + "\"";
   if (c.dds().domain_id() > 232) return "dds.domain_id must be 0..232";
+  {
+    const v1::DdsSecurityConfig& s = c.dds().security();
+    const std::string files[] = {s.identity_ca(),    s.identity_certificate(), s.private_key(),
+                                 s.permissions_ca(), s.governance(),           s.permissions()};
+    const auto set = std::count_if(std::begin(files), std::end(files),
+                                   [](const std::string& f) { return !f.empty(); });
+    if (set != 0 && set != 6)
+      return "dds.security needs all of identity_ca, identity_certificate, private_key, "
+             "permissions_ca, governance and permissions, or none";
+  }
   if (c.dds().device_id().empty()) return "dds.device_id must not be empty";
   if (!(c.walls().density_per_m2() > 0 && c.walls().density_per_m2() <= 10000))
     return "walls.density_per_m2 must be in (0, 10000]";
@@ -243,6 +255,19 @@ WallExtractionOptions ToWallExtractionOptions(const v1::FloorposedConfig& c) {
   w.max_edge_m = c.walls().max_edge_m();
   w.max_points = c.limits().max_wall_points_per_mesh();
   return w;
+}
+
+std::optional<DdsSecurity> ToDdsSecurity(const v1::FloorposedConfig& config) {
+  const v1::DdsSecurityConfig& s = config.dds().security();
+  if (s.identity_certificate().empty()) return std::nullopt;
+  DdsSecurity out;
+  out.identity_ca = s.identity_ca();
+  out.identity_certificate = s.identity_certificate();
+  out.private_key = s.private_key();
+  out.permissions_ca = s.permissions_ca();
+  out.governance = s.governance();
+  out.permissions = s.permissions();
+  return out;
 }
 
 }  // namespace floorpose::platform

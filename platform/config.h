@@ -2,11 +2,13 @@
 // every option with its unit and default).
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "core/tracker.h"
 #include "core/wall_extractor.h"
 #include "floorpose/v1/config.pb.h"
+#include "platform/dds.h"
 
 namespace floorpose::platform {
 
@@ -22,6 +24,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& config);
 std::string ResolvedConfigText(const v1::FloorposedConfig& config);
 
 TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& config);
+// The DDS Security files of dds.security, or nothing when it is not set.
+std::optional<DdsSecurity> ToDdsSecurity(const v1::FloorposedConfig& config);
 WallExtractionOptions ToWallExtractionOptions(const v1::FloorposedConfig& config);
 
 }  // namespace floorpose::platform

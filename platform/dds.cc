@@ -1,7 +1,9 @@
 #include "platform/dds.h"
 
 #include <array>
+#include <filesystem>
 #include <stdexcept>
+#include <utility>
 
 #include "envelope.h"
 
@@ -53,6 +55,10 @@ void Check(dds_return_t rc, const char* what) {
   if (rc < 0) throw std::runtime_error(std::string(what) + ": " + dds_strretcode(rc));
 }
 
+// Where the build found the DDS Security plugins (Debian's libddsc0 keeps them in a
+// directory of its own, off the loader path).
+constexpr const char* kDebianSecurityPluginDir = FLOORPOSE_DDS_SECURITY_DIR;
+
 }  // namespace
 
 const char* TopicName(Topic topic) { return Spec(topic).name; }
@@ -73,12 +79,41 @@ std::string LoopbackCycloneConfig() {
          "</Domain></CycloneDDS>";
 }
 
-Participant::Participant(uint32_t domain_id, const std::string& cyclone_config) {
+Participant::Participant(uint32_t domain_id, const std::string& cyclone_config,
+                         const DdsSecurity* security) {
   if (!cyclone_config.empty()) {
     domain_ = dds_create_domain(domain_id, cyclone_config.c_str());
     Check(domain_, "dds_create_domain");
   }
-  participant_ = dds_create_participant(domain_id, nullptr, nullptr);
+  dds_qos_t* qos = nullptr;
+  if (security) {
+    const std::string dir =
+        security->plugin_dir.empty() ? kDebianSecurityPluginDir : security->plugin_dir;
+    auto file = [](const std::string& path) {
+      return "file:" + std::filesystem::absolute(path).string();
+    };
+    qos = dds_create_qos();
+    const std::pair<const char*, std::string> props[] = {
+        {"dds.sec.auth.library.path", dir + "/libdds_security_auth.so"},
+        {"dds.sec.auth.library.init", "init_authentication"},
+        {"dds.sec.auth.library.finalize", "finalize_authentication"},
+        {"dds.sec.auth.identity_ca", file(security->identity_ca)},
+        {"dds.sec.auth.identity_certificate", file(security->identity_certificate)},
+        {"dds.sec.auth.private_key", file(security->private_key)},
+        {"dds.sec.crypto.library.path", dir + "/libdds_security_crypto.so"},
+        {"dds.sec.crypto.library.init", "init_crypto"},
+        {"dds.sec.crypto.library.finalize", "finalize_crypto"},
+        {"dds.sec.access.library.path", dir + "/libdds_security_ac.so"},
+        {"dds.sec.access.library.init", "init_access_control"},
+        {"dds.sec.access.library.finalize", "finalize_access_control"},
+        {"dds.sec.access.permissions_ca", file(security->permissions_ca)},
+        {"dds.sec.access.governance", file(security->governance)},
+        {"dds.sec.access.permissions", file(security->permissions)},
+    };
+    for (const auto& [name, value] : props) dds_qset_prop(qos, name, value.c_str());
+  }
+  participant_ = dds_create_participant(domain_id, qos, nullptr);
+  if (qos) dds_delete_qos(qos);
   if (participant_ < 0) {
     if (domain_ > 0) dds_delete(domain_);
     Check(participant_, "dds_create_participant");

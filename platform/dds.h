@@ -101,11 +101,23 @@ class Waiter {
   std::vector<dds_entity_t> conditions_;
 };
 
+// DDS Security (OMG DDS-Security 1.1, Cyclone's built-in plugins): PEM files and the two
+// signed access-control documents (S/MIME, .p7s), as tools/make-dds-security.sh makes
+// them. Paths; the plugins read them when the participant is created.
+struct DdsSecurity {
+  std::string identity_ca, identity_certificate, private_key;
+  std::string permissions_ca, governance, permissions;
+  std::string plugin_dir;  // where libdds_security_*.so are; empty: Debian's libddsc0debian
+};
+
 class Participant {
  public:
-  // `cyclone_config` is Cyclone XML (or a file:// URI); empty uses CYCLONEDDS_URI.
+  // `cyclone_config` is Cyclone XML (or a file:// URI); empty uses CYCLONEDDS_URI. With
+  // `security`, the participant authenticates, is access-controlled and encrypts as the
+  // governance says; one that cannot (a missing file, a bad signature) fails to start.
   // Throws std::runtime_error when DDS cannot start.
-  Participant(uint32_t domain_id, const std::string& cyclone_config);
+  Participant(uint32_t domain_id, const std::string& cyclone_config,
+              const DdsSecurity* security = nullptr);
   ~Participant();
   Participant(const Participant&) = delete;
   Participant& operator=(const Participant&) = delete;

@@ -50,17 +50,20 @@ class DaemonTest : public ::testing::Test {
     domain_ = testing::UniqueDomain();
   }
 
-  void StartDaemon(const std::string& extra_config = "") {
+  // Writes the configuration, starts floorposed and a headset link to it (with
+  // link_security, a secured one).
+  void StartDaemon(const std::string& extra_config = "",
+                   const platform::DdsSecurity* link_security = nullptr) {
     const std::string config_path = (dir_ / "floorposed.conf").string();
     std::ofstream(config_path) << "dds { domain_id: " << domain_
                                << " device_id: \"hl-test\" cyclonedds_uri: '"
-                               << platform::LoopbackCycloneConfig() << "' }\n"
+                               << platform::LoopbackCycloneConfig() << "' " << dds_extra_ << " }\n"
                                << "plan_path: \"" << plan_path_ << "\"\n"
                                << "status_period_s: 0.1\nlog_level: \"debug\"\n"
                                << extra_config;
     LaunchDaemon();
-    link_ =
-        std::make_unique<tools::HeadsetLink>(domain_, platform::LoopbackCycloneConfig(), "hl-test");
+    link_ = std::make_unique<tools::HeadsetLink>(domain_, platform::LoopbackCycloneConfig(),
+                                                 "hl-test", link_security);
     ASSERT_TRUE(link_->WaitForDaemon(seconds(15))) << "floorposed did not come up; log in " << dir_;
   }
 
@@ -104,7 +107,8 @@ class DaemonTest : public ::testing::Test {
   }
 
   fs::path dir_;
-  fs::path log_path_;  // of the latest launch
+  std::string dds_extra_;  // more of the dds { } block (e.g. security)
+  fs::path log_path_;      // of the latest launch
   int launches_ = 0;
   std::string plan_path_;
   uint32_t domain_ = 0;

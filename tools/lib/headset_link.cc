@@ -7,9 +7,9 @@ namespace floorpose::tools {
 using platform::Topic;
 
 HeadsetLink::HeadsetLink(uint32_t domain_id, const std::string& cyclone_config,
-                         std::string device_id)
+                         std::string device_id, const platform::DdsSecurity* security)
     : device_id_(std::move(device_id)) {
-  participant_ = std::make_unique<platform::Participant>(domain_id, cyclone_config);
+  participant_ = std::make_unique<platform::Participant>(domain_id, cyclone_config, security);
   mesh_ = std::make_unique<platform::Writer>(*participant_, Topic::kMeshDelta);
   pose_ = std::make_unique<platform::Writer>(*participant_, Topic::kHeadsetPose);
   command_ = std::make_unique<platform::Writer>(*participant_, Topic::kCommand);

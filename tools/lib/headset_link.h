@@ -15,8 +15,10 @@ namespace floorpose::tools {
 
 class HeadsetLink {
  public:
-  // Throws std::runtime_error when DDS cannot start.
-  HeadsetLink(uint32_t domain_id, const std::string& cyclone_config, std::string device_id);
+  // Throws std::runtime_error when DDS cannot start. With `security`, joins a secured
+  // domain with that identity (platform::DdsSecurity).
+  HeadsetLink(uint32_t domain_id, const std::string& cyclone_config, std::string device_id,
+              const platform::DdsSecurity* security = nullptr);
 
   // Waits until the daemon's readers matched our writers and a status arrived.
   bool WaitForDaemon(std::chrono::milliseconds timeout);

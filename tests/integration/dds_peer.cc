@@ -1,0 +1,62 @@
+// A participant of its own process for the DDS Security tests: Cyclone keeps one security
+// configuration per domain and process, so an intruder must be another process. It
+// publishes a few poses and a get_state command for a device, listens, and prints what
+// came back from a daemon:
+//
+//   dds_peer DOMAIN DEVICE SECONDS [IDENTITY_DIR NAME]
+//   -> "plan_poses N status S replies R"
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <string>
+
+#include "platform/dds.h"
+#include "tools/lib/headset_link.h"
+#include "tools/lib/headset_messages.h"
+
+int main(int argc, char** argv) {
+  using namespace floorpose;
+  if (argc != 4 && argc != 6) {
+    std::fprintf(stderr, "usage: dds_peer DOMAIN DEVICE SECONDS [IDENTITY_DIR NAME]\n");
+    return 2;
+  }
+  const auto domain = static_cast<uint32_t>(std::strtoul(argv[1], nullptr, 10));
+  const double seconds = std::strtod(argv[3], nullptr);
+  platform::DdsSecurity identity;
+  if (argc == 6) {
+    const std::string dir = argv[4], name = argv[5];
+    identity = {dir + "/ca.pem",
+                dir + "/" + name + ".pem",
+                dir + "/" + name + ".key",
+                dir + "/ca.pem",
+                dir + "/governance.p7s",
+                dir + "/permissions.p7s",
+                ""};
+  }
+  try {
+    tools::HeadsetLink link(domain, platform::LoopbackCycloneConfig(), argv[2],
+                            argc == 6 ? &identity : nullptr);
+    const auto deadline = std::chrono::steady_clock::now() +
+                          std::chrono::milliseconds(static_cast<int64_t>(seconds * 1000));
+    int64_t stamp = 1'000'000'000;
+    v1::Command get_state;
+    get_state.mutable_get_state();
+    get_state.set_request_id(1);
+    while (std::chrono::steady_clock::now() < deadline) {
+      link.Send(platform::Topic::kHeadsetPose,
+                tools::ToHeadsetPose(Pose2{{1.0, 2.0}, 0.0, 1.6}, HeadsetFrame::kUnityLeftHandedYUp,
+                                     stamp),
+                stamp);
+      link.Send(platform::Topic::kCommand, get_state, 0);
+      stamp += 300'000'000;
+      link.WaitUntil([] { return false; }, std::chrono::milliseconds(200));
+    }
+    link.Poll();
+    std::printf("plan_poses %zu status %d replies %zu\n", link.plan_poses.size(),
+                link.status.has_value() ? 1 : 0, link.replies.size());
+  } catch (const std::exception& e) {
+    std::printf("error %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,130 @@
+// DDS Security end to end (label security): floorposed with Cyclone's authentication,
+// access control and encryption, identities made by tools/make-dds-security.sh. A
+// participant without a valid identity (none at all, or one from another CA under the
+// same name) can neither feed the daemon nor read it; a permitted one can.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <iterator>
+#include <map>
+
+#include "tests/integration/daemon_fixture.h"
+#include "tools/lib/headset_messages.h"
+
+namespace floorpose {
+namespace {
+
+class SecurityTest : public DaemonTest {
+ protected:
+  void SetUp() override {
+    DaemonTest::SetUp();
+    // Ours, and a rogue CA that issues an "app" identity of its own.
+    for (const auto& [dir, names] : {std::pair{"pki", "floorposed app"}, {"rogue", "app"}}) {
+      const std::string cmd = std::string(FLOORPOSE_SOURCE_DIR) + "/tools/make-dds-security.sh '" +
+                              (dir_ / dir).string() + "' " + names + " > '" +
+                              (dir_ / dir).string() + ".log' 2>&1";
+      ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd << " failed; see " << dir_;
+    }
+  }
+  platform::DdsSecurity Identity(const std::string& dir, const std::string& name) const {
+    const fs::path d = dir_ / dir;
+    return {(d / "ca.pem").string(),
+            (d / (name + ".pem")).string(),
+            (d / (name + ".key")).string(),
+            (d / "ca.pem").string(),
+            (d / "governance.p7s").string(),
+            (d / "permissions.p7s").string(),
+            ""};
+  }
+  std::string SecurityConfig(const platform::DdsSecurity& s) const {
+    return "security { identity_ca: '" + s.identity_ca + "' identity_certificate: '" +
+           s.identity_certificate + "' private_key: '" + s.private_key + "' permissions_ca: '" +
+           s.permissions_ca + "' governance: '" + s.governance + "' permissions: '" +
+           s.permissions + "' }";
+  }
+  // Sends a wall pick and the walk's poses on `link`.
+  static void Drive(tools::HeadsetLink& link, const sim::DemoWalk& walk, int64_t stamp_offset) {
+    link.Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
+    for (const sim::SimStep& step : walk.steps)
+      link.Send(Topic::kHeadsetPose,
+                tools::ToHeadsetPose(step.slam, kFrame, step.stamp_ns + stamp_offset),
+                step.stamp_ns + stamp_offset);
+  }
+};
+
+TEST_F(SecurityTest, OnlyAPermittedParticipantFeedsAndReadsTheDaemon) {
+  const platform::DdsSecurity app = Identity("pki", "app");
+  dds_extra_ = SecurityConfig(Identity("pki", "floorposed"));
+  StartDaemon("", &app);
+  ASSERT_TRUE(WaitForStatus([](const v1::DaemonStatus& s) {
+    return s.state() == v1::DaemonStatus::WAITING_FOR_ALIGNMENT;
+  }));
+
+  // Intruders, each a process of its own for 4 s of poses and get_state commands: no
+  // identity at all, an "app" identity of another CA, and, as the control, our app.
+  struct Peer {
+    std::string name;
+    std::vector<std::string> identity;
+  };
+  const std::vector<Peer> peers = {{"open", {}},
+                                   {"impostor", {(dir_ / "rogue").string(), "app"}},
+                                   {"permitted", {(dir_ / "pki").string(), "app"}}};
+  std::map<std::string, std::string> heard;
+  for (const Peer& peer : peers) {
+    std::vector<std::string> argv = {DDS_PEER_PATH, std::to_string(domain_), "hl-test", "4"};
+    argv.insert(argv.end(), peer.identity.begin(), peer.identity.end());
+    const fs::path out = dir_ / (peer.name + ".out");
+    tools::ChildProcess process(argv, out.string());
+    ASSERT_EQ(process.Wait(seconds(30)), 0) << peer.name << ": see " << out;
+    std::ifstream in(out);
+    std::string line;
+    while (std::getline(in, line))
+      if (line.rfind("plan_poses ", 0) == 0) heard[peer.name] = line;
+  }
+  // Nothing reached the intruders...
+  EXPECT_EQ(heard["open"], "plan_poses 0 status 0 replies 0");
+  EXPECT_EQ(heard["impostor"], "plan_poses 0 status 0 replies 0");
+  // ...while the permitted peer was answered, in the same 4 s.
+  EXPECT_NE(heard["permitted"].rfind("plan_poses 0 ", 0), 0u) << heard["permitted"];
+  EXPECT_NE(heard["permitted"].find("status 1"), std::string::npos) << heard["permitted"];
+  // And the daemon took only the permitted peer's inputs: its poses and commands.
+  link_->WaitUntil([] { return false; }, seconds(1));  // a fresh status
+  ASSERT_TRUE(link_->status.has_value());
+  const v1::DaemonStatus::Counters& c = link_->status->counters();
+  size_t permitted_poses = 0;
+  std::sscanf(heard["permitted"].c_str(), "plan_poses %zu", &permitted_poses);
+  EXPECT_EQ(c.poses_in(), c.plan_poses_out()) << link_->status->ShortDebugString();
+  EXPECT_GE(c.poses_in(), permitted_poses);
+  EXPECT_LE(c.poses_in(), 25u) << "more poses than the permitted peer sent in 4 s";
+
+  // The app in this process, permitted too: a walk after a pick comes back on the plan.
+  const sim::DemoWalk walk = Walk(/*pick_error_m=*/0.0, 1);
+  const size_t before = link_->plan_poses.size();
+  Drive(*link_, walk, 0);
+  ASSERT_TRUE(link_->WaitUntil(
+      [&] { return link_->plan_poses.size() == before + walk.steps.size(); }, seconds(10)))
+      << link_->plan_poses.size() - before << " of " << walk.steps.size() << "; log in " << dir_;
+  const Pose2& truth = walk.steps.back().true_plan;
+  EXPECT_NEAR(link_->plan_poses.back().x(), truth.position.x(), 1e-5);
+  EXPECT_NEAR(link_->plan_poses.back().y(), truth.position.y(), 1e-5);
+}
+
+TEST_F(SecurityTest, ADaemonWhoseDocumentsAnotherCASignedDoesNotStart) {
+  platform::DdsSecurity broken = Identity("pki", "floorposed");
+  broken.governance = Identity("rogue", "app").governance;
+  const std::string config_path = (dir_ / "floorposed.conf").string();
+  std::ofstream(config_path) << "dds { domain_id: " << domain_ << " cyclonedds_uri: '"
+                             << platform::LoopbackCycloneConfig() << "' " << SecurityConfig(broken)
+                             << " }\n";
+  tools::ChildProcess daemon({FLOORPOSED_PATH, "--config", config_path},
+                             (dir_ / "floorposed.log").string());
+  ASSERT_TRUE(daemon.started());
+  EXPECT_EQ(daemon.Wait(seconds(10)), 1) << "see " << dir_;
+  std::ifstream in(dir_ / "floorposed.log");
+  const std::string log{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  EXPECT_NE(log.find("cannot start: DDS"), std::string::npos) << log;
+}
+
+}  // namespace
+}  // namespace floorpose
