@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <iterator>
 
 #include "core/frames.h"
@@ -260,13 +261,20 @@ WallExtractionOptions ToWallExtractionOptions(const v1::FloorposedConfig& c) {
 std::optional<DdsSecurity> ToDdsSecurity(const v1::FloorposedConfig& config) {
   const v1::DdsSecurityConfig& s = config.dds().security();
   if (s.identity_certificate().empty()) return std::nullopt;
+  // systemd's LoadCredential= hands the private key to the service's transient user in
+  // $CREDENTIALS_DIRECTORY (docs/security.md); the config names it there.
+  auto path = [](const std::string& p) {
+    static const std::string kVar = "$CREDENTIALS_DIRECTORY";
+    const char* dir = std::getenv("CREDENTIALS_DIRECTORY");
+    return p.rfind(kVar, 0) == 0 && dir ? dir + p.substr(kVar.size()) : p;
+  };
   DdsSecurity out;
-  out.identity_ca = s.identity_ca();
-  out.identity_certificate = s.identity_certificate();
-  out.private_key = s.private_key();
-  out.permissions_ca = s.permissions_ca();
-  out.governance = s.governance();
-  out.permissions = s.permissions();
+  out.identity_ca = path(s.identity_ca());
+  out.identity_certificate = path(s.identity_certificate());
+  out.private_key = path(s.private_key());
+  out.permissions_ca = path(s.permissions_ca());
+  out.governance = path(s.governance());
+  out.permissions = path(s.permissions());
   return out;
 }
 
