@@ -205,15 +205,17 @@ PlanPoseEstimate Tracker::Correct(const Pose2& pose_slam) {
   }
   last_slam_position_ = pose_slam.position;
   if (std::isfinite(pose_slam.heading)) last_slam_heading_ = pose_slam.heading;
+  PlanPoseEstimate out = Project(pose_slam);
+  if (has_alignment()) last_plan_position_ = out.pose.position;
+  return out;
+}
+
+PlanPoseEstimate Tracker::Project(const Pose2& pose_slam) const {
   PlanPoseEstimate out;
   out.alignment_version = alignment_.version;
   out.reliability = CurrentReliability();
-  if (!has_alignment()) {
-    out.pose = pose_slam;  // slam coordinates, flagged unreliable
-    return out;
-  }
-  out.pose = Apply(alignment_.T_plan_slam, pose_slam);
-  last_plan_position_ = out.pose.position;
+  // Without an alignment: slam coordinates, flagged unreliable.
+  out.pose = has_alignment() ? Apply(alignment_.T_plan_slam, pose_slam) : pose_slam;
   return out;
 }
 

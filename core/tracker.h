@@ -179,7 +179,11 @@ class Tracker {
   // other way in the headset than on the plan).
   std::string Flip(int64_t stamp_ns);
 
+  // A pose on the plan under the alignment in use, with its reliability; Correct also
+  // takes it as the wearer's newest (the walk and turn the filter's drift grows with),
+  // Project does not (a late pose).
   PlanPoseEstimate Correct(const Pose2& pose_slam);
+  PlanPoseEstimate Project(const Pose2& pose_slam) const;
 
   // Scheduling: due when aligned, with enough points, and enough new data, distance
   // walked or time.

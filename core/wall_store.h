@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -23,6 +24,11 @@ class WallStore {
   // Returns false when the id is unknown.
   bool Remove(uint64_t mesh_id);
   bool Contains(uint64_t mesh_id) const { return meshes_.count(mesh_id) > 0; }
+  // When the mesh was (re)scanned, if it is live.
+  std::optional<int64_t> MeshStamp(uint64_t mesh_id) const {
+    auto it = meshes_.find(mesh_id);
+    return it == meshes_.end() ? std::nullopt : std::optional<int64_t>(it->second.stamp_ns);
+  }
   size_t MeshPoints(uint64_t mesh_id) const {
     auto it = meshes_.find(mesh_id);
     return it == meshes_.end() ? 0 : it->second.points.size();

@@ -14,6 +14,16 @@
 
 namespace floorpose::platform {
 
+// Why an input was refused as a whole (DaemonStatus.Counters has one counter each).
+enum class Refusal {
+  kMalformed,
+  kUnknownEnum,
+  kNonFinite,
+  kOutOfRange,
+  kOverLimits,
+  kInconsistent
+};
+
 struct DecodedMesh {
   uint64_t mesh_id = 0;
   v1::MeshDelta::Change change = v1::MeshDelta::CHANGE_UNSPECIFIED;
@@ -23,9 +33,11 @@ struct DecodedMesh {
   size_t unusable_vertices = 0;  // non-finite or beyond the coordinate limit
 };
 
-// Returns an empty string on success, else why the delta was rejected as a whole.
+// Returns an empty string on success, else why the delta was rejected as a whole (and, in
+// *kind, which sort of refusal that is).
 std::string DecodeMeshDelta(const std::string& payload, HeadsetFrame frame,
-                            const v1::LimitsConfig& limits, DecodedMesh* out);
+                            const v1::LimitsConfig& limits, DecodedMesh* out,
+                            Refusal* kind = nullptr);
 
 struct DecodedPose {
   int64_t stamp_ns = 0;
@@ -34,7 +46,8 @@ struct DecodedPose {
 };
 
 std::string DecodeHeadsetPose(const std::string& payload, HeadsetFrame frame,
-                              const v1::LimitsConfig& limits, DecodedPose* out);
+                              const v1::LimitsConfig& limits, DecodedPose* out,
+                              Refusal* kind = nullptr);
 
 std::string DecodeCommand(const std::string& payload, v1::Command* out);
 

@@ -120,7 +120,10 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
 
 std::string Engine::LoadPlan(const std::string& path, const std::string& floor) {
   FloorPlanParse parsed = LoadFloorPlan(path);
-  if (!parsed.ok()) return parsed.error;
+  if (!parsed.ok()) {
+    counters_.set_plans_refused(counters_.plans_refused() + 1);
+    return parsed.error;
+  }
   ClosestWallIndex::Options index_options;
   index_options.max_distance_m = std::max(3.0, config_.icp().max_correspondence_m());
   auto index = std::make_shared<const ClosestWallIndex>(parsed.plan, index_options);
@@ -145,50 +148,96 @@ WallExtractionOptions Engine::BandedWallOptions() const {
   return o;
 }
 
-void Engine::Reject(const std::string& why) {
+void Engine::Warn(const std::string& topic, const std::string& line) {
+  // At most one line a second on each topic, so that a flood of bad input cannot flood
+  // the journal; the next line says how many were held back.
+  Throttle& t = throttles_[topic];
+  const int64_t now = now_ns_();
+  if (now < t.next_ns) {
+    ++t.held_back;
+    return;
+  }
+  if (t.held_back > 0)
+    spdlog::warn("{} ({} more like it in the last second)", line, t.held_back);
+  else
+    spdlog::warn("{}", line);
+  t.held_back = 0;
+  t.next_ns = now + 1'000'000'000;
+}
+
+void Engine::Reject(Refusal kind, const std::string& why) {
   counters_.set_rejected_messages(counters_.rejected_messages() + 1);
-  spdlog::warn("rejected: {}", why);
+  auto& c = counters_;
+  switch (kind) {
+    case Refusal::kMalformed: c.set_malformed(c.malformed() + 1); break;
+    case Refusal::kUnknownEnum: c.set_unknown_enum_values(c.unknown_enum_values() + 1); break;
+    case Refusal::kNonFinite: c.set_non_finite(c.non_finite() + 1); break;
+    case Refusal::kOutOfRange: c.set_out_of_range(c.out_of_range() + 1); break;
+    case Refusal::kOverLimits: c.set_over_limits(c.over_limits() + 1); break;
+    case Refusal::kInconsistent: c.set_inconsistent(c.inconsistent() + 1); break;
+  }
+  Warn("rejected " + std::to_string(static_cast<int>(kind)), "rejected: " + why);
 }
 
 void Engine::OnMeshDelta(const Envelope& e) {
   if (!Mine(e)) return;  // another wearer's daemon takes it
   counters_.set_mesh_deltas_in(counters_.mesh_deltas_in() + 1);
   DecodedMesh mesh;
-  const std::string error = DecodeMeshDelta(e.payload, frame_, config_.limits(), &mesh);
-  if (!error.empty()) return Reject(error);
+  Refusal kind{};
+  const std::string error = DecodeMeshDelta(e.payload, frame_, config_.limits(), &mesh, &kind);
+  if (!error.empty()) return Reject(kind, error);
   latest_stamp_ns_ = std::max(latest_stamp_ns_, mesh.stamp_ns);
   if (mesh.change == v1::MeshDelta::REMOVED) {
     if (store_.Remove(mesh.mesh_id)) {
       counters_.set_meshes_removed(counters_.meshes_removed() + 1);
     } else {
       counters_.set_unknown_mesh_ids(counters_.unknown_mesh_ids() + 1);
-      spdlog::warn("REMOVED for unknown mesh {}: ignored", mesh.mesh_id);
+      Warn("unknown mesh",
+           "REMOVED for unknown mesh " + std::to_string(mesh.mesh_id) + ": ignored");
     }
+    return;
+  }
+  if (const auto stored = store_.MeshStamp(mesh.mesh_id); stored && mesh.stamp_ns < *stored) {
+    // A late copy of an older scan: the store has a newer one of the same surface.
+    counters_.set_stale_stamps(counters_.stale_stamps() + 1);
+    Warn("stale mesh", "mesh " + std::to_string(mesh.mesh_id) + " " +
+                           v1::MeshDelta::Change_Name(mesh.change) + " of " +
+                           std::to_string(mesh.stamp_ns) + " ns is older than the stored one (" +
+                           std::to_string(*stored) + " ns): ignored");
     return;
   }
   WallExtractionReport report;
   std::vector<WallPoint> points = ExtractWallPoints({&mesh.vertices, &mesh.triangles}, mesh.mesh_id,
                                                     BandedWallOptions(), &report);
   if (report.over_limit) {
-    return Reject("mesh " + std::to_string(mesh.mesh_id) + ": " +
-                  std::to_string(report.wall_area_m2) + " m2 of wall would give more than " +
-                  std::to_string(wall_options_.max_points) + " points");
+    return Reject(Refusal::kOverLimits, "mesh " + std::to_string(mesh.mesh_id) + ": " +
+                                            std::to_string(report.wall_area_m2) +
+                                            " m2 of wall would give more than " +
+                                            std::to_string(wall_options_.max_points) + " points");
   }
   if (report.bad_indices || report.degenerate_triangles || mesh.unusable_vertices) {
-    spdlog::warn(
-        "mesh {}: dropped {} triangles with bad indices, {} degenerate; {} unusable vertices",
-        mesh.mesh_id, report.bad_indices, report.degenerate_triangles, mesh.unusable_vertices);
+    auto& c = counters_;
+    c.set_bad_index_triangles(c.bad_index_triangles() + report.bad_indices);
+    c.set_degenerate_triangles(c.degenerate_triangles() + report.degenerate_triangles);
+    c.set_unusable_vertices(c.unusable_vertices() + mesh.unusable_vertices);
+    Warn("dropped triangles", "mesh " + std::to_string(mesh.mesh_id) + ": dropped " +
+                                  std::to_string(report.bad_indices) +
+                                  " triangles with bad indices, " +
+                                  std::to_string(report.degenerate_triangles) + " degenerate; " +
+                                  std::to_string(mesh.unusable_vertices) + " unusable vertices");
   }
   const bool known = store_.Contains(mesh.mesh_id);
   if (mesh.change == v1::MeshDelta::UPDATED && !known) {
     // Keep the data: an UPDATED whose ADDED was lost is still a good mesh.
     counters_.set_unknown_mesh_ids(counters_.unknown_mesh_ids() + 1);
-    spdlog::warn("UPDATED for unknown mesh {}: stored as new", mesh.mesh_id);
+    Warn("unknown mesh",
+         "UPDATED for unknown mesh " + std::to_string(mesh.mesh_id) + ": stored as new");
   }
   const size_t replaced = known ? store_.MeshPoints(mesh.mesh_id) : 0;
   if (store_.points() - replaced + points.size() > config_.limits().max_wall_points()) {
-    return Reject("mesh " + std::to_string(mesh.mesh_id) + ": wall-point store full (" +
-                  std::to_string(store_.points()) + " points)");
+    return Reject(Refusal::kOverLimits, "mesh " + std::to_string(mesh.mesh_id) +
+                                            ": wall-point store full (" +
+                                            std::to_string(store_.points()) + " points)");
   }
   store_.Upsert(mesh.mesh_id, std::move(points), mesh.stamp_ns);
   if (mesh.change == v1::MeshDelta::ADDED && !known)
@@ -204,11 +253,35 @@ void Engine::OnHeadsetPose(const Envelope& e) {
   if (!Mine(e)) return;
   counters_.set_poses_in(counters_.poses_in() + 1);
   DecodedPose pose;
-  const std::string error = DecodeHeadsetPose(e.payload, frame_, config_.limits(), &pose);
-  if (!error.empty()) return Reject(error);
-  latest_stamp_ns_ = std::max(latest_stamp_ns_, pose.stamp_ns);
-  eye_z_ = pose.pose_slam.z;
-  PlanPoseEstimate est = tracker_.Correct(pose.pose_slam);
+  Refusal kind{};
+  const std::string error = DecodeHeadsetPose(e.payload, frame_, config_.limits(), &pose, &kind);
+  if (!error.empty()) return Reject(kind, error);
+  if (last_pose_stamp_ns_ && pose.stamp_ns == *last_pose_stamp_ns_) {
+    counters_.set_duplicate_stamps(counters_.duplicate_stamps() + 1);
+    Warn("duplicate pose",
+         "pose of " + std::to_string(pose.stamp_ns) + " ns again: dropped (answered already)");
+    return;
+  }
+  PlanPoseEstimate est;
+  if (last_pose_stamp_ns_ && pose.stamp_ns < *last_pose_stamp_ns_) {
+    // Late: answered under the alignment in use, but the walk is not walked backwards.
+    counters_.set_stale_stamps(counters_.stale_stamps() + 1);
+    Warn("stale pose", "pose of " + std::to_string(pose.stamp_ns) +
+                           " ns is older than the newest taken (" +
+                           std::to_string(*last_pose_stamp_ns_) + " ns): not tracked");
+    est = tracker_.Project(pose.pose_slam);
+  } else {
+    last_pose_stamp_ns_ = pose.stamp_ns;
+    latest_stamp_ns_ = std::max(latest_stamp_ns_, pose.stamp_ns);
+    eye_z_ = pose.pose_slam.z;
+    est = tracker_.Correct(pose.pose_slam);
+  }
+  if (!tracker_.has_plan()) {
+    counters_.set_poses_without_plan(counters_.poses_without_plan() + 1);
+    Warn("no plan",
+         "pose before a floor plan is loaded: answered in slam coordinates, "
+         "UNRELIABLE");
+  }
   if (pose.tracking == v1::HeadsetPose::TRACKING_LOST) {
     // The headset itself does not know where it is: neither do we.
     est.reliability.flag = ReliabilityFlag::kUnreliable;

@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "core/frames.h"
@@ -18,6 +19,7 @@
 #include "core/wall_store.h"
 #include "floorpose/v1/config.pb.h"
 #include "floorpose/v1/floorpose.pb.h"
+#include "platform/codec.h"
 #include "platform/dds.h"
 
 namespace floorpose::platform {
@@ -97,7 +99,11 @@ class Engine {
   // The recent trajectory under the alignment in use (PlanTrack).
   void PublishTrack();
   v1::PlanPose ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) const;
-  void Reject(const std::string& why);
+  // A refused input: counted by kind (DaemonStatus.Counters) and logged through Warn.
+  void Reject(Refusal kind, const std::string& why);
+  // A warning, at most one line a second per topic (the next one says how many were held
+  // back): bad input at 100 Hz must not flood the journal.
+  void Warn(const std::string& topic, const std::string& line);
   // The wall options with the height band about the wearer's eyes, once a pose is known.
   WallExtractionOptions BandedWallOptions() const;
   bool Mine(const Envelope& e) const { return e.device_id == config_.dds().device_id(); }
@@ -119,7 +125,13 @@ class Engine {
     std::string why;
   };
   std::optional<LastRegistration> last_registration_;
-  int64_t latest_stamp_ns_ = 0;  // newest headset stamp seen: the scheduling clock
+  int64_t latest_stamp_ns_ = 0;                // newest headset stamp seen: the scheduling clock
+  std::optional<int64_t> last_pose_stamp_ns_;  // of the newest pose taken
+  struct Throttle {
+    int64_t next_ns = 0;
+    uint64_t held_back = 0;
+  };
+  std::unordered_map<std::string, Throttle> throttles_;
   std::optional<double> eye_z_;  // slam height of the latest pose
   // Recent poses: slam, and as published (for PlanTrack).
   std::deque<std::pair<Pose2, v1::PlanPose>> recent_;

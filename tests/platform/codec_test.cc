@@ -188,6 +188,22 @@ TEST(DecodeMeshDeltaTest, RemovedNeedsNoGeometry) {
   EXPECT_TRUE(out.triangles.empty());
 }
 
+// Stamps near the int64 limits would overflow the engine's stamp arithmetic (found by
+// tests/fuzz/mesh_ingest_fuzzer): refused at the boundary.
+TEST(DecodeMeshDeltaTest, RejectsStampsNearTheInt64Limits) {
+  DecodedMesh out;
+  v1::MeshDelta m = WallDelta();
+  for (int64_t stamp : {std::numeric_limits<int64_t>::min(), -(int64_t{1} << 62), int64_t{1} << 62,
+                        std::numeric_limits<int64_t>::max()}) {
+    m.set_stamp_ns(stamp);
+    EXPECT_THAT(Decode(m, &out), HasSubstr("stamp_ns " + std::to_string(stamp) + " out of range"));
+  }
+  m.set_change(v1::MeshDelta::REMOVED);  // its stamp moves the scheduling clock too
+  EXPECT_THAT(Decode(m, &out), HasSubstr("out of range"));
+  m.set_stamp_ns(-5);  // negative stamps of a sane size are a clock's business
+  EXPECT_THAT(Decode(m, &out), IsEmpty());
+}
+
 v1::HeadsetPose GoodPose() {
   v1::HeadsetPose p;
   p.set_stamp_ns(42);
@@ -233,6 +249,10 @@ TEST(DecodeHeadsetPoseTest, RejectsBadPoses) {
   p = GoodPose();
   p.mutable_position()->set_x(-2e4);
   EXPECT_THAT(Decode(p, &out), HasSubstr("position beyond"));
+
+  p = GoodPose();
+  p.set_stamp_ns(std::numeric_limits<int64_t>::min());
+  EXPECT_THAT(Decode(p, &out), HasSubstr("stamp_ns -9223372036854775808 out of range"));
 
   p = GoodPose();
   p.GetReflection()->SetEnumValue(&p, p.GetDescriptor()->FindFieldByName("tracking"), 9);

@@ -1,0 +1,201 @@
+// Bad input at the daemon's boundary: every kind of refusal is counted in DaemonStatus
+// by its reason, nothing crashes, and the good data around it is kept (the cases of
+// docs/robustness.md).
+#include <gtest/gtest.h>
+
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "platform/engine.h"
+#include "tests/test_util.h"
+
+namespace floorpose::platform {
+namespace {
+
+class EngineInputTest : public testing::TempDirTest {
+ protected:
+  void SetUp() override {
+    TempDirTest::SetUp();
+    config_.mutable_dds()->set_device_id("hl-1");
+    config_.set_headset_frame("zup");
+    config_.mutable_limits()->set_max_vertices_per_mesh(1000);
+  }
+  void Start(bool with_plan) {
+    if (with_plan) config_.set_plan_path(Write("room.txt", "1\n0 0 10 0\n"));
+    engine_ = std::make_unique<Engine>(
+        config_,
+        [this](Topic topic, const google::protobuf::Message& m) {
+          if (topic == Topic::kPlanPose) poses_.push_back(static_cast<const v1::PlanPose&>(m));
+        },
+        [this] { return clock_ns_; });
+    engine_->Start();
+  }
+  static Envelope Wrap(const google::protobuf::Message& m) {
+    Envelope e;
+    e.device_id = "hl-1";
+    m.SerializeToString(&e.payload);
+    return e;
+  }
+  static Envelope Raw(std::string bytes) {
+    Envelope e;
+    e.device_id = "hl-1";
+    e.payload = std::move(bytes);
+    return e;
+  }
+  // A 4 x 2.5 m wall along x at y = 1 (zup frame), as two triangles.
+  static v1::MeshDelta Wall(uint64_t id, v1::MeshDelta::Change change, int64_t stamp_ns) {
+    v1::MeshDelta m;
+    m.set_mesh_id(id);
+    m.set_change(change);
+    m.set_stamp_ns(stamp_ns);
+    for (float v : {0.f, 1.f, 0.f, 4.f, 1.f, 0.f, 4.f, 1.f, 2.5f, 0.f, 1.f, 2.5f})
+      m.add_vertices(v);
+    for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) m.add_triangles(i);
+    return m;
+  }
+  static v1::HeadsetPose Pose(int64_t stamp_ns, double x = 1.0) {
+    v1::HeadsetPose p;
+    p.set_stamp_ns(stamp_ns);
+    p.mutable_position()->set_x(x);
+    p.mutable_position()->set_z(1.6);
+    p.mutable_orientation()->set_w(1.0);
+    return p;
+  }
+  const v1::DaemonStatus::Counters& c() const { return engine_->counters(); }
+
+  v1::FloorposedConfig config_;
+  std::unique_ptr<Engine> engine_;
+  std::vector<v1::PlanPose> poses_;
+  int64_t clock_ns_ = 0;
+};
+
+TEST_F(EngineInputTest, RefusalsAreCountedByReasonAndGoodDataIsKept) {
+  Start(/*with_plan=*/true);
+  engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::ADDED, 10)));
+  const size_t good_points = engine_->store().points();
+  ASSERT_GT(good_points, 0u);
+
+  engine_->OnMeshDelta(Raw("\xff\xff\xff not protobuf"));
+  engine_->OnHeadsetPose(Raw("\x0a\x05\x08"));
+  EXPECT_EQ(c().malformed(), 2u);
+
+  v1::MeshDelta unknown = Wall(2, v1::MeshDelta::ADDED, 11);
+  unknown.set_change(static_cast<v1::MeshDelta::Change>(99));
+  engine_->OnMeshDelta(Wrap(unknown));
+  v1::HeadsetPose tracking = Pose(12);
+  tracking.set_tracking(static_cast<v1::HeadsetPose::TrackingState>(42));
+  engine_->OnHeadsetPose(Wrap(tracking));
+  EXPECT_EQ(c().unknown_enum_values(), 2u);
+
+  v1::HeadsetPose nan = Pose(13);
+  nan.mutable_position()->set_y(std::numeric_limits<double>::quiet_NaN());
+  engine_->OnHeadsetPose(Wrap(nan));
+  v1::MeshDelta inf = Wall(3, v1::MeshDelta::ADDED, 14);
+  for (int i = 0; i < 16; ++i) inf.add_mesh_to_world(i % 5 == 0 ? 1.f : 0.f);
+  inf.set_mesh_to_world(3, std::numeric_limits<float>::infinity());
+  engine_->OnMeshDelta(Wrap(inf));
+  EXPECT_EQ(c().non_finite(), 2u);
+
+  engine_->OnHeadsetPose(Wrap(Pose(15, 1e7)));  // beyond 10 km
+  v1::HeadsetPose squashed = Pose(16);
+  squashed.mutable_orientation()->set_w(2.0);
+  engine_->OnHeadsetPose(Wrap(squashed));
+  engine_->OnHeadsetPose(Wrap(Pose(std::numeric_limits<int64_t>::max())));
+  EXPECT_EQ(c().out_of_range(), 3u);
+
+  v1::MeshDelta ragged = Wall(4, v1::MeshDelta::ADDED, 17);
+  ragged.add_vertices(1.f);
+  engine_->OnMeshDelta(Wrap(ragged));
+  v1::MeshDelta affine = Wall(5, v1::MeshDelta::ADDED, 18);
+  for (int i = 0; i < 16; ++i) affine.add_mesh_to_world(1.f);
+  engine_->OnMeshDelta(Wrap(affine));
+  EXPECT_EQ(c().inconsistent(), 2u);
+
+  v1::MeshDelta huge = Wall(6, v1::MeshDelta::ADDED, 19);
+  for (int i = 0; i < 3 * 1001; ++i) huge.add_vertices(0.f);
+  engine_->OnMeshDelta(Wrap(huge));
+  EXPECT_EQ(c().over_limits(), 1u);
+  EXPECT_EQ(c().rejected_messages(), 12u);
+
+  // Inside an accepted mesh: the bad triangles go, the good one stays.
+  v1::MeshDelta holes = Wall(7, v1::MeshDelta::ADDED, 20);
+  for (uint32_t i : {0u, 1u, 99u, 0u, 0u, 0u}) holes.add_triangles(i);
+  engine_->OnMeshDelta(Wrap(holes));
+  EXPECT_EQ(c().bad_index_triangles(), 1u);
+  EXPECT_EQ(c().degenerate_triangles(), 1u);
+  EXPECT_EQ(engine_->store().meshes(), 2u);
+
+  // Order: an update older than the stored mesh is ignored; a late pose is answered but
+  // not tracked; a repeated one is dropped.
+  v1::MeshDelta late = Wall(1, v1::MeshDelta::UPDATED, 5);
+  late.clear_triangles();
+  engine_->OnMeshDelta(Wrap(late));
+  EXPECT_EQ(c().stale_stamps(), 1u);
+  EXPECT_EQ(engine_->store().MeshPoints(1), good_points);
+  engine_->OnHeadsetPose(Wrap(Pose(100)));
+  engine_->OnHeadsetPose(Wrap(Pose(100)));
+  engine_->OnHeadsetPose(Wrap(Pose(50)));
+  EXPECT_EQ(c().duplicate_stamps(), 1u);
+  EXPECT_EQ(c().stale_stamps(), 2u);
+  ASSERT_EQ(poses_.size(), 2u);
+  EXPECT_EQ(poses_[1].source_stamp_ns(), 50);
+
+  // UPDATED and REMOVED for ids never added: the update is kept, the removal ignored.
+  engine_->OnMeshDelta(Wrap(Wall(8, v1::MeshDelta::UPDATED, 30)));
+  v1::MeshDelta gone;
+  gone.set_mesh_id(9);
+  gone.set_change(v1::MeshDelta::REMOVED);
+  engine_->OnMeshDelta(Wrap(gone));
+  EXPECT_EQ(c().unknown_mesh_ids(), 2u);
+  EXPECT_EQ(engine_->store().meshes(), 3u);
+  EXPECT_EQ(engine_->store().MeshPoints(1), good_points);
+}
+
+TEST_F(EngineInputTest, PosesBeforeAPlanAndPlansThatAreNotPlans) {
+  Start(/*with_plan=*/false);
+  engine_->OnHeadsetPose(Wrap(Pose(1)));
+  EXPECT_EQ(c().poses_without_plan(), 1u);
+  ASSERT_EQ(poses_.size(), 1u);
+  EXPECT_EQ(poses_[0].reliability().flag(), v1::Reliability::UNRELIABLE);
+
+  for (const auto& [name, contents] :
+       std::vector<std::pair<std::string, std::string>>{{"empty.geojson", ""},
+                                                        {"zero.txt", "0\n"},
+                                                        {"picture.geojson", "\x89PNG\r\n\x1a\n"},
+                                                        {"lies.txt", "1000000000\n0 0 1 1\n"}}) {
+    v1::Command load;
+    load.set_request_id(1);
+    load.mutable_load_plan()->set_path(Write(name, contents));
+    engine_->OnCommand(Wrap(load));
+  }
+  EXPECT_EQ(c().plans_refused(), 4u);
+  EXPECT_EQ(c().commands_refused(), 4u);
+  EXPECT_FALSE(engine_->tracker().has_plan());
+}
+
+TEST_F(EngineInputTest, AFloodOfBadInputLogsOnceASecond) {
+  Start(/*with_plan=*/true);
+  std::ostringstream log;
+  const auto previous = spdlog::default_logger();
+  spdlog::set_default_logger(std::make_shared<spdlog::logger>(
+      "capture", std::make_shared<spdlog::sinks::ostream_sink_st>(log)));
+  for (int i = 0; i < 1000; ++i) engine_->OnMeshDelta(Raw("garbage"));
+  clock_ns_ += 2'000'000'000;
+  engine_->OnMeshDelta(Raw("garbage"));
+  spdlog::set_default_logger(previous);
+  EXPECT_EQ(c().malformed(), 1001u);
+  const std::string text = log.str();
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 2) << text;
+  EXPECT_NE(
+      text.find("rejected: malformed MeshDelta protobuf (999 more like it in the last second)"),
+      std::string::npos)
+      << text;
+}
+
+}  // namespace
+}  // namespace floorpose::platform
