@@ -238,15 +238,21 @@ void Daemon::ResumeFromSnapshot() {
 
 void Daemon::MaybeSnapshot(int64_t now_ns, bool force) {
   if (snapshot_path_.empty()) return;
+  // A new alignment within a second (it is what a restart must not lose), new walls only
+  // every snapshot_period_s (a restart re-scans them anyway), anything on force.
   const uint64_t version = engine_->tracker().alignment().version;
   const uint64_t deltas = engine_->counters().mesh_deltas_in();
-  const bool changed = version != saved_version_ || deltas != saved_deltas_;
-  if (!changed || (!force && now_ns < next_snapshot_ns_)) return;
+  const bool new_alignment = version != saved_version_, new_walls = deltas != saved_deltas_;
+  if (!new_alignment && !new_walls) return;
+  const int64_t period_ns = static_cast<int64_t>(config_.snapshot_period_s() * 1e9);
+  const int64_t due_ns =
+      last_snapshot_ns_ + (new_alignment ? std::min<int64_t>(1'000'000'000, period_ns) : period_ns);
+  if (!force && now_ns < due_ns) return;
   v1::StateSnapshot snapshot = engine_->SaveState();
   snapshot.set_written_unix_ns(platform::WallClockNs());
   saved_version_ = version;
   saved_deltas_ = deltas;
-  next_snapshot_ns_ = now_ns + static_cast<int64_t>(config_.snapshot_period_s() * 1e9);
+  last_snapshot_ns_ = now_ns;
   {
     std::lock_guard lock(snapshot_mu_);
     snapshot_ = std::move(snapshot);

@@ -71,7 +71,7 @@ class Daemon {
   std::optional<v1::StateSnapshot> snapshot_;
   bool snapshot_stop_ = false;
   uint64_t saved_version_ = 0, saved_deltas_ = 0;  // what the latest snapshot had seen
-  int64_t next_snapshot_ns_ = 0;
+  int64_t last_snapshot_ns_ = INT64_MIN / 2;       // monotonic; none yet
   std::thread snapshot_thread_;
 
   std::atomic<bool> running_{false};
