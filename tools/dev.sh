@@ -16,9 +16,10 @@ packages=(build-essential cmake pkg-config clang-format
   libcli11-dev nlohmann-json3-dev libyaml-cpp-dev libpng-dev libgdal-dev systemd)
 # The tests also talk to clients that are not ours (label interop): a Fast DDS app and
 # the Python example client. The fuzz tests (label fuzz, tools/fuzz.sh) build with clang
-# and its libFuzzer and sanitizer runtimes.
+# and its libFuzzer and sanitizer runtimes; the security tests make their CA and
+# identities with openssl (tools/make-dds-security.sh).
 if [ "${1:-build}" = test ]; then
-  packages+=(libfastrtps-dev fastddsgen python3-protobuf clang libclang-rt-14-dev)
+  packages+=(libfastrtps-dev fastddsgen python3-protobuf clang libclang-rt-14-dev openssl)
 fi
 
 missing=()
