@@ -69,6 +69,17 @@ std::optional<Topic> TopicFromName(std::string_view name) {
   return std::nullopt;
 }
 
+DdsSecurity SecurityFilesIn(const std::string& dir, const std::string& name) {
+  const std::filesystem::path d(dir);
+  return {(d / "ca.pem").string(),
+          (d / (name + ".pem")).string(),
+          (d / (name + ".key")).string(),
+          (d / "ca.pem").string(),
+          (d / "governance.p7s").string(),
+          (d / "permissions.p7s").string(),
+          ""};
+}
+
 std::string LoopbackCycloneConfig() {
   return "<CycloneDDS><Domain Id=\"any\"><General>"
          "<Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces>"

@@ -110,6 +110,9 @@ struct DdsSecurity {
   std::string plugin_dir;  // where libdds_security_*.so are; empty: Debian's libddsc0debian
 };
 
+// The files tools/make-dds-security.sh writes to `dir` for participant `name`.
+DdsSecurity SecurityFilesIn(const std::string& dir, const std::string& name);
+
 class Participant {
  public:
   // `cyclone_config` is Cyclone XML (or a file:// URI); empty uses CYCLONEDDS_URI. With

@@ -23,16 +23,7 @@ int main(int argc, char** argv) {
   const auto domain = static_cast<uint32_t>(std::strtoul(argv[1], nullptr, 10));
   const double seconds = std::strtod(argv[3], nullptr);
   platform::DdsSecurity identity;
-  if (argc == 6) {
-    const std::string dir = argv[4], name = argv[5];
-    identity = {dir + "/ca.pem",
-                dir + "/" + name + ".pem",
-                dir + "/" + name + ".key",
-                dir + "/ca.pem",
-                dir + "/governance.p7s",
-                dir + "/permissions.p7s",
-                ""};
-  }
+  if (argc == 6) identity = platform::SecurityFilesIn(argv[4], argv[5]);
   try {
     tools::HeadsetLink link(domain, platform::LoopbackCycloneConfig(), argv[2],
                             argc == 6 ? &identity : nullptr);

@@ -28,14 +28,7 @@ class SecurityTest : public DaemonTest {
     }
   }
   platform::DdsSecurity Identity(const std::string& dir, const std::string& name) const {
-    const fs::path d = dir_ / dir;
-    return {(d / "ca.pem").string(),
-            (d / (name + ".pem")).string(),
-            (d / (name + ".key")).string(),
-            (d / "ca.pem").string(),
-            (d / "governance.p7s").string(),
-            (d / "permissions.p7s").string(),
-            ""};
+    return platform::SecurityFilesIn((dir_ / dir).string(), name);
   }
   std::string SecurityConfig(const platform::DdsSecurity& s) const {
     return "security { identity_ca: '" + s.identity_ca + "' identity_certificate: '" +
