@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -106,6 +107,8 @@ TEST_F(RecoveryTest, KilledMidWalkResumesTheAlignmentWithinTwoSeconds) {
   const double answered_s = std::chrono::duration<double>(Clock::now() - restarted).count();
   const v1::PlanPose& first = link_->plan_poses[poses_before];
   EXPECT_LT(answered_s, 2.0) << "first plan pose " << answered_s << " s after the restart";
+  std::printf("first plan pose %.2f s after the restart (alignment version %llu, %d meshes)\n",
+              answered_s, static_cast<unsigned long long>(before.version()), saved->meshes_size());
   EXPECT_EQ(first.alignment_version(), before.version());
   const v1::Se2& t = before.t_plan_slam();
   const Pose2 expected = Apply(Se2{t.theta(), {t.x(), t.y()}}, next.slam);
