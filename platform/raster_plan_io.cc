@@ -69,6 +69,11 @@ std::string ReadGreyPng(const std::string& path, int* width, int* height,
   if (image.width == 0 || image.height == 0 || image.width > kMaxSide || image.height > kMaxSide)
     return path + ": image size " + std::to_string(image.width) + " x " +
            std::to_string(image.height) + " out of range (1.." + std::to_string(kMaxSide) + ")";
+  // Before allocating: a few bytes of header may claim a gigabyte of pixels.
+  const size_t max_cells = RasterPlanOptions{}.max_cells;
+  if (size_t{image.width} * image.height > max_cells)
+    return path + ": image of " + std::to_string(image.width) + " x " +
+           std::to_string(image.height) + " pixels, more than " + std::to_string(max_cells);
   image.format = PNG_FORMAT_GRAY;
   grey->resize(PNG_IMAGE_SIZE(image));
   png_color background{255, 255, 255};  // transparent pixels are free, not walls

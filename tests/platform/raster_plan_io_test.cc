@@ -90,6 +90,27 @@ TEST_F(RasterPlanIoTest, BrokenFilesFailClearly) {
   }
 }
 
+// A few bytes of PNG header may claim a gigabyte of pixels: refused before allocating.
+TEST_F(RasterPlanIoTest, AHeaderClaimingHugeDimensionsIsRefusedBeforeReading) {
+  std::string png = testing::ReadText(WritePng("plan.png"));
+  ASSERT_EQ(png.substr(12, 4), "IHDR");
+  for (int i = 0; i < 2; ++i) {  // width, height: 32000 (big-endian)
+    png[16 + 4 * i + 2] = static_cast<char>(32000 >> 8);
+    png[16 + 4 * i + 3] = static_cast<char>(32000 & 0xff);
+  }
+  uint32_t crc = 0xffffffffu;  // PNG's CRC-32 over the chunk type and data
+  for (int k = 12; k < 29; ++k) {
+    crc ^= static_cast<uint8_t>(png[k]);
+    for (int b = 0; b < 8; ++b) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+  }
+  crc = ~crc;
+  for (int i = 0; i < 4; ++i) png[29 + i] = static_cast<char>(crc >> (24 - 8 * i));
+  Write("huge.png", png);
+  const FloorPlanParse parsed = LoadFloorPlan(WriteYaml("huge.yaml", "huge.png"));
+  EXPECT_FALSE(parsed.ok());
+  EXPECT_THAT(parsed.error, ::testing::HasSubstr("image of 32000 x 32000 pixels, more than"));
+}
+
 TEST(RasterPlanDataTest, CarmenPlansLoad) {
   const auto data = testing::DataDir();
   if (!data) GTEST_SKIP() << testing::kNoDataMessage;
