@@ -1,7 +1,7 @@
 // A participant of its own process for the DDS Security tests: Cyclone keeps one security
 // configuration per domain and process, so an intruder must be another process. It
-// publishes a few poses and a get_state command for a device, listens, and prints what
-// came back from a daemon:
+// publishes a wall mesh, a pose and a get_state command for a device five times a second,
+// listens, and prints what came back from a daemon:
 //
 //   dds_peer DOMAIN DEVICE SECONDS [IDENTITY_DIR NAME]
 //   -> "plan_poses N status S replies R"
@@ -30,6 +30,13 @@ int main(int argc, char** argv) {
     const auto deadline = std::chrono::steady_clock::now() +
                           std::chrono::milliseconds(static_cast<int64_t>(seconds * 1000));
     int64_t stamp = 1'000'000'000;
+    // A 2 x 2.5 m wall (headset frame: Unity, y up), re-sent as UPDATED.
+    v1::MeshDelta wall;
+    wall.set_mesh_id(1);
+    wall.set_change(v1::MeshDelta::UPDATED);
+    for (float v : {0.f, 0.f, 1.f, 2.f, 0.f, 1.f, 2.f, 2.5f, 1.f, 0.f, 2.5f, 1.f})
+      wall.add_vertices(v);
+    for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) wall.add_triangles(i);
     v1::Command get_state;
     get_state.mutable_get_state();
     get_state.set_request_id(1);
@@ -39,6 +46,8 @@ int main(int argc, char** argv) {
                                      stamp),
                 stamp);
       link.Send(platform::Topic::kCommand, get_state, 0);
+      wall.set_stamp_ns(stamp);
+      link.Send(platform::Topic::kMeshDelta, wall, stamp);
       stamp += 300'000'000;
       link.WaitUntil([] { return false; }, std::chrono::milliseconds(200));
     }
