@@ -605,8 +605,16 @@ std::string Engine::RestoreState(const v1::StateSnapshot& s) {
   if (s.plan_digest() != plan_digest_)
     return refuse("of plan " + s.plan_path() + " as it was before it changed");
   // The wall store first, checked whole before anything is kept.
-  std::vector<std::pair<const v1::StateSnapshot::Mesh*, std::vector<WallPoint>>> meshes;
+  // Coordinates as the codec bounds the headset's (slam frame), twice that on the plan.
+  const double max_abs = config_.limits().max_abs_coordinate_m();
+  auto within = [](const Eigen::Vector2d& v, double limit) {
+    return v.allFinite() && v.cwiseAbs().maxCoeff() <= limit;
+  };
   size_t total = 0;
+  for (const v1::StateSnapshot::Mesh& m : s.meshes()) total += m.points_size() / 2;
+  if (total > config_.limits().max_wall_points())
+    return refuse(std::to_string(total) + " wall points, more than limits.max_wall_points");
+  std::vector<std::pair<const v1::StateSnapshot::Mesh*, std::vector<WallPoint>>> meshes;
   for (const v1::StateSnapshot::Mesh& m : s.meshes()) {
     if (m.points_size() % 2 != 0 || m.points_size() != m.normals_size())
       return refuse("with mesh " + std::to_string(m.mesh_id()) + " malformed");
@@ -615,14 +623,11 @@ std::string Engine::RestoreState(const v1::StateSnapshot& s) {
       const int k = static_cast<int>(2 * i);
       points[i].p = {m.points(k), m.points(k + 1)};
       points[i].n = {m.normals(k), m.normals(k + 1)};
-      if (!points[i].p.allFinite() || !points[i].n.allFinite())
-        return refuse("with mesh " + std::to_string(m.mesh_id()) + " not finite");
+      if (!within(points[i].p.cast<double>(), max_abs) || !within(points[i].n.cast<double>(), 2))
+        return refuse("with mesh " + std::to_string(m.mesh_id()) + " not finite or out of range");
     }
-    total += points.size();
     meshes.emplace_back(&m, std::move(points));
   }
-  if (total > config_.limits().max_wall_points())
-    return refuse(std::to_string(total) + " wall points, more than limits.max_wall_points");
   if (s.alignment().version() > 0) {
     TrackerState t;
     const v1::Alignment& a = s.alignment();
@@ -644,6 +649,11 @@ std::string Engine::RestoreState(const v1::StateSnapshot& s) {
     if (s.has_pick()) t.pick_plan_point = Eigen::Vector2d(s.pick_x(), s.pick_y());
     t.start_pivot = {s.start_pivot_x(), s.start_pivot_y()};
     t.fused = s.fused();
+    if (!within(t.alignment.T_plan_slam.t, 2 * max_abs) || !within(t.pivot, 2 * max_abs) ||
+        !within(t.start_pivot, 2 * max_abs) ||
+        (t.pick_plan_point && !within(*t.pick_plan_point, 2 * max_abs)) ||
+        !(t.P.cwiseAbs().maxCoeff() <= 1e6))
+      return refuse("with an alignment or its filter out of range");
     if (const std::string e = tracker_.RestoreState(t); !e.empty()) return refuse("with " + e);
   }
   store_.Clear();

@@ -27,6 +27,8 @@ mkdir -p "$build_dir/out"
   if [ ! -f "$build_dir/CMakeCache.txt" ]; then
     cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFLOORPOSE_FUZZ=ON \
       -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ >/dev/null
+  else
+    cmake "$build_dir" >/dev/null  # a target added since the tree was configured
   fi
   cmake --build "$build_dir" -j"$(nproc)" --target "${targets[@]}" >/dev/null
 ) 9>"$build_dir/out/build.lock" || exit 2

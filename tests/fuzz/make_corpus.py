@@ -209,11 +209,38 @@ def plan_loader():
         write("plan_loader_fuzzer", name, b"\x02" + struct.pack("<H", len(data)) + data + image)
 
 
+def snapshot():
+    """A restored state: an alignment with its filter and two meshes of wall points, as a
+    payload (odd first byte) and as a whole file with its header and CRC (even)."""
+    s = pb.StateSnapshot(device_id="fuzz-headset", plan_path="room.geojson", floor="0",
+                         latest_stamp_ns=30_000_000_000, next_version=4, drift_scale=1.0,
+                         pivot_x=3.0, pivot_y=2.0, has_pick=True, pick_x=0.0, pick_y=2.0,
+                         start_pivot_x=0.0, start_pivot_y=2.0, fused=2)
+    a = s.alignment
+    a.t_plan_slam.theta, a.t_plan_slam.x, a.t_plan_slam.y = 0.1, 0.5, -0.2
+    a.version, a.source, a.floor, a.stamp_ns = 3, pb.Alignment.REGISTRATION, "0", 29_000_000_000
+    s.covariance.extend([0.001, 0, 0, 0, 0.04, 0, 0, 0, 0.04])
+    for mesh_id, (p, q) in enumerate([((0.1, 0.0), (5.9, 0.0)), ((6.0, 0.1), (6.0, 3.9))], 1):
+        m = s.meshes.add(mesh_id=mesh_id, stamp_ns=mesh_id * 1_000_000_000)
+        for k in range(12):
+            t = k / 11
+            m.points.extend([p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])])
+            m.normals.extend([0.0, 1.0] if p[1] == q[1] else [-1.0, 0.0])
+    payload = s.SerializeToString()
+    write("snapshot_fuzzer", "payload", b"\x01" + payload)
+    header = b"FPSNAP1\n" + struct.pack("<QI", len(payload), zlib.crc32(payload))
+    write("snapshot_fuzzer", "file", b"\x00" + header + payload)
+    s.alignment.version, s.next_version = 0, 1
+    s.ClearField("covariance")
+    write("snapshot_fuzzer", "walls_only", b"\x01" + s.SerializeToString())
+
+
 if __name__ == "__main__":
     shutil.rmtree(OUT, ignore_errors=True)
     codec()
     mesh_ingest()
     plan_loader()
+    snapshot()
     sizes = sorted((p.stat().st_size, str(p.relative_to(OUT))) for p in OUT.rglob("*")
                    if p.is_file())
     print(f"{len(sizes)} seeds, {sum(s for s, _ in sizes)} bytes in {OUT}")

@@ -212,13 +212,16 @@ TEST_F(EngineStateTest, ForeignOrBrokenSnapshotsAreRefusedAndNothingOfThemIsKept
       {"of device 'hl-2'", [](v1::StateSnapshot* s) { s->set_device_id("hl-2"); }},
       {"before it changed", [](v1::StateSnapshot* s) { s->set_plan_digest(s->plan_digest() + 1); }},
       {"does not load now", [](v1::StateSnapshot* s) { s->set_plan_path("/nonexistent.geojson"); }},
-      {"not finite",
+      {"not finite or out of range",
        [](v1::StateSnapshot* s) { s->mutable_meshes(0)->set_points(0, std::nanf("")); }},
       {"malformed", [](v1::StateSnapshot* s) { s->mutable_meshes(0)->add_points(1.0f); }},
+      {"out of range", [](v1::StateSnapshot* s) { s->mutable_meshes(0)->set_points(1, 5e21f); }},
+      {"alignment or its filter out of range",
+       [](v1::StateSnapshot* s) { s->set_covariance(4, 1e300); }},
       {"not symmetric and positive", [](v1::StateSnapshot* s) { s->set_covariance(0, -1.0); }},
       {"without the filter's covariance", [](v1::StateSnapshot* s) { s->clear_covariance(); }},
       {"versions out of order", [](v1::StateSnapshot* s) { s->set_next_version(1); }},
-      {"not finite", [](v1::StateSnapshot* s) {
+      {"alignment or its filter out of range", [](v1::StateSnapshot* s) {
          s->mutable_alignment()->mutable_t_plan_slam()->set_x(INFINITY);
        }}};
   for (const Case& c : cases) {
