@@ -9,6 +9,7 @@
 // preempted run on a shared machine.
 #include <spdlog/spdlog.h>
 
+#include <unistd.h>
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <chrono>
@@ -28,7 +29,9 @@
 #include "core/random.h"
 #include "core/registration.h"
 #include "core/se2.h"
+#include "platform/engine.h"
 #include "platform/floor_plan_io.h"
+#include "platform/state_file.h"
 #include "tools/floorpose/commands.h"
 
 namespace floorpose::tools {
@@ -413,6 +416,66 @@ int RunBenchRegistration(const BenchOptions& o) {
   return 0;
 }
 
+// What a state snapshot costs the daemon (daemon/daemon.cc MaybeSnapshot): the io thread
+// copies the state (Engine::SaveState), the snapshot thread writes it (serialise, fsync,
+// rename). Wall stores of 10k to 1M points, made of 4 m wall meshes fed as mesh deltas.
+int RunBenchSnapshot(const BenchOptions& o) {
+  if (spdlog::get_level() > spdlog::level::debug) spdlog::set_level(spdlog::level::warn);
+  const fs::path dir =
+      fs::temp_directory_path() / ("floorpose-bench-snapshot-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "plan.txt") << "1\n0 0 4 0\n";
+  v1::FloorposedConfig config;
+  config.set_plan_path((dir / "plan.txt").string());
+  config.set_headset_frame("zup");
+  config.mutable_dds()->set_device_id("bench");
+  if (!o.json) {
+    std::printf("floorpose bench snapshot: state of a wall store of N points, median of %d\n",
+                o.repetitions);
+    std::printf("%10s %10s %16s %16s %12s\n", "points", "meshes", "SaveState ms", "write+fsync ms",
+                "file MB");
+  }
+  for (size_t target : {size_t{10'000}, size_t{100'000}, size_t{1'000'000}}) {
+    platform::Engine engine(
+        config, [](platform::Topic, const google::protobuf::Message&) {},
+        [] { return int64_t{0}; });
+    if (const std::string e = engine.Start(); !e.empty()) {
+      std::fprintf(stderr, "bench snapshot: %s\n", e.c_str());
+      return 1;
+    }
+    for (uint64_t id = 1; engine.store().points() < target; ++id) {
+      // A 4 x 2.5 m wall, one per mesh, walls 0.5 m apart.
+      v1::MeshDelta m;
+      m.set_mesh_id(id);
+      m.set_change(v1::MeshDelta::ADDED);
+      const float y = 0.5f * static_cast<float>(id);
+      for (float v : {0.f, y, 0.f, 4.f, y, 0.f, 4.f, y, 2.5f, 0.f, y, 2.5f}) m.add_vertices(v);
+      for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) m.add_triangles(i);
+      engine.OnMeshDelta({"bench", id, 0, m.SerializeAsString()});
+    }
+    v1::StateSnapshot snapshot;
+    const double save_ms = MedianMs(o.repetitions, [&] { snapshot = engine.SaveState(); });
+    std::string error;
+    const std::string path = (dir / "bench.snapshot").string();
+    const double write_ms = MedianMs(o.repetitions, [&] {
+      if (!platform::WriteStateFile(path, snapshot, &error))
+        std::fprintf(stderr, "%s\n", error.c_str());
+    });
+    const double mb = static_cast<double>(fs::file_size(path)) / 1e6;
+    if (o.json)
+      std::printf(
+          "{\"points\": %zu, \"meshes\": %zu, \"save_state_ms\": %.3f, "
+          "\"write_ms\": %.3f, \"file_mb\": %.2f}\n",
+          engine.store().points(), engine.store().meshes(), save_ms, write_ms, mb);
+    else
+      std::printf("%10zu %10zu %16.2f %16.2f %12.2f\n", engine.store().points(),
+                  engine.store().meshes(), save_ms, write_ms, mb);
+  }
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+  return 0;
+}
+
 }  // namespace
 
 Run AddBenchCommand(CLI::App& app) {
@@ -431,7 +494,13 @@ Run AddBenchCommand(CLI::App& app) {
       ->add_option("--min-segments", o->min_segments,
                    "tile the plan side by side until it has this many segments")
       ->capture_default_str();
-  return [o, registration] {
+  CLI::App* snapshot = app.add_subcommand(
+      "snapshot", "time the state snapshot (copy on the io thread, write) at 10k to 1M points");
+  snapshot->add_flag("--json", o->json, "one JSON object per line per store size");
+  snapshot->add_option("--repetitions", o->repetitions, "runs per measurement (median)")
+      ->capture_default_str();
+  return [o, registration, snapshot] {
+    if (snapshot->parsed()) return RunBenchSnapshot(*o);
     if (!registration->parsed()) return 2;
     return RunBenchRegistration(*o);
   };
