@@ -13,40 +13,21 @@
 //   3 raw      topic (mesh, pose, command, another device's mesh), length, payload bytes
 // A stamp step is a byte: n < 255 moves the clock n x 10 ms on, 255 sets it to the next
 // 8 bytes (so stamps can jump back or to the extremes a sender could put in a sample).
-#include <google/protobuf/stubs/logging.h>
-#include <spdlog/spdlog.h>
-#include <unistd.h>
-
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <string>
 
 #include "platform/config.h"
 #include "platform/engine.h"
+#include "tests/fuzz/fuzz_room.h"
 
 namespace floorpose::platform {
 namespace {
 
-constexpr char kDevice[] = "fuzz-headset";
-
-// A 6 x 4 m room with a wall stub, so that it has one right way round (small: the engine
-// indexes it for every input).
-constexpr char kPlan[] = R"({"type": "FeatureCollection", "features": [
-  {"type": "Feature", "geometry": {"type": "Polygon",
-   "coordinates": [[[0, 0], [6, 0], [6, 4], [0, 4], [0, 0]]]}},
-  {"type": "Feature", "geometry": {"type": "LineString", "coordinates": [[2, 0], [2, 1.5]]}}]})";
-
-std::filesystem::path plan_dir;
-
-void RemovePlanDir() {
-  std::error_code ec;
-  std::filesystem::remove_all(plan_dir, ec);
-}
+using fuzz::kDevice;
 
 class Input {
  public:
@@ -192,8 +173,8 @@ class Session {
 v1::FloorposedConfig MakeConfig() {
   v1::FloorposedConfig config;
   config.mutable_dds()->set_device_id(kDevice);
-  config.set_plan_path((plan_dir / "room.geojson").string());
-  config.set_plan_dir(plan_dir.string());
+  config.set_plan_path((fuzz::WorkDir() / "room.geojson").string());
+  config.set_plan_dir(fuzz::WorkDir().string());
   // Smaller than the daemon's limits, so that one input stays fast (an input over them
   // takes the same rejection path as a larger one would in the daemon).
   config.mutable_limits()->set_max_wall_points_per_mesh(20000);
@@ -211,17 +192,7 @@ v1::FloorposedConfig MakeConfig() {
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   using namespace floorpose::platform;
-  // Every rejection is logged: noise, and slow. FLOORPOSE_FUZZ_LOG=1 shows the engine's log
-  // when replaying one input (`mesh_ingest_fuzzer crash-...`).
-  if (!std::getenv("FLOORPOSE_FUZZ_LOG")) {
-    spdlog::set_level(spdlog::level::off);
-    google::protobuf::SetLogHandler(nullptr);
-  }
-  plan_dir = std::filesystem::temp_directory_path() /
-             ("floorpose-mesh-ingest-fuzzer-" + std::to_string(getpid()));
-  std::filesystem::create_directories(plan_dir);
-  std::atexit(RemovePlanDir);
-  std::ofstream(plan_dir / "room.geojson") << kPlan;
+  floorpose::fuzz::SetUp("mesh-ingest-fuzzer");
   const std::string invalid = ValidateConfig(MakeConfig());
   if (!invalid.empty()) {
     std::fprintf(stderr, "mesh_ingest_fuzzer: bad config: %s\n", invalid.c_str());

@@ -8,40 +8,25 @@
 //         checksum and the identity checks to the values themselves.
 // A restored engine then takes a pose, a mesh and a registration, and saves its state
 // again, as the daemon would go on after a restart.
-#include <google/protobuf/stubs/logging.h>
-#include <spdlog/spdlog.h>
-#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
 #include <fstream>
 #include <string>
 
 #include "platform/engine.h"
 #include "platform/state_file.h"
+#include "tests/fuzz/fuzz_room.h"
 
 namespace floorpose::platform {
 namespace {
 
-constexpr char kDevice[] = "fuzz-headset";
-// The room of mesh_ingest_fuzzer.cc.
-constexpr char kPlan[] = R"({"type": "FeatureCollection", "features": [
-  {"type": "Feature", "geometry": {"type": "Polygon",
-   "coordinates": [[[0, 0], [6, 0], [6, 4], [0, 4], [0, 0]]]}},
-  {"type": "Feature", "geometry": {"type": "LineString", "coordinates": [[2, 0], [2, 1.5]]}}]})";
-
-std::filesystem::path work_dir;
-
-void RemoveWorkDir() {
-  std::error_code ec;
-  std::filesystem::remove_all(work_dir, ec);
-}
+using fuzz::kDevice;
 
 v1::FloorposedConfig MakeConfig() {
   v1::FloorposedConfig config;
   config.mutable_dds()->set_device_id(kDevice);
-  config.set_plan_path((work_dir / "room.geojson").string());
+  config.set_plan_path((fuzz::WorkDir() / "room.geojson").string());
   config.mutable_limits()->set_max_wall_points(50000);
   config.mutable_tracking()->set_max_points(1000);
   return config;
@@ -78,16 +63,7 @@ void GoOn(Engine& engine, int64_t stamp_ns) {
 }  // namespace floorpose::platform
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  using namespace floorpose::platform;
-  if (!std::getenv("FLOORPOSE_FUZZ_LOG")) {
-    spdlog::set_level(spdlog::level::off);
-    google::protobuf::SetLogHandler(nullptr);
-  }
-  work_dir = std::filesystem::temp_directory_path() /
-             ("floorpose-snapshot-fuzzer-" + std::to_string(getpid()));
-  std::filesystem::create_directories(work_dir);
-  std::atexit(RemoveWorkDir);
-  std::ofstream(work_dir / "room.geojson") << kPlan;
+  floorpose::fuzz::SetUp("snapshot-fuzzer");
   return 0;
 }
 
@@ -104,7 +80,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string rest(reinterpret_cast<const char*>(data) + 1, size - 1);
   floorpose::v1::StateSnapshot snapshot;
   if (data[0] % 2 == 0) {
-    const std::string path = (work_dir / "state.snapshot").string();
+    const std::string path = (floorpose::fuzz::WorkDir() / "state.snapshot").string();
     std::ofstream(path, std::ios::binary | std::ios::trunc) << rest;
     std::string error;
     if (ReadStateFile(path, &snapshot, &error) != StateRead::kOk) return 0;
