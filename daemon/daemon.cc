@@ -115,9 +115,12 @@ void Daemon::IoLoop() {
     io_heartbeat_ns_ = platform::MonotonicNs();
     // One batch from all inputs, in stamp order (platform::InputBefore), the order
     // `floorpose eval` takes a recording in: a pose is corrected with the walls and the
-    // pick that came before it.
+    // pick that came before it. Poses are taken first: the walls and commands sent before
+    // a pose have arrived by the time it is taken, almost always, and a wall that arrives
+    // between the takes still joins the batch of the pose it precedes (taking poses last
+    // left such a wall to the next batch, after its pose, under load).
     batch.clear();
-    for (auto* reader : {command_reader_.get(), mesh_reader_.get(), pose_reader_.get()})
+    for (auto* reader : {pose_reader_.get(), mesh_reader_.get(), command_reader_.get()})
       for (auto& e : reader->Take(256)) batch.push_back({reader->topic(), std::move(e)});
     std::stable_sort(batch.begin(), batch.end(), [](const Input& a, const Input& b) {
       return platform::InputBefore(a.topic, a.envelope.stamp_ns, b.topic, b.envelope.stamp_ns);
