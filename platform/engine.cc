@@ -65,6 +65,24 @@ v1::Alignment::Source ToProto(AlignmentSource s) {
   return v1::Alignment::SOURCE_UNSPECIFIED;
 }
 
+// The Alignment message of an alignment on `floor` (with its registration's statistics
+// when it has them): published on every change and kept in the state snapshot.
+v1::Alignment ToProto(const AlignmentState& a, const std::string& floor) {
+  v1::Alignment out;
+  out.mutable_t_plan_slam()->set_theta(a.T_plan_slam.theta);
+  out.mutable_t_plan_slam()->set_x(a.T_plan_slam.t.x());
+  out.mutable_t_plan_slam()->set_y(a.T_plan_slam.t.y());
+  out.set_version(a.version);
+  out.set_source(ToProto(a.source));
+  out.set_floor(floor);
+  out.set_stamp_ns(a.stamp_ns);
+  if (a.registration) {
+    *out.mutable_stats() = ToProto(*a.registration);
+    out.mutable_stats()->set_accepted(true);
+  }
+  return out;
+}
+
 // Smaller turns onto the walls' directions are not worth a new alignment version.
 constexpr double kMinTurnRad = 0.1 * M_PI / 180;
 
@@ -485,20 +503,7 @@ void Engine::OnRegistrationDone(Done done) {
 }
 
 void Engine::PublishAlignment() {
-  const AlignmentState& a = tracker_.alignment();
-  v1::Alignment out;
-  out.mutable_t_plan_slam()->set_theta(a.T_plan_slam.theta);
-  out.mutable_t_plan_slam()->set_x(a.T_plan_slam.t.x());
-  out.mutable_t_plan_slam()->set_y(a.T_plan_slam.t.y());
-  out.set_version(a.version);
-  out.set_source(ToProto(a.source));
-  out.set_floor(floor_);
-  out.set_stamp_ns(a.stamp_ns);
-  if (a.registration) {
-    *out.mutable_stats() = ToProto(*a.registration);
-    out.mutable_stats()->set_accepted(true);
-  }
-  publish_(Topic::kAlignment, out);
+  publish_(Topic::kAlignment, ToProto(tracker_.alignment(), floor_));
 }
 
 void Engine::PublishStatus(const std::string& message) {
@@ -538,15 +543,7 @@ v1::StateSnapshot Engine::SaveState() const {
   s.set_floor(floor_);
   s.set_latest_stamp_ns(latest_stamp_ns_);
   const TrackerState t = tracker_.SaveState();
-  const AlignmentState& a = t.alignment;
-  v1::Alignment* out = s.mutable_alignment();
-  out->mutable_t_plan_slam()->set_theta(a.T_plan_slam.theta);
-  out->mutable_t_plan_slam()->set_x(a.T_plan_slam.t.x());
-  out->mutable_t_plan_slam()->set_y(a.T_plan_slam.t.y());
-  out->set_version(a.version);
-  out->set_source(ToProto(a.source));
-  out->set_floor(floor_);
-  out->set_stamp_ns(a.stamp_ns);
+  *s.mutable_alignment() = ToProto(t.alignment, floor_);
   s.set_next_version(t.next_version);
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) s.add_covariance(t.P(r, c));

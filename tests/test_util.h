@@ -86,6 +86,16 @@ inline std::vector<Eigen::Vector2d> SampleWalls(const FloorPlan& plan, double sp
   return out;
 }
 
+// A plan in the thesis' text format (core/floor_plan.h ParseTextFloorPlan), to write as
+// a .txt plan file.
+inline std::string ThesisText(const FloorPlan& plan) {
+  std::string text = std::to_string(plan.segments.size()) + "\n";
+  for (const Segment& s : plan.segments)
+    text += std::to_string(s.a.x()) + " " + std::to_string(s.a.y()) + " " +
+            std::to_string(s.b.x()) + " " + std::to_string(s.b.y()) + "\n";
+  return text;
+}
+
 // The developer data set, from FLOORPOSE_DATA; nothing when unset or empty.
 inline std::optional<std::filesystem::path> DataDir() {
   const char* dir = std::getenv("FLOORPOSE_DATA");

@@ -50,6 +50,15 @@ class RecoveryTest : public DaemonTest {
         seconds(10));
     return found;
   }
+  // A walk after a wall pick, then SIGTERM (which writes the last snapshot).
+  void WalkAndStop(const sim::DemoWalk& walk) {
+    link_->Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
+    ASSERT_TRUE(link_->WaitUntil([&] { return !link_->alignments.empty(); }, seconds(10)));
+    for (const sim::SimStep& step : walk.steps) SendStep(step);
+    ASSERT_TRUE(link_->WaitUntil([&] { return link_->plan_poses.size() == walk.steps.size(); },
+                                 seconds(10)));
+    ASSERT_EQ(daemon_->Terminate(seconds(5)), 0);
+  }
   std::string Log() const {
     std::ifstream in(log_path_);
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
@@ -131,25 +140,9 @@ TEST_F(RecoveryTest, KilledMidWalkResumesTheAlignmentWithinTwoSeconds) {
   EXPECT_LT(std::hypot(last.x() - truth.position.x(), last.y() - truth.position.y()), 0.1);
 }
 
-// A walk until the daemon has a snapshot with a registered alignment, then SIGTERM (which
-// writes the last one).
-void WalkAndStop(const sim::DemoWalk& walk, tools::HeadsetLink& link, tools::ChildProcess& daemon) {
-  link.Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
-  ASSERT_TRUE(link.WaitUntil([&] { return !link.alignments.empty(); }, seconds(10)));
-  for (const sim::SimStep& step : walk.steps) {
-    for (const sim::SimMesh& m : step.meshes)
-      link.Send(Topic::kMeshDelta, tools::ToMeshDelta(m, kFrame, step.stamp_ns), step.stamp_ns);
-    link.Send(Topic::kHeadsetPose, tools::ToHeadsetPose(step.slam, kFrame, step.stamp_ns),
-              step.stamp_ns);
-  }
-  ASSERT_TRUE(
-      link.WaitUntil([&] { return link.plan_poses.size() == walk.steps.size(); }, seconds(10)));
-  ASSERT_EQ(daemon.Terminate(seconds(5)), 0);
-}
-
 TEST_F(RecoveryTest, ACorruptSnapshotIsSetAsideAndTheDaemonStartsClean) {
   StartWithState();
-  WalkAndStop(Walk(/*pick_error_m=*/0.0, 1), *link_, *daemon_);
+  WalkAndStop(Walk(/*pick_error_m=*/0.0, 1));
   ASSERT_TRUE(WaitForSnapshot(1));
   // One bit flipped in the middle of the payload.
   {
@@ -181,7 +174,7 @@ TEST_F(RecoveryTest, ACorruptSnapshotIsSetAsideAndTheDaemonStartsClean) {
 
 TEST_F(RecoveryTest, ASnapshotOfAChangedPlanIsNotTrusted) {
   StartWithState();
-  WalkAndStop(Walk(/*pick_error_m=*/0.0, 1), *link_, *daemon_);
+  WalkAndStop(Walk(/*pick_error_m=*/0.0, 1));
   ASSERT_TRUE(WaitForSnapshot(1));
   // Someone moved the inner wall in the plan file meanwhile.
   std::string plan = kRoomGeoJson;

@@ -158,15 +158,11 @@ TEST_F(CarmenTest, RegistrationKeepsTheRobotOnThePlan) {
   const std::string recording = Path("walk.rec");
   ASSERT_TRUE(WriteSimulationRecording(walk, "room", "carmen", 0, {}, recording, nullptr, &error))
       << error;
-  std::string text = std::to_string(plan_.segments.size()) + "\n";
-  for (const Segment& s : plan_.segments)
-    text += std::to_string(s.a.x()) + " " + std::to_string(s.a.y()) + " " +
-            std::to_string(s.b.x()) + " " + std::to_string(s.b.y()) + "\n";
   v1::FloorposedConfig config;
   ASSERT_TRUE(
       platform::LoadConfig(FLOORPOSE_SOURCE_DIR "/tools/carmen/robot.conf", &config, &error))
       << error;
-  config.set_plan_path(Write("room.txt", text));
+  config.set_plan_path(Write("room.txt", testing::ThesisText(plan_)));
   EvalReport registered, alone;
   ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &registered, &error)) << error;
   ASSERT_TRUE(Evaluate(config, recording, Baseline::kNoAlgorithm, &alone, &error)) << error;

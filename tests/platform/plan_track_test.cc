@@ -20,10 +20,6 @@ class PlanTrackTest : public testing::TempDirTest {
   // for it.
   void Simulate(v1::FloorposedConfig* config, std::string* recording) {
     const FloorPlan plan = testing::SyntheticOffice();
-    std::string text = std::to_string(plan.segments.size()) + "\n";
-    for (const Segment& s : plan.segments)
-      text += std::to_string(s.a.x()) + " " + std::to_string(s.a.y()) + " " +
-              std::to_string(s.b.x()) + " " + std::to_string(s.b.y()) + "\n";
     sim::SimulatorOptions o;
     o.seed = 3;
     o.scenario = sim::Scenario::kCorridor;
@@ -32,7 +28,7 @@ class PlanTrackTest : public testing::TempDirTest {
     std::string error;
     *recording = Path("walk.rec");
     ASSERT_TRUE(SimulateToRecording(plan, o, nullptr, {}, *recording, &simulated, &error)) << error;
-    config->set_plan_path(Write("office.txt", text));
+    config->set_plan_path(Write("office.txt", testing::ThesisText(plan)));
   }
 };
 

@@ -112,15 +112,8 @@ class EngineStateTest : public testing::TempDirTest {
   void SetUp() override {
     TempDirTest::SetUp();
     plan_ = testing::AsymmetricRoom();
-    config_.set_plan_path(WritePlan("room.txt", plan_));
+    config_.set_plan_path(Write("room.txt", testing::ThesisText(plan_)));
     config_.mutable_dds()->set_device_id("hl-1");
-  }
-  std::string WritePlan(const std::string& name, const FloorPlan& plan) const {
-    std::string text = std::to_string(plan.segments.size()) + "\n";
-    for (const Segment& s : plan.segments)
-      text += std::to_string(s.a.x()) + " " + std::to_string(s.a.y()) + " " +
-              std::to_string(s.b.x()) + " " + std::to_string(s.b.y()) + "\n";
-    return Write(name, text);
   }
   std::unique_ptr<Engine> NewEngine(std::vector<v1::PlanPose>* poses = nullptr) {
     auto engine = std::make_unique<Engine>(
