@@ -223,6 +223,11 @@ class Tracker {
   // How much faster than the configured prior the SLAM drifts, as the filter learnt it
   // from the registrations (AlignmentFilterOptions::drift_window).
   double drift_scale() const { return filter_.drift_scale(); }
+  // Learn the drift over this many registrations from now on (0: keep the prior).
+  void SetDriftWindow(int window) {
+    options_.filter.drift_window = window;
+    filter_.set_drift_window(window);
+  }
 
   // The latest accepted alignments, oldest first.
   const std::vector<AlignmentState>& history() const { return history_; }

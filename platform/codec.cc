@@ -107,6 +107,10 @@ std::string DecodeHeadsetPose(const std::string& payload, HeadsetFrame frame,
     return Refuse(
         k, Refusal::kUnknownEnum,
         "HeadsetPose: unknown tracking state " + std::to_string(static_cast<int>(msg.tracking())));
+  if (!v1::HeadsetPose::Odometry_IsValid(msg.odometry()))
+    return Refuse(
+        k, Refusal::kUnknownEnum,
+        "HeadsetPose: unknown odometry " + std::to_string(static_cast<int>(msg.odometry())));
   if (!StampInRange(msg.stamp_ns()))
     return Refuse(k, Refusal::kOutOfRange,
                   "HeadsetPose: stamp_ns " + std::to_string(msg.stamp_ns()) + " out of range");
@@ -126,6 +130,9 @@ std::string DecodeHeadsetPose(const std::string& payload, HeadsetFrame frame,
                       std::to_string(quat.norm()) + ")");
   out->stamp_ns = msg.stamp_ns();
   out->tracking = msg.tracking();
+  out->odometry = msg.odometry() == v1::HeadsetPose::ODOMETRY_UNSPECIFIED
+                      ? v1::HeadsetPose::VISUAL_INERTIAL
+                      : msg.odometry();
   out->pose_slam = HeadsetPoseToSlam(frame, {p.x(), p.y(), p.z()}, quat);
   return {};
 }

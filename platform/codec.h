@@ -43,6 +43,7 @@ struct DecodedPose {
   int64_t stamp_ns = 0;
   Pose2 pose_slam;
   v1::HeadsetPose::TrackingState tracking = v1::HeadsetPose::TRACKING_UNSPECIFIED;
+  v1::HeadsetPose::Odometry odometry = v1::HeadsetPose::VISUAL_INERTIAL;  // never UNSPECIFIED
 };
 
 std::string DecodeHeadsetPose(const std::string& payload, HeadsetFrame frame,

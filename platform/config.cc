@@ -124,7 +124,11 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   for (const auto& [value, name] :
        {std::pair{c.registration().search_sigmas(), "registration.search_sigmas"},
         std::pair{c.registration().search_min_m(), "registration.search_min_m"},
-        std::pair{c.tracking().refine_window_s(), "tracking.refine_window_s"}}) {
+        std::pair{c.tracking().window_s(), "tracking.window_s"},
+        std::pair{c.tracking().refine_window_s(), "tracking.refine_window_s"},
+        std::pair{c.tracking().wheel_odometry().window_s(), "tracking.wheel_odometry.window_s"},
+        std::pair{c.tracking().wheel_odometry().refine_window_s(),
+                  "tracking.wheel_odometry.refine_window_s"}}) {
     if (!(value >= 0 && std::isfinite(value))) return std::string(name) + " must be >= 0";
   }
   if (!(c.registration().search_tie_ratio() >= 0 && c.registration().search_tie_ratio() <= 1))
@@ -147,7 +151,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
     return "tracking.drift_*, min_walk_m and confirm_* must be >= 0";
   if (!(k.max_drift_scale() >= 1 && k.max_drift_scale() <= 1e6))
     return "tracking.max_drift_scale must be in [1, 1e6]";
-  if (k.drift_window() > 1000) return "tracking.drift_window must be at most 1000";
+  if (k.drift_window() > 1000 || k.wheel_odometry().drift_window() > 1000)
+    return "tracking.drift_window and wheel_odometry.drift_window must be at most 1000";
   if (!(k.max_ambiguity() > 0 && k.max_ambiguity() <= 1))
     return "tracking.max_ambiguity must be in (0, 1]";
   if (!(k.first_inlier_ratio() >= 0 && k.first_inlier_ratio() <= 1))
@@ -246,6 +251,17 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.reliability.reliable_probability = rel.reliable_probability();
   t.reliability.degraded_probability = rel.degraded_probability();
   return t;
+}
+
+v1::FloorposedConfig ForOdometry(v1::FloorposedConfig config, v1::HeadsetPose::Odometry odometry) {
+  if (odometry == v1::HeadsetPose::WHEEL) {
+    v1::TrackingConfig& t = *config.mutable_tracking();
+    const v1::WheelOdometryConfig& w = t.wheel_odometry();
+    t.set_drift_window(w.drift_window());
+    t.set_window_s(w.window_s());
+    t.set_refine_window_s(w.refine_window_s());
+  }
+  return config;
 }
 
 WallExtractionOptions ToWallExtractionOptions(const v1::FloorposedConfig& c) {

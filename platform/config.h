@@ -8,6 +8,7 @@
 #include "core/tracker.h"
 #include "core/wall_extractor.h"
 #include "floorpose/v1/config.pb.h"
+#include "floorpose/v1/floorpose.pb.h"
 #include "platform/dds.h"
 
 namespace floorpose::platform {
@@ -24,6 +25,9 @@ std::string ValidateConfig(const v1::FloorposedConfig& config);
 std::string ResolvedConfigText(const v1::FloorposedConfig& config);
 
 TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& config);
+// The configuration a device moving on this odometry is tracked with: for WHEEL,
+// tracking.wheel_odometry replaces the tracking options of the same names.
+v1::FloorposedConfig ForOdometry(v1::FloorposedConfig config, v1::HeadsetPose::Odometry odometry);
 // The DDS Security files of dds.security, or nothing when it is not set.
 std::optional<DdsSecurity> ToDdsSecurity(const v1::FloorposedConfig& config);
 WallExtractionOptions ToWallExtractionOptions(const v1::FloorposedConfig& config);

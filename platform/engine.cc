@@ -89,7 +89,8 @@ constexpr double kMinTurnRad = 0.1 * M_PI / 180;
 }  // namespace
 
 Engine::Engine(v1::FloorposedConfig config, Publish publish, std::function<int64_t()> now_ns)
-    : config_(std::move(config)),
+    : base_config_(std::move(config)),
+      config_(base_config_),
       publish_(std::move(publish)),
       now_ns_(std::move(now_ns)),
       frame_(
@@ -280,6 +281,7 @@ void Engine::OnHeadsetPose(const Envelope& e) {
          "pose of " + std::to_string(pose.stamp_ns) + " ns again: dropped (answered already)");
     return;
   }
+  if (pose.odometry != odometry_) UseOdometry(pose.odometry);
   PlanPoseEstimate est;
   if (last_pose_stamp_ns_ && pose.stamp_ns < *last_pose_stamp_ns_) {
     // Late: answered under the alignment in use, but the walk is not walked backwards.
@@ -315,6 +317,16 @@ void Engine::OnHeadsetPose(const Envelope& e) {
   }
   publish_(Topic::kPlanPose, out);
   counters_.set_plan_poses_out(counters_.plan_poses_out() + 1);
+}
+
+void Engine::UseOdometry(v1::HeadsetPose::Odometry odometry) {
+  odometry_ = odometry;
+  config_ = ForOdometry(base_config_, odometry);
+  const v1::TrackingConfig& t = config_.tracking();
+  tracker_.SetDriftWindow(static_cast<int>(t.drift_window()));
+  spdlog::info("device {} moves on {} odometry: drift_window {}, window_s {}, refine_window_s {}",
+               config_.dds().device_id(), v1::HeadsetPose::Odometry_Name(odometry),
+               t.drift_window(), t.window_s(), t.refine_window_s());
 }
 
 v1::PlanPose Engine::ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) const {

@@ -92,6 +92,7 @@ class Engine {
   const v1::DaemonStatus::Counters& counters() const { return counters_; }
   const Tracker& tracker() const { return tracker_; }
   const WallStore& store() const { return store_; }
+  // The configuration in use: as configured, for the device's odometry (ForOdometry).
   const v1::FloorposedConfig& config() const { return config_; }
 
  private:
@@ -107,8 +108,12 @@ class Engine {
   // The wall options with the height band about the wearer's eyes, once a pose is known.
   WallExtractionOptions BandedWallOptions() const;
   bool Mine(const Envelope& e) const { return e.device_id == config_.dds().device_id(); }
+  // Tracks the device with the options for its odometry from now on (ForOdometry).
+  void UseOdometry(v1::HeadsetPose::Odometry odometry);
 
-  v1::FloorposedConfig config_;
+  const v1::FloorposedConfig base_config_;  // as configured
+  v1::FloorposedConfig config_;             // ...for the device's odometry
+  v1::HeadsetPose::Odometry odometry_ = v1::HeadsetPose::VISUAL_INERTIAL;
   Publish publish_;
   std::function<int64_t()> now_ns_;
   HeadsetFrame frame_;

@@ -45,6 +45,7 @@ int RunImportCarmen(ImportCarmenOptions o) {
     return 1;
   }
   o.recording.frame = *ParseHeadsetFrame(o.frame);  // checked by CLI11
+  o.recording.odometry = v1::HeadsetPose::WHEEL;    // the daemon tracks it as a robot
   size_t records = 0;
   if (!WriteSimulationRecording(walk, o.plan_id.empty() ? name + "_plan" : o.plan_id, "carmen", 0,
                                 o.recording, o.out, &records, &error)) {

@@ -82,8 +82,9 @@ bool WriteSimulationRecording(const sim::Simulation& simulation, const std::stri
     for (const sim::SimMesh& mesh : step.meshes)
       ok = ok &&
            out.Append(mesh_topic, step.stamp_ns, ToMeshDelta(mesh, recording.frame, step.stamp_ns));
-    ok = ok && out.Append(pose_topic, step.stamp_ns,
-                          ToHeadsetPose(step.slam, recording.frame, step.stamp_ns));
+    v1::HeadsetPose pose = ToHeadsetPose(step.slam, recording.frame, step.stamp_ns);
+    pose.set_odometry(recording.odometry);
+    ok = ok && out.Append(pose_topic, step.stamp_ns, pose);
     v1::GroundTruthPose truth;
     truth.set_stamp_ns(step.stamp_ns);
     truth.set_x(step.true_plan.position.x());

@@ -11,6 +11,7 @@
 #include "core/floor_plan.h"
 #include "core/frames.h"
 #include "core/sim/simulator.h"
+#include "floorpose/v1/floorpose.pb.h"
 
 namespace floorpose::tools {
 
@@ -21,6 +22,8 @@ struct SimulateRecordingOptions {
   std::string device_id = "sim-headset";
   std::string floor = "0";  // floor id of the ground truth
   HeadsetFrame frame = HeadsetFrame::kUnityLeftHandedYUp;
+  // What the poses say the device moves on (a CARMEN robot: WHEEL).
+  v1::HeadsetPose::Odometry odometry = v1::HeadsetPose::VISUAL_INERTIAL;
 };
 
 struct SimulateRecordingResult {
