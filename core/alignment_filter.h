@@ -99,8 +99,8 @@ class AlignmentFilter {
   double drift_scale() const { return drift_scale_; }
   void set_drift_scale(double scale) { drift_scale_ = scale; }
   const AlignmentFilterOptions& options() const { return options_; }
-  // Another drift window from now on (the device said it moves on another odometry).
-  void set_drift_window(int window) { options_.drift_window = window; }
+  // Other options from now on, keeping the estimate (Tracker::SetFilterOptions).
+  void set_options(const AlignmentFilterOptions& options) { options_ = options; }
 
  private:
   // The heading drift scale that makes this innovation typical (see drift_window).

@@ -223,10 +223,11 @@ class Tracker {
   // How much faster than the configured prior the SLAM drifts, as the filter learnt it
   // from the registrations (AlignmentFilterOptions::drift_window).
   double drift_scale() const { return filter_.drift_scale(); }
-  // Learn the drift over this many registrations from now on (0: keep the prior).
-  void SetDriftWindow(int window) {
-    options_.filter.drift_window = window;
-    filter_.set_drift_window(window);
+  // Another drift model from now on (the device said it moves on another odometry); the
+  // alignment, its covariance and what the filter learnt stay.
+  void SetFilterOptions(const AlignmentFilterOptions& options) {
+    options_.filter = options;
+    filter_.set_options(options);
   }
 
   // The latest accepted alignments, oldest first.

@@ -224,6 +224,11 @@ TEST(DecodeHeadsetPoseTest, GoodPose) {
   ASSERT_THAT(Decode(GoodPose(), &out), IsEmpty());
   EXPECT_EQ(out.stamp_ns, 42);
   EXPECT_EQ(out.tracking, v1::HeadsetPose::TRACKING_OK);
+  EXPECT_EQ(out.odometry, v1::HeadsetPose::VISUAL_INERTIAL);  // unset: a headset's SLAM
+  v1::HeadsetPose wheel = GoodPose();
+  wheel.set_odometry(v1::HeadsetPose::WHEEL);
+  ASSERT_THAT(Decode(wheel, &out), IsEmpty());
+  EXPECT_EQ(out.odometry, v1::HeadsetPose::WHEEL);
   EXPECT_EQ(out.pose_slam.position, Eigen::Vector2d(1, 3));
   EXPECT_DOUBLE_EQ(out.pose_slam.z, 1.6);
   EXPECT_NEAR(out.pose_slam.heading, M_PI / 2, 1e-12);  // Unity forward is slam +y
@@ -257,6 +262,10 @@ TEST(DecodeHeadsetPoseTest, RejectsBadPoses) {
   p = GoodPose();
   p.GetReflection()->SetEnumValue(&p, p.GetDescriptor()->FindFieldByName("tracking"), 9);
   EXPECT_THAT(Decode(p, &out), HasSubstr("unknown tracking state 9"));
+
+  p = GoodPose();
+  p.GetReflection()->SetEnumValue(&p, p.GetDescriptor()->FindFieldByName("odometry"), 7);
+  EXPECT_THAT(Decode(p, &out), HasSubstr("unknown odometry 7"));
 
   const std::string good = GoodPose().SerializeAsString();
   EXPECT_THAT(DecodeHeadsetPose(good.substr(0, good.size() - 3), kUnity, {}, &out),

@@ -150,6 +150,9 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"tracking { turn_sigma_deg: 0 }", "turn_sigma_deg"},
            Case{"tracking { drift_turn: -0.01 }", "drift_"},
            Case{"tracking { refine_window_s: inf }", "refine_window_s"},
+           Case{"tracking { window_s: -5 }", "tracking.window_s"},
+           Case{"tracking { wheel_odometry { window_s: nan } }", "wheel_odometry.window_s"},
+           Case{"tracking { wheel_odometry { drift_window: 5000 } }", "drift_window"},
            Case{"status_period_s: 0", "status_period_s"},
            Case{"log_level: \"loud\"", "log_level"},
        }) {
@@ -164,6 +167,23 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
   EXPECT_THAT(ValidateConfig(c), HasSubstr("headset_frame"));
   c.set_headset_frame("zup");
   EXPECT_THAT(ValidateConfig(c), IsEmpty());
+}
+
+TEST(ConfigTest, WheelOdometryReplacesTheHeadsetsDriftAndWindows) {
+  v1::FloorposedConfig c;
+  std::string error;
+  ASSERT_TRUE(ParseConfig("tracking { window_s: 30 wheel_odometry { window_s: 4 } }", &c, &error))
+      << error;
+  const v1::FloorposedConfig headset = ForOdometry(c, v1::HeadsetPose::VISUAL_INERTIAL);
+  EXPECT_EQ(headset.tracking().window_s(), 30);
+  EXPECT_EQ(headset.tracking().drift_window(), 0u);
+  EXPECT_EQ(headset.tracking().refine_window_s(), 20);
+  const v1::FloorposedConfig wheel = ForOdometry(c, v1::HeadsetPose::WHEEL);
+  EXPECT_EQ(wheel.tracking().window_s(), 4);
+  EXPECT_EQ(wheel.tracking().drift_window(), 9u);
+  EXPECT_EQ(wheel.tracking().refine_window_s(), 3);
+  EXPECT_EQ(ToTrackerOptions(wheel).filter.drift_window, 9);
+  EXPECT_EQ(wheel.tracking().drift_heading_deg(), headset.tracking().drift_heading_deg());
 }
 
 // Every field of a message type and of its sub-messages, depth first.

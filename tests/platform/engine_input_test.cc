@@ -178,6 +178,23 @@ TEST_F(EngineInputTest, PosesBeforeAPlanAndPlansThatAreNotPlans) {
   EXPECT_FALSE(engine_->tracker().has_plan());
 }
 
+TEST_F(EngineInputTest, AWheeledDeviceIsTrackedWithTheWheelOdometrysDrift) {
+  Start(/*with_plan=*/true);
+  engine_->OnHeadsetPose(Wrap(Pose(1)));
+  EXPECT_EQ(engine_->config().tracking().window_s(), 40);
+  EXPECT_EQ(engine_->tracker().options().filter.drift_window, 0);
+  v1::HeadsetPose wheel = Pose(2);
+  wheel.set_odometry(v1::HeadsetPose::WHEEL);
+  engine_->OnHeadsetPose(Wrap(wheel));
+  EXPECT_EQ(engine_->config().tracking().window_s(), 6);
+  EXPECT_EQ(engine_->config().tracking().refine_window_s(), 3);
+  EXPECT_EQ(engine_->tracker().options().filter.drift_window, 9);
+  engine_->OnHeadsetPose(Wrap(Pose(3)));  // unset again: a headset's SLAM
+  EXPECT_EQ(engine_->config().tracking().window_s(), 40);
+  EXPECT_EQ(engine_->tracker().options().filter.drift_window, 0);
+  EXPECT_EQ(poses_.size(), 3u);
+}
+
 TEST_F(EngineInputTest, AFloodOfBadInputLogsOnceASecond) {
   Start(/*with_plan=*/true);
   std::ostringstream log;
