@@ -324,10 +324,9 @@ void Engine::UseOdometry(v1::HeadsetPose::Odometry odometry) {
   config_ = ForOdometry(base_config_, odometry);
   const v1::TrackingConfig& t = config_.tracking();
   tracker_.SetFilterOptions(ToTrackerOptions(config_).filter);
-  spdlog::info(
-      "device {} moves on {} odometry: drift_window {}, window_s {}, refine_window_s {}",
-      config_.dds().device_id(), v1::HeadsetPose::Odometry_Name(odometry), t.drift_window(),
-      t.window_s(), t.refine_window_s());
+  spdlog::info("device {} moves on {} odometry: drift_window {}, window_s {}, refine_window_s {}",
+               config_.dds().device_id(), v1::HeadsetPose::Odometry_Name(odometry),
+               t.drift_window(), t.window_s(), t.refine_window_s());
 }
 
 v1::PlanPose Engine::ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) const {
