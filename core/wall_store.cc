@@ -60,6 +60,22 @@ bool WallStore::Remove(uint64_t mesh_id) {
   return true;
 }
 
+size_t WallStore::EvictOldest(size_t max_points, std::optional<uint64_t> keep_id) {
+  if (points_ <= max_points) return 0;
+  std::vector<std::pair<int64_t, uint64_t>> by_age;  // (stamp, id)
+  by_age.reserve(meshes_.size());
+  for (const auto& [id, mesh] : meshes_)
+    if (id != keep_id) by_age.emplace_back(mesh.stamp_ns, id);
+  std::sort(by_age.begin(), by_age.end());
+  size_t evicted = 0;
+  for (const auto& [stamp, id] : by_age) {
+    if (points_ <= max_points) break;
+    Remove(id);
+    ++evicted;
+  }
+  return evicted;
+}
+
 void WallStore::Clear() {
   meshes_.clear();
   voxels_.clear();

@@ -23,6 +23,11 @@ class WallStore {
   size_t Upsert(uint64_t mesh_id, std::vector<WallPoint> points, int64_t stamp_ns = 0);
   // Returns false when the id is unknown.
   bool Remove(uint64_t mesh_id);
+  // The bound on memory: removes the meshes scanned longest ago (oldest stamp, then
+  // lowest id), never `keep_id`, until at most max_points points are live. They are the
+  // walls the registration window dropped first, and a re-scan brings them back. Returns
+  // how many meshes went.
+  size_t EvictOldest(size_t max_points, std::optional<uint64_t> keep_id = std::nullopt);
   bool Contains(uint64_t mesh_id) const { return meshes_.count(mesh_id) > 0; }
   // When the mesh was (re)scanned, if it is live.
   std::optional<int64_t> MeshStamp(uint64_t mesh_id) const {

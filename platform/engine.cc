@@ -252,11 +252,19 @@ void Engine::OnMeshDelta(const Envelope& e) {
     Warn("unknown mesh",
          "UPDATED for unknown mesh " + std::to_string(mesh.mesh_id) + ": stored as new");
   }
+  const size_t cap = config_.limits().max_wall_points();
+  if (points.size() > cap)
+    return Reject(Refusal::kOverLimits, "mesh " + std::to_string(mesh.mesh_id) + ": " +
+                                            std::to_string(points.size()) +
+                                            " wall points, more than limits.max_wall_points");
+  // At the cap the meshes scanned longest ago make room (WallStore::EvictOldest).
   const size_t replaced = known ? store_.MeshPoints(mesh.mesh_id) : 0;
-  if (store_.points() - replaced + points.size() > config_.limits().max_wall_points()) {
-    return Reject(Refusal::kOverLimits, "mesh " + std::to_string(mesh.mesh_id) +
-                                            ": wall-point store full (" +
-                                            std::to_string(store_.points()) + " points)");
+  if (const size_t evicted = store_.EvictOldest(cap - points.size() + replaced, mesh.mesh_id)) {
+    counters_.set_meshes_evicted(counters_.meshes_evicted() + evicted);
+    Warn("evicted", "wall-point store at limits.max_wall_points (" + std::to_string(cap) +
+                        "): the " + std::to_string(evicted) +
+                        " meshes scanned longest ago evicted for mesh " +
+                        std::to_string(mesh.mesh_id));
   }
   store_.Upsert(mesh.mesh_id, std::move(points), mesh.stamp_ns);
   if (mesh.change == v1::MeshDelta::ADDED && !known)

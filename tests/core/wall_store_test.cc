@@ -71,6 +71,27 @@ TEST(WallStoreTest, UpsertReplaceRemoveCounts) {
   EXPECT_TRUE(store.Snapshot(0).empty());
 }
 
+TEST(WallStoreTest, EvictionTakesTheMeshesScannedLongestAgo) {
+  SplitMix64 rng(43);
+  WallStore store;
+  store.Upsert(5, RandomPoints(rng, 10), 300);
+  store.Upsert(1, RandomPoints(rng, 10), 100);
+  store.Upsert(2, RandomPoints(rng, 10), 100);  // same age as 1: the lower id goes first
+  store.Upsert(3, RandomPoints(rng, 10), 200);
+  EXPECT_EQ(store.EvictOldest(40), 0u);  // within the bound: nothing
+  EXPECT_EQ(store.EvictOldest(25), 2u);
+  EXPECT_FALSE(store.Contains(1));
+  EXPECT_FALSE(store.Contains(2));
+  EXPECT_EQ(store.points(), 20u);
+  // The kept mesh stays even when it is the oldest.
+  EXPECT_EQ(store.EvictOldest(10, 3), 1u);
+  EXPECT_TRUE(store.Contains(3));
+  EXPECT_FALSE(store.Contains(5));
+  EXPECT_EQ(store.occupied_voxels(), store.Snapshot(0).size());
+  EXPECT_EQ(store.EvictOldest(0, 3), 0u);  // nothing else to evict
+  EXPECT_EQ(store.points(), 10u);
+}
+
 TEST(WallStoreTest, NonFinitePointsAreNeverStored) {
   SplitMix64 rng(42);
   const float nan = std::numeric_limits<float>::quiet_NaN();

@@ -178,6 +178,45 @@ TEST_F(EngineInputTest, PosesBeforeAPlanAndPlansThatAreNotPlans) {
   EXPECT_FALSE(engine_->tracker().has_plan());
 }
 
+TEST_F(EngineInputTest, TheWallStoreIsBoundedByAreaNotTime) {
+  Start(/*with_plan=*/true);
+  // Re-scans of the same surface, again and again: they replace, never grow.
+  engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::ADDED, 10)));
+  const size_t one_mesh = engine_->store().points();
+  ASSERT_GT(one_mesh, 100u);
+  for (int k = 1; k <= 500; ++k)
+    engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::UPDATED, 10 + k)));
+  EXPECT_LE(engine_->store().points(), one_mesh * 11 / 10);  // each scan samples anew
+  EXPECT_EQ(engine_->store().meshes(), 1u);
+  EXPECT_EQ(c().meshes_updated(), 500u);
+
+  // A cap of three meshes: the fourth and fifth new surfaces evict the oldest scans, and
+  // an update keeps its mesh fresh.
+  config_.mutable_limits()->set_max_wall_points(static_cast<uint32_t>(one_mesh * 3 + one_mesh / 2));
+  Start(/*with_plan=*/true);
+  for (uint64_t id = 1; id <= 3; ++id)
+    engine_->OnMeshDelta(Wrap(Wall(id, v1::MeshDelta::ADDED, static_cast<int64_t>(id) * 10)));
+  EXPECT_EQ(engine_->store().meshes(), 3u);
+  engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::UPDATED, 35)));  // 2 is now the oldest
+  engine_->OnMeshDelta(Wrap(Wall(4, v1::MeshDelta::ADDED, 40)));
+  EXPECT_FALSE(engine_->store().Contains(2));
+  EXPECT_TRUE(engine_->store().Contains(1));
+  engine_->OnMeshDelta(Wrap(Wall(5, v1::MeshDelta::ADDED, 50)));
+  EXPECT_FALSE(engine_->store().Contains(3));
+  EXPECT_EQ(engine_->store().meshes(), 3u);
+  EXPECT_LE(engine_->store().points(), config_.limits().max_wall_points());
+  EXPECT_EQ(c().meshes_evicted(), 2u);
+  EXPECT_EQ(c().rejected_messages(), 0u);  // eviction is not a refusal
+  for (uint64_t id : {1u, 4u, 5u}) EXPECT_TRUE(engine_->store().Contains(id)) << id;
+
+  // One mesh over the whole cap is refused, and evicts nothing.
+  config_.mutable_limits()->set_max_wall_points(static_cast<uint32_t>(one_mesh / 2));
+  Start(/*with_plan=*/true);
+  engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::ADDED, 10)));
+  EXPECT_EQ(c().over_limits(), 1u);
+  EXPECT_EQ(engine_->store().points(), 0u);
+}
+
 TEST_F(EngineInputTest, AWheeledDeviceIsTrackedWithTheWheelOdometrysDrift) {
   Start(/*with_plan=*/true);
   engine_->OnHeadsetPose(Wrap(Pose(1)));
