@@ -94,7 +94,12 @@ Participant::Participant(uint32_t domain_id, const std::string& cyclone_config,
                          const DdsSecurity* security) {
   if (!cyclone_config.empty()) {
     domain_ = dds_create_domain(domain_id, cyclone_config.c_str());
-    Check(domain_, "dds_create_domain");
+    // This process has the domain already (another participant made it, with its own
+    // configuration): join it. That participant owns the domain and must outlive this one.
+    if (domain_ == DDS_RETCODE_PRECONDITION_NOT_MET)
+      domain_ = 0;
+    else
+      Check(domain_, "dds_create_domain");
   }
   dds_qos_t* qos = nullptr;
   if (security) {

@@ -118,7 +118,8 @@ class Participant {
   // `cyclone_config` is Cyclone XML (or a file:// URI); empty uses CYCLONEDDS_URI. With
   // `security`, the participant authenticates, is access-controlled and encrypts as the
   // governance says; one that cannot (a missing file, a bad signature) fails to start.
-  // Throws std::runtime_error when DDS cannot start.
+  // Throws std::runtime_error when DDS cannot start. A second participant of a domain in
+  // one process joins the first one's domain (and configuration); the first must outlive it.
   Participant(uint32_t domain_id, const std::string& cyclone_config,
               const DdsSecurity* security = nullptr);
   ~Participant();

@@ -499,8 +499,11 @@ Run AddBenchCommand(CLI::App& app) {
   snapshot->add_flag("--json", o->json, "one JSON object per line per store size");
   snapshot->add_option("--repetitions", o->repetitions, "runs per measurement (median)")
       ->capture_default_str();
-  return [o, registration, snapshot] {
+  Run daemon = AddBenchDaemonCommand(app);
+  CLI::App* daemon_command = app.get_subcommand("daemon");
+  return [o, registration, snapshot, daemon, daemon_command] {
     if (snapshot->parsed()) return RunBenchSnapshot(*o);
+    if (daemon_command->parsed()) return daemon();
     if (!registration->parsed()) return 2;
     return RunBenchRegistration(*o);
   };

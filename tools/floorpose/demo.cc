@@ -28,14 +28,17 @@ namespace {
 namespace fs = std::filesystem;
 using platform::Topic;
 
+}  // namespace
+
 std::string DefaultDemoDir() {
-  // Installed next to the binary's prefix, else the source tree this was built from.
   std::error_code ec;
   const fs::path self = fs::read_symlink("/proc/self/exe", ec).parent_path();
   const fs::path installed = self / ".." / "share" / "floorpose" / "demo";
   if (fs::exists(installed / "office.geojson", ec)) return installed.string();
   return FLOORPOSE_SOURCE_DEMO_DIR;
 }
+
+namespace {
 
 // Waypoints: one "x y" per line, '#' comments.
 bool LoadWaypoints(const std::string& path, std::vector<Eigen::Vector2d>* out, std::string* error) {

@@ -19,6 +19,7 @@ class ChildProcess {
   ChildProcess& operator=(const ChildProcess&) = delete;
 
   bool started() const { return pid_ > 0; }
+  pid_t pid() const { return pid_; }
   bool Running();
   // SIGTERM, then wait up to timeout; SIGKILL after. Returns the exit code, or nothing if
   // it had to be killed or died by a signal.
