@@ -125,11 +125,31 @@ void Daemon::IoLoop() {
     std::stable_sort(batch.begin(), batch.end(), [](const Input& a, const Input& b) {
       return platform::InputBefore(a.topic, a.envelope.stamp_ns, b.topic, b.envelope.stamp_ns);
     });
-    for (const Input& in : batch) {
+    auto handle = [&](const Input& in) {
       switch (in.topic) {
         case Topic::kCommand: engine_->OnCommand(in.envelope); break;
         case Topic::kMeshDelta: engine_->OnMeshDelta(in.envelope); break;
         default: engine_->OnHeadsetPose(in.envelope); break;
+      }
+    };
+    if (deterministic_) {
+      for (const Input& in : batch) {
+        handle(in);
+        AfterInput();
+      }
+    } else {
+      // The wearer first: the batch's poses (and commands, in their order) are answered
+      // before its meshes become wall points, and a registration is applied and the next
+      // one scheduled after them; a pose that arrives meanwhile is answered before the next
+      // mesh. Registrations run on the worker, so neither order changes what they see by
+      // more than a batch; a pose no longer waits for wall extraction, a store snapshot or
+      // a PlanTrack (floorpose bench daemon, p99 latency).
+      for (const Input& in : batch)
+        if (in.topic != Topic::kMeshDelta) handle(in);
+      for (const Input& in : batch) {
+        if (in.topic != Topic::kMeshDelta) continue;
+        for (auto& e : pose_reader_->Take(256)) handle({Topic::kHeadsetPose, std::move(e)});
+        handle(in);
       }
       AfterInput();
     }

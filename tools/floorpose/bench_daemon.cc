@@ -118,7 +118,7 @@ struct Headset {
   sim::Simulation walk;
   std::unordered_map<int64_t, size_t> step_of_stamp;
   std::vector<std::atomic<int64_t>> sent_ns;  // per step: when its pose was written
-  std::vector<double> latency_ms;  // receiver thread until it is joined
+  std::vector<double> latency_ms;             // receiver thread until it is joined
   std::vector<uint8_t> answered;
   size_t mesh_deltas = 0;
   std::string log_path;
@@ -127,7 +127,9 @@ struct Headset {
   ProcSample at_10min, at_end;
 };
 
-double Max(const std::vector<double>& v) { return v.empty() ? 0 : *std::max_element(v.begin(), v.end()); }
+double Max(const std::vector<double>& v) {
+  return v.empty() ? 0 : *std::max_element(v.begin(), v.end());
+}
 
 int RunBenchDaemon(const BenchDaemonOptions& o) {
   const std::string plan_path = o.plan.empty() ? DefaultDemoDir() + "/office.geojson" : o.plan;
@@ -216,8 +218,7 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
         auto step = hs.step_of_stamp.find(p.source_stamp_ns());
         if (step == hs.step_of_stamp.end() || hs.answered[step->second]) continue;
         hs.answered[step->second] = 1;
-        hs.latency_ms.push_back(static_cast<double>(now - hs.sent_ns[step->second].load()) *
-                                1e-6);
+        hs.latency_ms.push_back(static_cast<double>(now - hs.sent_ns[step->second].load()) * 1e-6);
         answered.fetch_add(1);
       }
     }
@@ -340,8 +341,9 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
   } else {
     std::printf("  pose latency, write to plan pose back  p50 %.2f  p99 %.2f  max %.2f ms\n",
                 Percentile(latency, 0.5), Percentile(latency, 0.99), Max(latency));
-    std::printf("  poses sent / answered                  %zu / %zu: %zu dropped, %zu late (> %g ms)\n",
-                poses_sent, latency.size(), dropped, late, o.late_ms);
+    std::printf(
+        "  poses sent / answered                  %zu / %zu: %zu dropped, %zu late (> %g ms)\n",
+        poses_sent, latency.size(), dropped, late, o.late_ms);
     std::printf("  registrations                          %zu: p50 %.1f  p99 %.1f  max %.1f ms\n",
                 registrations.size(), Percentile(registrations, 0.5),
                 Percentile(registrations, 0.99), Max(registrations));
@@ -350,9 +352,10 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
         "real time (%.1f%% while played)\n",
         cpu_s / (walk_s / 60.0), cpu_percent, cpu_percent_played);
     if (sampled_10min)
-      std::printf("  RSS per daemon (worst)                 peak %.1f MB, after 10 min %.1f MB, "
-                  "final %.1f MB\n",
-                  rss_peak, rss_10, rss_final);
+      std::printf(
+          "  RSS per daemon (worst)                 peak %.1f MB, after 10 min %.1f MB, "
+          "final %.1f MB\n",
+          rss_peak, rss_10, rss_final);
     else
       std::printf("  RSS per daemon (worst)                 peak %.1f MB, final %.1f MB\n",
                   rss_peak, rss_final);
