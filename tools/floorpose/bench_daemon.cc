@@ -59,7 +59,8 @@ struct BenchDaemonOptions {
   int domain = -1;
   double late_ms = 50.0;
   std::string floorposed;
-  std::string logs;  // keep the daemons' logs here
+  std::string logs;         // keep the daemons' logs here
+  std::string latency_csv;  // every pose's latency here
   bool json = false;
 };
 
@@ -118,7 +119,8 @@ struct Headset {
   sim::Simulation walk;
   std::unordered_map<int64_t, size_t> step_of_stamp;
   std::vector<std::atomic<int64_t>> sent_ns;  // per step: when its pose was written
-  std::vector<double> latency_ms;             // receiver thread until it is joined
+  std::vector<double> latency_ms;             // receiver thread until it is joined...
+  std::vector<size_t> latency_step;           // ...and the step of each
   std::vector<uint8_t> answered;
   size_t mesh_deltas = 0;
   std::string log_path;
@@ -139,7 +141,7 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
     return 1;
   }
   const uint32_t domain =
-      o.domain >= 0 ? static_cast<uint32_t>(o.domain) : 100 + static_cast<uint32_t>(getpid() % 120);
+      o.domain >= 0 ? static_cast<uint32_t>(o.domain) : 201 + static_cast<uint32_t>(getpid() % 30);
   const fs::path tmp = fs::temp_directory_path() / ("floorpose-bench-" + std::to_string(getpid()));
   fs::create_directories(tmp);
   const std::string floorposed = o.floorposed.empty() ? FindFloorposed() : o.floorposed;
@@ -219,6 +221,7 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
         if (step == hs.step_of_stamp.end() || hs.answered[step->second]) continue;
         hs.answered[step->second] = 1;
         hs.latency_ms.push_back(static_cast<double>(now - hs.sent_ns[step->second].load()) * 1e-6);
+        hs.latency_step.push_back(step->second);
         answered.fetch_add(1);
       }
     }
@@ -304,6 +307,16 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
       wall_points = std::max<size_t>(wall_points, hs.link->status->wall_points());
       meshes = std::max<size_t>(meshes, hs.link->status->live_meshes());
     }
+  }
+  if (!o.latency_csv.empty()) {
+    std::ofstream csv(o.latency_csv);
+    csv << "device,t_s,latency_ms,mesh_deltas_before\n";
+    for (const Headset& hs : headsets)
+      for (size_t i = 0; i < hs.latency_ms.size(); ++i) {
+        const sim::SimulatedStep& step = hs.walk.steps[hs.latency_step[i]];
+        csv << hs.device << ',' << static_cast<double>(step.stamp_ns - first_stamp) * 1e-9 << ','
+            << hs.latency_ms[i] << ',' << step.meshes.size() << '\n';
+      }
   }
   const double cpu_percent = 100.0 * cpu_s / walk_s;
   const double cpu_percent_played = 100.0 * cpu_s / played_s;
@@ -394,13 +407,22 @@ Run AddBenchDaemonCommand(CLI::App& bench) {
       ->check(CLI::Range(1, 32))
       ->capture_default_str();
   app->add_option("--seed", o->seed, "simulation seed of the first headset")->capture_default_str();
-  app->add_option("--domain", o->domain, "DDS domain id (default: from the process id)");
+  app->add_option("--domain", o->domain, "DDS domain id (default: 201-230, from the process id)");
   app->add_option("--late-ms", o->late_ms, "a plan pose later than this is late")
       ->capture_default_str();
   app->add_option("--floorposed", o->floorposed, "floorposed binary (default: beside floorpose)");
   app->add_option("--logs", o->logs, "keep the daemons' logs in this directory");
+  app->add_option("--latency-csv", o->latency_csv,
+                  "write every pose's latency here (device, walk time, ms, mesh deltas before it)");
   app->add_flag("--json", o->json, "print one JSON object");
-  return [o] { return RunBenchDaemon(*o); };
+  return [o] {
+    try {
+      return RunBenchDaemon(*o);
+    } catch (const std::exception& e) {  // DDS would not start: the daemons are stopped
+      spdlog::error("bench daemon: {}", e.what());
+      return 1;
+    }
+  };
 }
 
 }  // namespace floorpose::tools

@@ -1,0 +1,59 @@
+// `floorpose bench daemon` as a user runs it: real floorposed processes, two headsets on
+// one domain, every pose answered by its own daemon, and the JSON it promises. What it
+// measures (latency, CPU, memory) is for docs/performance.md, not asserted here.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "tests/daemon_test_util.h"
+#include "tests/test_util.h"
+#include "tools/lib/process.h"
+
+namespace floorpose {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(BenchDaemonTest, TwoHeadsetsEachAnsweredByItsOwnDaemon) {
+  const fs::path dir = fs::path(::testing::TempDir()) / ("bench-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string out = (dir / "out.json").string();
+  // A minute of walk at 20 times real time, on a domain of its own.
+  tools::ChildProcess bench({FLOORPOSE_PATH, "bench", "daemon", "--minutes", "1", "--speed", "20",
+                             "--headsets", "2", "--domain", std::to_string(testing::UniqueDomain()),
+                             "--logs", (dir / "logs").string(), "--json"},
+                            out);
+  ASSERT_TRUE(bench.started());
+  ASSERT_EQ(bench.Wait(std::chrono::seconds(90)), 0) << testing::ReadText(out);
+
+  const std::string text = testing::ReadText(out);
+  const nlohmann::json j = nlohmann::json::parse(text.substr(text.rfind("\n{") + 1));
+  for (const char* key :
+       {"latency_ms_p50", "latency_ms_p99", "latency_ms_max", "rss_mb_peak", "rss_mb_10min",
+        "rss_mb_final", "cpu_percent", "poses_in", "poses_out", "dropped"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["headsets"], 2);
+  // 60 s of walk, a pose every 0.3 s, per headset; every one answered.
+  EXPECT_EQ(j["poses_in"], 2 * 201);
+  EXPECT_EQ(j["poses_out"], j["poses_in"]);
+  EXPECT_EQ(j["dropped"], 0);
+  EXPECT_TRUE(j["rss_mb_10min"].is_null());  // the walk was shorter than 10 minutes
+  EXPECT_GT(j["rss_mb_peak"].get<double>(), 1.0);
+  EXPECT_GT(j["registrations"].get<int>(), 0);
+  EXPECT_TRUE(j["stopped_cleanly"].get<bool>());
+  // Each daemon took only its own headset: its log says so, and it stopped with its own
+  // poses counted.
+  for (const char* device : {"bench-1", "bench-2"}) {
+    const std::string log = testing::ReadText(dir / "logs" / (std::string(device) + ".log"));
+    EXPECT_NE(log.find("as device '" + std::string(device) + "'"), std::string::npos) << device;
+    EXPECT_NE(log.find("stopped: 201 poses in, 201 plan poses out"), std::string::npos) << log;
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace floorpose
