@@ -1,10 +1,14 @@
 #include "daemon/daemon.h"
 
 #include <spdlog/spdlog.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <vector>
 
@@ -190,6 +194,11 @@ void Daemon::ApplyFinished(bool wait) {
 void Daemon::WorkerLoop() {
   // The worker touches nothing of the io thread's but the job, which carries its own
   // copies (the index as a shared_ptr), so a plan change never pulls data from under it.
+  // It yields the core to the io thread: a pose is answered before a registration goes
+  // on (on a two-core puck shared with other software, the scheduler decides; nice 10
+  // gives this thread a tenth of the io thread's weight).
+  if (setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), 10) != 0)
+    spdlog::debug("registration worker keeps its priority: {}", std::strerror(errno));
   while (true) {
     platform::Engine::Job job;
     {
