@@ -223,11 +223,13 @@ class Tracker {
   // How much faster than the configured prior the SLAM drifts, as the filter learnt it
   // from the registrations (AlignmentFilterOptions::drift_window).
   double drift_scale() const { return filter_.drift_scale(); }
-  // Another drift model from now on (the device said it moves on another odometry); the
-  // alignment, its covariance and what the filter learnt stay.
-  void SetFilterOptions(const AlignmentFilterOptions& options) {
-    options_.filter = options;
-    filter_.set_options(options);
+  // Another drift model from now on (the device said it moves on another odometry): the
+  // filter's options and confirm_walk_m of `options`; the alignment, its covariance and
+  // what the filter learnt stay.
+  void SetOdometryOptions(const TrackerOptions& options) {
+    options_.filter = options.filter;
+    options_.confirm_walk_m = options.confirm_walk_m;
+    filter_.set_options(options.filter);
   }
 
   // The latest accepted alignments, oldest first.

@@ -260,6 +260,7 @@ v1::FloorposedConfig ForOdometry(v1::FloorposedConfig config, v1::HeadsetPose::O
     t.set_drift_window(w.drift_window());
     t.set_window_s(w.window_s());
     t.set_refine_window_s(w.refine_window_s());
+    t.set_confirm_walk_m(w.confirm_walk_m());
   }
   return config;
 }

@@ -331,10 +331,12 @@ void Engine::UseOdometry(v1::HeadsetPose::Odometry odometry) {
   odometry_ = odometry;
   config_ = ForOdometry(base_config_, odometry);
   const v1::TrackingConfig& t = config_.tracking();
-  tracker_.SetFilterOptions(ToTrackerOptions(config_).filter);
-  spdlog::info("device {} moves on {} odometry: drift_window {}, window_s {}, refine_window_s {}",
-               config_.dds().device_id(), v1::HeadsetPose::Odometry_Name(odometry),
-               t.drift_window(), t.window_s(), t.refine_window_s());
+  tracker_.SetOdometryOptions(ToTrackerOptions(config_));
+  spdlog::info(
+      "device {} moves on {} odometry: drift_window {}, window_s {}, refine_window_s {}, "
+      "confirm_walk_m {}",
+      config_.dds().device_id(), v1::HeadsetPose::Odometry_Name(odometry), t.drift_window(),
+      t.window_s(), t.refine_window_s(), t.confirm_walk_m());
 }
 
 v1::PlanPose Engine::ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) const {

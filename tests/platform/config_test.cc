@@ -182,6 +182,8 @@ TEST(ConfigTest, WheelOdometryReplacesTheHeadsetsDriftAndWindows) {
   EXPECT_EQ(wheel.tracking().window_s(), 4);
   EXPECT_EQ(wheel.tracking().drift_window(), 9u);
   EXPECT_EQ(wheel.tracking().refine_window_s(), 3);
+  EXPECT_EQ(wheel.tracking().confirm_walk_m(), 3);
+  EXPECT_EQ(headset.tracking().confirm_walk_m(), 10);
   EXPECT_EQ(ToTrackerOptions(wheel).filter.drift_window, 9);
   EXPECT_EQ(wheel.tracking().drift_heading_deg(), headset.tracking().drift_heading_deg());
 }

@@ -228,6 +228,7 @@ TEST_F(EngineInputTest, AWheeledDeviceIsTrackedWithTheWheelOdometrysDrift) {
   EXPECT_EQ(engine_->config().tracking().window_s(), 6);
   EXPECT_EQ(engine_->config().tracking().refine_window_s(), 3);
   EXPECT_EQ(engine_->tracker().options().filter.drift_window, 9);
+  EXPECT_EQ(engine_->tracker().options().confirm_walk_m, 3);
   engine_->OnHeadsetPose(Wrap(Pose(3)));  // unset again: a headset's SLAM
   EXPECT_EQ(engine_->config().tracking().window_s(), 40);
   EXPECT_EQ(engine_->tracker().options().filter.drift_window, 0);
