@@ -212,6 +212,7 @@ std::vector<Envelope> Reader::Take(size_t max) {
       e.device_id = s->device_id ? s->device_id : "";
       e.seq = s->seq;
       e.stamp_ns = s->stamp_ns;
+      e.source_timestamp_ns = infos[i].source_timestamp;
       e.payload.assign(reinterpret_cast<const char*>(s->payload._buffer), s->payload._length);
       out.push_back(std::move(e));
     }

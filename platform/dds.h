@@ -39,6 +39,9 @@ struct Envelope {
   uint64_t seq = 0;
   int64_t stamp_ns = 0;
   std::string payload;  // serialized protobuf
+  // Received ones: when the writer wrote it, on the writer's CLOCK_REALTIME (DDS source
+  // timestamp); comparable across the processes of one machine.
+  int64_t source_timestamp_ns = 0;
 };
 
 class Participant;

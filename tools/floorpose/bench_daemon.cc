@@ -4,15 +4,16 @@
 // DDS domain (each takes only its own device), and plays each a long simulated walk over
 // the bundled office plan (mesh deltas, poses, a wall pick) faster than real time. It
 // measures what the wearer's puck pays:
-//  - pose latency: from the bench writing a HeadsetPose to the PlanPose made from it
-//    arriving back, both read on CLOCK_MONOTONIC (one clock for every process of the
-//    machine); the arrival is stamped by a thread that blocks on the plan-pose reader;
+//  - pose latency: from the bench writing a HeadsetPose to the daemon writing the PlanPose
+//    made from it (its DDS source timestamp; both on CLOCK_REALTIME, one clock for every
+//    process of the machine), and the round trip until that PlanPose is back in the bench
+//    (CLOCK_MONOTONIC, stamped by a thread that blocks on the plan-pose reader);
 //  - registration times, from each daemon's own log lines;
 //  - CPU: utime + stime of the daemon (/proc/PID/stat) per minute of walk, and as a share of
 //    one core at real time (CPU seconds over walk seconds);
 //  - memory: resident set (/proc/PID/status VmRSS) after 10 minutes of walk and at the end,
 //    and its high-water mark (VmHWM);
-//  - poses sent, answered, dropped (never answered) and late (answered after --late-ms).
+//  - poses sent, answered, dropped (never answered) and late (back after --late-ms).
 // Played faster than real time, the daemon's per-second costs (status, wake-ups) count
 // less than they would: `--speed 1` gives the CPU share exactly, in real time.
 #include <spdlog/spdlog.h>
@@ -119,9 +120,11 @@ struct Headset {
   std::string device;
   sim::Simulation walk;
   std::unordered_map<int64_t, size_t> step_of_stamp;
-  std::vector<std::atomic<int64_t>> sent_ns;  // per step: when its pose was written
-  std::vector<double> latency_ms;             // receiver thread until it is joined...
-  std::vector<size_t> latency_step;           // ...and the step of each
+  std::vector<std::atomic<int64_t>> sent_ns;       // per step: when its pose was written...
+  std::vector<std::atomic<int64_t>> sent_wall_ns;  // ...on CLOCK_MONOTONIC and _REALTIME
+  std::vector<double> latency_ms;     // pose written to plan pose written (receiver thread...
+  std::vector<double> round_trip_ms;  // ...and to plan pose back here (until it is joined)
+  std::vector<size_t> latency_step;   // ...and the step of each
   std::vector<uint8_t> answered;
   size_t mesh_deltas = 0;
   std::string log_path;
@@ -177,8 +180,10 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
       hs.mesh_deltas += hs.walk.steps[k].meshes.size() * resends;
     }
     hs.sent_ns = std::vector<std::atomic<int64_t>>(hs.walk.steps.size());
+    hs.sent_wall_ns = std::vector<std::atomic<int64_t>>(hs.walk.steps.size());
     hs.answered.assign(hs.walk.steps.size(), 0);
     hs.latency_ms.reserve(hs.walk.steps.size());
+    hs.round_trip_ms.reserve(hs.walk.steps.size());
   }
 
   for (Headset& hs : headsets) {
@@ -224,7 +229,11 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
         auto step = hs.step_of_stamp.find(p.source_stamp_ns());
         if (step == hs.step_of_stamp.end() || hs.answered[step->second]) continue;
         hs.answered[step->second] = 1;
-        hs.latency_ms.push_back(static_cast<double>(now - hs.sent_ns[step->second].load()) * 1e-6);
+        hs.latency_ms.push_back(
+            static_cast<double>(e.source_timestamp_ns - hs.sent_wall_ns[step->second].load()) *
+            1e-6);
+        hs.round_trip_ms.push_back(static_cast<double>(now - hs.sent_ns[step->second].load()) *
+                                   1e-6);
         hs.latency_step.push_back(step->second);
         answered.fetch_add(1);
       }
@@ -261,6 +270,7 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
           hs.link->Send(Topic::kMeshDelta, delta, step.stamp_ns);
         }
       }
+      hs.sent_wall_ns[k] = platform::WallClockNs();
       hs.sent_ns[k] = platform::MonotonicNs();
       hs.link->Send(Topic::kHeadsetPose, ToHeadsetPose(step.slam, frame, step.stamp_ns),
                     step.stamp_ns);
@@ -299,13 +309,14 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
   }
 
   // Everything, all headsets together; memory and CPU per daemon (the worst, and the mean).
-  std::vector<double> latency, registrations;
+  std::vector<double> latency, round_trip, registrations;
   size_t dropped = 0, late = 0, wall_points = 0, meshes = 0;
   double rss_peak = 0, rss_10 = 0, rss_final = 0, cpu_s = 0;
   for (const Headset& hs : headsets) {
     latency.insert(latency.end(), hs.latency_ms.begin(), hs.latency_ms.end());
+    round_trip.insert(round_trip.end(), hs.round_trip_ms.begin(), hs.round_trip_ms.end());
     dropped += hs.walk.steps.size() - hs.latency_ms.size();
-    late += static_cast<size_t>(std::count_if(hs.latency_ms.begin(), hs.latency_ms.end(),
+    late += static_cast<size_t>(std::count_if(hs.round_trip_ms.begin(), hs.round_trip_ms.end(),
                                               [&](double ms) { return ms > o.late_ms; }));
     const std::vector<double> r = RegistrationTimes(hs.log_path);
     registrations.insert(registrations.end(), r.begin(), r.end());
@@ -320,12 +331,12 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
   }
   if (!o.latency_csv.empty()) {
     std::ofstream csv(o.latency_csv);
-    csv << "device,t_s,latency_ms,mesh_deltas_before\n";
+    csv << "device,t_s,latency_ms,round_trip_ms,mesh_deltas_before\n";
     for (const Headset& hs : headsets)
       for (size_t i = 0; i < hs.latency_ms.size(); ++i) {
         const sim::SimulatedStep& step = hs.walk.steps[hs.latency_step[i]];
         csv << hs.device << ',' << static_cast<double>(step.stamp_ns - first_stamp) * 1e-9 << ','
-            << hs.latency_ms[i] << ',' << step.meshes.size() << '\n';
+            << hs.latency_ms[i] << ',' << hs.round_trip_ms[i] << ',' << step.meshes.size() << '\n';
       }
   }
   const double cpu_percent = 100.0 * cpu_s / walk_s;
@@ -342,6 +353,9 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
         {"latency_ms_p50", Percentile(latency, 0.5)},
         {"latency_ms_p99", Percentile(latency, 0.99)},
         {"latency_ms_max", Max(latency)},
+        {"round_trip_ms_p50", Percentile(round_trip, 0.5)},
+        {"round_trip_ms_p99", Percentile(round_trip, 0.99)},
+        {"round_trip_ms_max", Max(round_trip)},
         {"registrations", registrations.size()},
         {"registration_ms_p50", Percentile(registrations, 0.5)},
         {"registration_ms_p99", Percentile(registrations, 0.99)},
@@ -362,8 +376,10 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
     };
     std::printf("%s\n", j.dump().c_str());
   } else {
-    std::printf("  pose latency, write to plan pose back  p50 %.2f  p99 %.2f  max %.2f ms\n",
+    std::printf("  pose written to plan pose written      p50 %.2f  p99 %.2f  max %.2f ms\n",
                 Percentile(latency, 0.5), Percentile(latency, 0.99), Max(latency));
+    std::printf("  ...and back at the headset             p50 %.2f  p99 %.2f  max %.2f ms\n",
+                Percentile(round_trip, 0.5), Percentile(round_trip, 0.99), Max(round_trip));
     std::printf(
         "  poses sent / answered                  %zu / %zu: %zu dropped, %zu late (> %g ms)\n",
         poses_sent, latency.size(), dropped, late, o.late_ms);
