@@ -99,7 +99,7 @@ class AlignmentFilter {
   double drift_scale() const { return drift_scale_; }
   void set_drift_scale(double scale) { drift_scale_ = scale; }
   const AlignmentFilterOptions& options() const { return options_; }
-  // Other options from now on, keeping the estimate (Tracker::SetFilterOptions).
+  // Other options from now on, keeping the estimate (Tracker::SetOdometryOptions).
   void set_options(const AlignmentFilterOptions& options) { options_ = options; }
 
  private:
