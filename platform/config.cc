@@ -253,6 +253,15 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   return t;
 }
 
+std::string LoopbackDdsConfigText(uint32_t domain, const std::string& device_id,
+                                  const std::string& extra) {
+  std::string text = "dds { domain_id: " + std::to_string(domain);
+  if (!device_id.empty()) text += " device_id: \"" + device_id + "\"";
+  text += " cyclonedds_uri: '" + LoopbackCycloneConfig() + "'";
+  if (!extra.empty()) text += " " + extra;
+  return text + " }\n";
+}
+
 v1::FloorposedConfig ForOdometry(v1::FloorposedConfig config, v1::HeadsetPose::Odometry odometry) {
   if (odometry == v1::HeadsetPose::WHEEL) {
     v1::TrackingConfig& t = *config.mutable_tracking();

@@ -21,6 +21,12 @@ bool ParseConfig(const std::string& text, v1::FloorposedConfig* config, std::str
 // Checks values the schema cannot (ranges, names). Empty when valid.
 std::string ValidateConfig(const v1::FloorposedConfig& config);
 
+// The `dds { ... }` block of a floorposed config on `domain`, kept on loopback
+// (LoopbackCycloneConfig), for device_id (empty: the default), with `extra` options inside
+// the block; one line. For the tools and tests that start a daemon of their own.
+std::string LoopbackDdsConfigText(uint32_t domain, const std::string& device_id,
+                                  const std::string& extra = "");
+
 // Text format with every option present, defaults included.
 std::string ResolvedConfigText(const v1::FloorposedConfig& config);
 

@@ -13,6 +13,7 @@
 
 #include "core/sim/demo_walk.h"
 #include "floorpose/v1/config.pb.h"
+#include "platform/config.h"
 #include "platform/dds.h"
 #include "platform/floor_plan_io.h"
 #include "tests/daemon_test_util.h"
@@ -55,9 +56,7 @@ class DaemonTest : public ::testing::Test {
   void StartDaemon(const std::string& extra_config = "",
                    const platform::DdsSecurity* link_security = nullptr) {
     const std::string config_path = (dir_ / "floorposed.conf").string();
-    std::ofstream(config_path) << "dds { domain_id: " << domain_
-                               << " device_id: \"hl-test\" cyclonedds_uri: '"
-                               << platform::LoopbackCycloneConfig() << "' " << dds_extra_ << " }\n"
+    std::ofstream(config_path) << platform::LoopbackDdsConfigText(domain_, "hl-test", dds_extra_)
                                << "plan_path: \"" << plan_path_ << "\"\n"
                                << "status_period_s: 0.1\nlog_level: \"debug\"\n"
                                << extra_config;

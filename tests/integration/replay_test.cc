@@ -39,9 +39,7 @@ TEST_F(ReplayTest, DaemonGivesTheSamePlanPosesAsEval) {
   // The live run: floorposed in deterministic mode, the recording replayed over DDS.
   const uint32_t domain = testing::UniqueDomain();
   const std::string config_path = (dir / "floorposed.conf").string();
-  std::ofstream(config_path) << "dds { domain_id: " << domain
-                             << " device_id: \"sim-headset\" cyclonedds_uri: '"
-                             << platform::LoopbackCycloneConfig() << "' }\n"
+  std::ofstream(config_path) << platform::LoopbackDdsConfigText(domain, "sim-headset")
                              << "plan_path: \"" << FLOORPOSE_DEMO_PLAN << "\"\n"
                              << "tracking { deterministic: true }\nstatus_period_s: 0.2\n";
   tools::ChildProcess daemon({FLOORPOSED_PATH, "--config", config_path},

@@ -113,9 +113,8 @@ TEST_F(SecurityTest, ADaemonWhoseDocumentsAnotherCASignedDoesNotStart) {
   platform::DdsSecurity broken = Identity("pki", "floorposed");
   broken.governance = Identity("rogue", "app").governance;
   const std::string config_path = (dir_ / "floorposed.conf").string();
-  std::ofstream(config_path) << "dds { domain_id: " << domain_ << " cyclonedds_uri: '"
-                             << platform::LoopbackCycloneConfig() << "' " << SecurityConfig(broken)
-                             << " }\n";
+  std::ofstream(config_path) << platform::LoopbackDdsConfigText(domain_, "",
+                                                                SecurityConfig(broken));
   tools::ChildProcess daemon({FLOORPOSED_PATH, "--config", config_path},
                              (dir_ / "floorposed.log").string());
   ASSERT_TRUE(daemon.started());

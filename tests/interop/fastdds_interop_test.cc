@@ -9,6 +9,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "platform/config.h"
 #include "platform/dds.h"
 #include "tests/daemon_test_util.h"
 #include "tests/test_util.h"
@@ -33,9 +34,7 @@ TEST_F(FastDdsInterop, AnAppOfAnotherVendorFollowsTheProtocolDocument) {
   // The daemon starts without a plan: the app has to load one (section 7, step 4).
   const uint32_t domain = testing::UniqueDomain();
   const std::string config_path = (dir / "floorposed.conf").string();
-  std::ofstream(config_path) << "dds { domain_id: " << domain
-                             << " device_id: \"hl-fastdds\" cyclonedds_uri: '"
-                             << platform::LoopbackCycloneConfig() << "' }\n"
+  std::ofstream(config_path) << platform::LoopbackDdsConfigText(domain, "hl-fastdds")
                              << "plan_dir: \"" << (dir / "plans").string() << "\"\n"
                              << "status_period_s: 0.2\n";
   tools::ChildProcess daemon({FLOORPOSED_PATH, "--config", config_path},

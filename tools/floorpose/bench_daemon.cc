@@ -37,6 +37,7 @@
 
 #include "core/sim/simulator.h"
 #include "platform/clock.h"
+#include "platform/config.h"
 #include "platform/dds.h"
 #include "platform/floor_plan_io.h"
 #include "tools/floorpose/commands.h"
@@ -68,7 +69,6 @@ struct BenchDaemonOptions {
 
 // What /proc says of a process now.
 struct ProcSample {
-  bool ok = false;
   double rss_mb = 0, hwm_mb = 0;  // VmRSS, VmHWM
   double cpu_s = 0;               // utime + stime
 };
@@ -96,7 +96,6 @@ ProcSample SampleProcess(pid_t pid) {
     if (i == 14) utime = std::stod(field);
     if (i == 15) {
       stime = std::stod(field);
-      s.ok = true;
       break;
     }
   }
@@ -190,9 +189,8 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
     const fs::path dir = tmp / hs.device;
     fs::create_directories(dir);
     const std::string config_path = (dir / "floorposed.conf").string();
-    std::ofstream(config_path) << "dds { domain_id: " << domain << " device_id: \"" << hs.device
-                               << "\" cyclonedds_uri: '" << platform::LoopbackCycloneConfig()
-                               << "' }\nplan_path: \"" << fs::absolute(plan_path).string()
+    std::ofstream(config_path) << platform::LoopbackDdsConfigText(domain, hs.device)
+                               << "plan_path: \"" << fs::absolute(plan_path).string()
                                << "\"\nlog_level: \"info\"\nstate_dir: \"" << dir.string()
                                << "\"\n";
     hs.log_path = o.logs.empty() ? (dir / "floorposed.log").string()
@@ -240,8 +238,14 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
     }
   });
 
-  size_t steps = 0, poses_sent = 0;
-  for (const Headset& hs : headsets) steps = std::max(steps, hs.walk.steps.size());
+  // Every walk starts at the same virtual time with the same pose period: the longest one
+  // paces them all.
+  const sim::Simulation& clock =
+      std::max_element(headsets.begin(), headsets.end(), [](const Headset& a, const Headset& b) {
+        return a.walk.steps.size() < b.walk.steps.size();
+      })->walk;
+  const size_t steps = clock.steps.size();
+  size_t poses_sent = 0;
   const int64_t first_stamp = headsets.front().walk.steps.front().stamp_ns;
   const double walk_s = headsets.front().walk.duration_s;
   if (!o.json)
@@ -256,7 +260,7 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
   const int64_t ten_minutes_ns = first_stamp + static_cast<int64_t>(600e9);
   bool sampled_10min = false;
   for (size_t k = 0; k < steps; ++k) {
-    const int64_t stamp = headsets.front().walk.steps[std::min(k, steps - 1)].stamp_ns;
+    const int64_t stamp = clock.steps[k].stamp_ns;
     std::this_thread::sleep_until(
         t0 + std::chrono::nanoseconds(static_cast<int64_t>((stamp - first_stamp) / o.speed)));
     for (Headset& hs : headsets) {

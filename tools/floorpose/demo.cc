@@ -15,6 +15,7 @@
 
 #include "core/sim/demo_walk.h"
 #include "platform/clock.h"
+#include "platform/config.h"
 #include "platform/floor_plan_io.h"
 #include "tools/floorpose/commands.h"
 #include "tools/lib/evaluation.h"
@@ -105,9 +106,8 @@ int RunDemo(const DemoOptions& o) {
   const std::string config_path = (tmp / "floorposed.conf").string();
   {
     std::ofstream conf(config_path);
-    conf << "dds { domain_id: " << domain << " device_id: \"demo-headset\" cyclonedds_uri: '"
-         << platform::LoopbackCycloneConfig() << "' }\n"
-         << "plan_path: \"" << fs::absolute(plan_path).string() << "\"\n"
+    conf << platform::LoopbackDdsConfigText(domain, "demo-headset") << "plan_path: \""
+         << fs::absolute(plan_path).string() << "\"\n"
          << "log_level: \"info\"\nstate_dir: \"" << tmp.string() << "\"\n"
          << "registration { method: \"" << o.method << "\" }\n";
   }
