@@ -6,7 +6,6 @@
 #include <functional>
 #include <iterator>
 #include <limits>
-#include <queue>
 #include <utility>
 
 namespace floorpose::sim {
@@ -19,32 +18,19 @@ constexpr double kMaxCells = 8e6;
 // The largest 4-connected piece of the cells where mask is set (the first of equals), in
 // ascending order.
 std::vector<int> LargestComponent(const std::vector<uint8_t>& mask, int nx, int ny) {
-  std::vector<uint8_t> seen(mask.size(), 0);
-  std::vector<int> best, current, queue;
-  for (int start = 0; start < nx * ny; ++start) {
-    if (!mask[start] || seen[start]) continue;
-    current.clear();
-    queue.assign(1, start);
-    seen[start] = 1;
-    while (!queue.empty()) {
-      const int c = queue.back();
-      queue.pop_back();
-      current.push_back(c);
-      const int x = c % nx, y = c / nx;
-      const int next[4][2] = {{x - 1, y}, {x + 1, y}, {x, y - 1}, {x, y + 1}};
-      for (const auto& [qx, qy] : next) {
-        if (qx < 0 || qy < 0 || qx >= nx || qy >= ny) continue;
-        const int q = qy * nx + qx;
-        if (mask[q] && !seen[q]) {
-          seen[q] = 1;
-          queue.push_back(q);
-        }
-      }
-    }
-    if (current.size() > best.size()) best.swap(current);
-  }
-  std::sort(best.begin(), best.end());
-  return best;
+  GridGeometry grid;
+  grid.nx = nx, grid.ny = ny;
+  std::vector<int> labels;
+  const int count = LabelComponents(grid, mask, &labels);
+  std::vector<size_t> sizes(count, 0);
+  for (int label : labels)
+    if (label >= 0) ++sizes[label];
+  const int best =
+      count == 0 ? -1 : static_cast<int>(std::max_element(sizes.begin(), sizes.end()) - sizes.begin());
+  std::vector<int> cells;
+  for (int i = 0; i < nx * ny; ++i)
+    if (labels[i] == best && best >= 0) cells.push_back(i);
+  return cells;
 }
 
 }  // namespace
@@ -340,60 +326,20 @@ std::vector<Eigen::Vector2d> FreeSpace::Path(const Eigen::Vector2d& from,
                                              const Eigen::Vector2d& to) const {
   const int start = CellOf(from), goal = CellOf(to);
   if (start < 0 || goal < 0 || !walkable_[start] || !walkable_[goal]) return {};
-  const int n = nx_ * ny_;
-  const int gx = goal % nx_, gy = goal / nx_;
-  auto heuristic = [&](int cell) {  // octile distance in cells: admissible, costs are >= 1
-    const double dx = std::abs(cell % nx_ - gx), dy = std::abs(cell / nx_ - gy);
-    return std::max(dx, dy) + (M_SQRT2 - 1.0) * std::min(dx, dy);
-  };
-  std::vector<double> g(n, std::numeric_limits<double>::infinity());
-  std::vector<int> parent(n, -1);
-  std::vector<uint8_t> closed(n, 0);
-  using Entry = std::pair<double, int>;  // (f, cell): ties break on the cell, deterministic
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<>> open;
-  g[start] = 0;
-  open.push({heuristic(start), start});
-  while (!open.empty()) {
-    const int c = open.top().second;
-    open.pop();
-    if (closed[c]) continue;
-    closed[c] = 1;
-    if (c == goal) break;
-    const int x = c % nx_, y = c / nx_;
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        if ((dx == 0 && dy == 0) || !InGrid(x + dx, y + dy)) continue;
-        const int q = (y + dy) * nx_ + x + dx;
-        if (!walkable_[q] || closed[q]) continue;
-        // No cutting corners: a diagonal step needs both cells beside it.
-        if (dx != 0 && dy != 0 && (!walkable_[y * nx_ + x + dx] || !walkable_[(y + dy) * nx_ + x]))
-          continue;
-        const double near_wall = std::max(0.0, 1.0 - clearance_[q] / options_.centre_clearance_m);
-        const double cost =
-            (dx != 0 && dy != 0 ? M_SQRT2 : 1.0) * (1.0 + options_.centre_weight * near_wall);
-        if (g[c] + cost < g[q]) {
-          g[q] = g[c] + cost;
-          parent[q] = c;
-          open.push({g[q] + heuristic(q), q});
-        }
-      }
-  }
-  if (!closed[goal]) return {};
+  const GridGeometry grid{origin_, options_.cell_m, nx_, ny_};
+  const std::vector<int> steps = GridAStar(grid, walkable_, start, goal, [&](int cell) {
+    const double near_wall = std::max(0.0, 1.0 - clearance_[cell] / options_.centre_clearance_m);
+    return 1.0 + options_.centre_weight * near_wall;
+  });
+  if (steps.empty()) return {};
   std::vector<Eigen::Vector2d> cells;
-  for (int c = goal; c >= 0; c = parent[c]) cells.push_back(CellCentre(c));
-  std::reverse(cells.begin(), cells.end());
+  cells.reserve(steps.size());
+  for (int c : steps) cells.push_back(CellCentre(c));
   cells.front() = from;
   cells.back() = to;
-  // String pulling: from each kept point, jump to the farthest point still in sight.
-  std::vector<Eigen::Vector2d> path{cells.front()};
-  size_t i = 0;
-  while (i + 1 < cells.size()) {
-    size_t j = i + 1;
-    while (j + 1 < cells.size() && LineOfSight(cells[i], cells[j + 1])) ++j;
-    path.push_back(cells[j]);
-    i = j;
-  }
-  return path;
+  return PullString(cells, [this](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return LineOfSight(a, b);
+  });
 }
 
 }  // namespace floorpose::sim

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/floor_plan.h"
+#include "core/grid.h"
 
 namespace floorpose::sim {
 

@@ -1,0 +1,65 @@
+// Routes on a floor plan (seed 003's minimap routes): the shortest path a person of a
+// given body radius can walk from one plan position to another, through door openings,
+// never closer to a wall than that radius.
+//
+// The plan's free space is a grid. A cell is passable when no wall comes within the body
+// radius plus half the cell's diagonal of its centre, so every point of a passable cell
+// keeps the body radius: a polyline that stays in passable cells is clear, exactly, not
+// just at its samples. A route is 8-connected A* on that grid, pulled tight by
+// line-of-sight shortcuts (any angle, checked cell by cell along each leg), so it bends
+// only at corners and is within a few percent of the true shortest path.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/floor_plan.h"
+#include "core/grid.h"
+
+namespace floorpose {
+
+struct RouteOptions {
+  double cell_m = 0.05;        // grid resolution
+  double body_radius_m = 0.3;  // the route keeps this far from every wall
+  // A start or destination closer to a wall than the body radius (a wearer standing at a
+  // wall, a destination picked on one) moves to the nearest passable point within this.
+  double snap_m = 1.0;
+  double max_cells = 16e6;  // larger plans get coarser cells (64 MB of grid at most)
+};
+
+struct Route {
+  std::string error;                 // why there is no route; empty when there is one
+  std::vector<Eigen::Vector2d> path;  // from the start to the destination, plan metres
+  double length_m = 0;
+  double start_moved_m = 0, goal_moved_m = 0;  // snapped away from a wall by this much
+  bool ok() const { return error.empty(); }
+};
+
+class RoutePlanner {
+ public:
+  RoutePlanner(const FloorPlan& plan, const RouteOptions& options = {});
+
+  // A route from `from` to `to`, or the reason there is none (outside the plan, in a
+  // wall, or no opening at least twice the body radius wide leads there).
+  Route Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to) const;
+
+  const RouteOptions& options() const { return options_; }
+  const GridGeometry& grid() const { return grid_; }
+  bool Passable(int cell) const { return cell >= 0 && passable_[cell]; }
+  const std::vector<uint8_t>& passable() const { return passable_; }
+  // Every point of the segment a-b lies in a passable cell.
+  bool LineOfSight(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
+
+ private:
+  // The passable cell nearest p within snap_m (of the given component when >= 0), or -1.
+  int Snap(const Eigen::Vector2d& p, int component) const;
+
+  RouteOptions options_;
+  GridGeometry grid_;
+  std::vector<uint8_t> passable_;
+  std::vector<int> component_;  // LabelComponents of passable_
+};
+
+}  // namespace floorpose
