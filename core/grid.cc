@@ -77,48 +77,72 @@ int LabelComponents(const GridGeometry& grid, const std::vector<uint8_t>& mask,
 }
 
 std::vector<int> GridAStar(const GridGeometry& grid, const std::vector<uint8_t>& passable,
-                           int start, int goal, const std::function<double(int)>& step_weight) {
+                           int start, int goal, const std::function<double(int)>& step_weight,
+                           const std::function<double(int)>& heuristic,
+                           GridSearchScratch* scratch) {
   const int n = static_cast<int>(grid.size());
   if (start < 0 || goal < 0 || start >= n || goal >= n || !passable[start] || !passable[goal])
     return {};
   const int nx = grid.nx;
   const int gx = goal % nx, gy = goal / nx;
-  auto heuristic = [&](int cell) {  // octile distance in cells: admissible, weights are >= 1
+  auto h = [&](int cell) {  // octile distance in cells: admissible, weights are >= 1
     const double dx = std::abs(cell % nx - gx), dy = std::abs(cell / nx - gy);
-    return std::max(dx, dy) + (M_SQRT2 - 1.0) * std::min(dx, dy);
+    const double octile = std::max(dx, dy) + (M_SQRT2 - 1.0) * std::min(dx, dy);
+    return heuristic ? std::max(octile, heuristic(cell)) : octile;
   };
-  std::vector<double> g(n, std::numeric_limits<double>::infinity());
-  std::vector<int> parent(n, -1);
-  std::vector<uint8_t> closed(n, 0);
+  GridSearchScratch local;
+  GridSearchScratch& s = scratch ? *scratch : local;
+  if (s.stamp.size() != grid.size() || ++s.search == 0) {
+    s.stamp.assign(grid.size(), 0);
+    s.g.resize(grid.size());
+    s.parent.resize(grid.size());
+    s.closed.resize(grid.size());
+    s.search = 1;
+  }
+  auto touch = [&s](int cell) {
+    if (s.stamp[cell] != s.search) {
+      s.stamp[cell] = s.search;
+      s.g[cell] = std::numeric_limits<double>::infinity();
+      s.parent[cell] = -1;
+      s.closed[cell] = 0;
+    }
+  };
   using Entry = std::pair<double, int>;  // (f, cell): ties break on the cell, deterministic
   std::priority_queue<Entry, std::vector<Entry>, std::greater<>> open;
-  g[start] = 0;
-  open.push({heuristic(start), start});
+  touch(start);
+  s.g[start] = 0;
+  open.push({h(start), start});
+  bool reached = false;
   while (!open.empty()) {
     const int c = open.top().second;
     open.pop();
-    if (closed[c]) continue;
-    closed[c] = 1;
-    if (c == goal) break;
+    if (s.closed[c]) continue;
+    s.closed[c] = 1;
+    if (c == goal) {
+      reached = true;
+      break;
+    }
     const int x = c % nx, y = c / nx;
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {
         if ((dx == 0 && dy == 0) || !grid.InGrid(x + dx, y + dy)) continue;
         const int q = (y + dy) * nx + x + dx;
-        if (!passable[q] || closed[q]) continue;
+        if (!passable[q]) continue;
+        touch(q);
+        if (s.closed[q]) continue;
         if (dx != 0 && dy != 0 && (!passable[y * nx + x + dx] || !passable[(y + dy) * nx + x]))
           continue;
         const double cost = (dx != 0 && dy != 0 ? M_SQRT2 : 1.0) * (step_weight ? step_weight(q) : 1.0);
-        if (g[c] + cost < g[q]) {
-          g[q] = g[c] + cost;
-          parent[q] = c;
-          open.push({g[q] + heuristic(q), q});
+        if (s.g[c] + cost < s.g[q]) {
+          s.g[q] = s.g[c] + cost;
+          s.parent[q] = c;
+          open.push({s.g[q] + h(q), q});
         }
       }
   }
-  if (!closed[goal]) return {};
+  if (!reached) return {};
   std::vector<int> cells;
-  for (int c = goal; c >= 0; c = parent[c]) cells.push_back(c);
+  for (int c = goal; c >= 0; c = s.parent[c]) cells.push_back(c);
   std::reverse(cells.begin(), cells.end());
   return cells;
 }

@@ -46,14 +46,30 @@ std::vector<uint8_t> CellsNearWalls(const GridGeometry& grid, const std::vector<
 int LabelComponents(const GridGeometry& grid, const std::vector<uint8_t>& mask,
                     std::vector<int>* labels);
 
+// The per-cell state of a search, kept between searches: on a big grid, allocating and
+// clearing it (tens of megabytes, page faults included) costs more than the search. A
+// cell's entries are valid when its stamp is the current search's.
+struct GridSearchScratch {
+  std::vector<uint32_t> stamp;
+  std::vector<double> g;
+  std::vector<int> parent;
+  std::vector<uint8_t> closed;
+  uint32_t search = 0;
+};
+
 // The cheapest 8-connected path from start to goal through passable cells, never cutting
 // a corner (a diagonal step needs both cells beside it), as cell indices from start to
 // goal; empty when there is none. A step into cell q costs its length (1 or sqrt 2 cells)
 // times step_weight(q), which must be at least 1 (the octile heuristic stays admissible);
-// without step_weight every weight is 1.
+// without step_weight every weight is 1. The search is guided by the octile distance to
+// the goal, or by `heuristic` (cells) where that is larger: a better estimate expands
+// fewer cells, and one that overestimates by e% can lengthen the path by up to e%. With
+// `scratch`, its buffers are used (and kept) instead of fresh ones.
 std::vector<int> GridAStar(const GridGeometry& grid, const std::vector<uint8_t>& passable,
                            int start, int goal,
-                           const std::function<double(int)>& step_weight = nullptr);
+                           const std::function<double(int)>& step_weight = nullptr,
+                           const std::function<double(int)>& heuristic = nullptr,
+                           GridSearchScratch* scratch = nullptr);
 
 // String pulling: from each kept point, straight to the farthest later point still in
 // sight. Keeps the first and the last point.

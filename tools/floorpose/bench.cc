@@ -501,9 +501,12 @@ Run AddBenchCommand(CLI::App& app) {
       ->capture_default_str();
   Run daemon = AddBenchDaemonCommand(app);
   CLI::App* daemon_command = app.get_subcommand("daemon");
-  return [o, registration, snapshot, daemon, daemon_command] {
+  Run route = AddBenchRouteCommand(app);
+  CLI::App* route_command = app.get_subcommand("route");
+  return [o, registration, snapshot, daemon, daemon_command, route, route_command] {
     if (snapshot->parsed()) return RunBenchSnapshot(*o);
     if (daemon_command->parsed()) return daemon();
+    if (route_command->parsed()) return route();
     if (!registration->parsed()) return 2;
     return RunBenchRegistration(*o);
   };

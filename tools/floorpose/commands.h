@@ -19,8 +19,11 @@ Run AddEvalCommand(CLI::App& app);
 Run AddEvalSuiteCommand(CLI::App& app);
 Run AddBenchCommand(CLI::App& app);
 Run AddCalibrateCommand(CLI::App& app);
+Run AddRouteCommand(CLI::App& app);
 // `floorpose bench daemon` (bench_daemon.cc), a subcommand of `bench`.
 Run AddBenchDaemonCommand(CLI::App& bench);
+// `floorpose bench route` (route.cc).
+Run AddBenchRouteCommand(CLI::App& bench);
 
 // The bundled demo plan and walk: installed beside the binary's prefix, else the source tree.
 std::string DefaultDemoDir();

@@ -30,6 +30,8 @@ int main(int argc, char** argv) {
       floorpose::tools::AddEvalSuiteCommand);
   add("calibrate", "fit the reliability model on an eval-suite's calibration.csv",
       floorpose::tools::AddCalibrateCommand);
+  add("route", "the shortest route a wearer can walk between two points of a floor plan",
+      floorpose::tools::AddRouteCommand);
   add("bench", "time the registration methods and the closest-wall index",
       floorpose::tools::AddBenchCommand);
   CLI11_PARSE(app, argc, argv);
