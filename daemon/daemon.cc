@@ -38,6 +38,7 @@ bool Daemon::Start(std::string* error) {
     status_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kStatus);
     track_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kPlanTrack);
     reply_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kCommandReply);
+    explored_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kExplored);
     waiter_ = std::make_unique<platform::Waiter>(*participant_);
     waiter_->Attach(*mesh_reader_);
     waiter_->Attach(*pose_reader_);
@@ -224,6 +225,7 @@ void Daemon::Publish(Topic topic, const google::protobuf::Message& msg) {
                              : topic == Topic::kStatus       ? status_writer_.get()
                              : topic == Topic::kPlanTrack    ? track_writer_.get()
                              : topic == Topic::kCommandReply ? reply_writer_.get()
+                             : topic == Topic::kExplored     ? explored_writer_.get()
                                                              : nullptr;
   if (!writer) return;
   platform::Envelope e;

@@ -52,7 +52,7 @@ class Daemon {
   std::unique_ptr<platform::Participant> participant_;
   std::unique_ptr<platform::Reader> mesh_reader_, pose_reader_, command_reader_;
   std::unique_ptr<platform::Writer> plan_pose_writer_, alignment_writer_, status_writer_,
-      track_writer_, reply_writer_;
+      track_writer_, reply_writer_, explored_writer_;
   std::unique_ptr<platform::Waiter> waiter_;
   std::unique_ptr<platform::Engine> engine_;  // io thread only
   int64_t next_status_ns_ = 0;

@@ -131,6 +131,19 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
                   "tracking.wheel_odometry.refine_window_s"}}) {
     if (!(value >= 0 && std::isfinite(value))) return std::string(name) + " must be >= 0";
   }
+  for (const auto& [value, name] :
+       {std::pair{c.routes().body_radius_m(), "routes.body_radius_m"},
+        std::pair{c.routes().cell_m(), "routes.cell_m"},
+        std::pair{c.explored().cell_m(), "explored.cell_m"},
+        std::pair{c.explored().publish_period_s(), "explored.publish_period_s"},
+        std::pair{c.explored().max_ray_m(), "explored.max_ray_m"},
+        std::pair{c.explored().max_door_m(), "explored.max_door_m"}}) {
+    if (!(value > 0 && value <= 1000)) return std::string(name) + " must be in (0, 1000]";
+  }
+  if (!(c.routes().snap_m() >= 0 && c.routes().snap_m() <= 100))
+    return "routes.snap_m must be in [0, 100]";
+  if (c.routes().cell_m() < 0.01 || c.explored().cell_m() < 0.01)
+    return "routes.cell_m and explored.cell_m must be at least 0.01";
   if (!(c.registration().search_tie_ratio() >= 0 && c.registration().search_tie_ratio() <= 1))
     return "registration.search_tie_ratio must be in [0, 1]";
   if (!(c.icp().degeneracy_ratio() >= 0 && c.icp().degeneracy_ratio() < 1))

@@ -17,7 +17,7 @@ struct TopicSpec {
   int32_t depth;  // keep-last depth; 0 = keep-all
 };
 
-constexpr std::array<TopicSpec, 8> kSpecs = {{
+constexpr std::array<TopicSpec, 9> kSpecs = {{
     {Topic::kMeshDelta, "floorpose/v1/mesh_delta", false, 0},
     {Topic::kHeadsetPose, "floorpose/v1/headset_pose", false, 64},
     {Topic::kCommand, "floorpose/v1/command", false, 0},
@@ -28,6 +28,7 @@ constexpr std::array<TopicSpec, 8> kSpecs = {{
     // Volatile: a reply is for the app that asked, now; a later app must not get old
     // replies whose request ids it may reuse.
     {Topic::kCommandReply, "floorpose/v1/command_reply", false, 0},
+    {Topic::kExplored, "floorpose/v1/explored", true, 1},
 }};
 
 const TopicSpec& Spec(Topic t) { return kSpecs[static_cast<size_t>(t)]; }

@@ -26,10 +26,11 @@ enum class Topic {
   kStatus,        // daemon -> all: reliable, transient-local, keep-last 1 per device
   kPlanTrack,     // daemon -> all: reliable, transient-local, keep-last 1 per device
   kCommandReply,  // daemon -> app: reliable, keep-all (bounded), volatile
+  kExplored,      // daemon -> all: reliable, transient-local, keep-last 1 per device
 };
 inline constexpr Topic kAllTopics[] = {Topic::kMeshDelta, Topic::kHeadsetPose, Topic::kCommand,
                                        Topic::kPlanPose,  Topic::kAlignment,   Topic::kStatus,
-                                       Topic::kPlanTrack, Topic::kCommandReply};
+                                       Topic::kPlanTrack, Topic::kCommandReply, Topic::kExplored};
 const char* TopicName(Topic topic);
 std::optional<Topic> TopicFromName(std::string_view name);
 

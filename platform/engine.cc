@@ -3,9 +3,11 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cstdio>
 
 #include "platform/codec.h"
 #include "platform/config.h"
+#include "platform/explored_codec.h"
 #include "platform/floor_plan_io.h"
 
 namespace floorpose::platform {
@@ -153,8 +155,71 @@ std::string Engine::LoadPlan(const std::string& path, const std::string& floor) 
   tracker_.SetPlan(std::move(index));
   floor_ = floor;
   plan_path_ = path;
+  plan_id_ = parsed.plan.id;
   plan_digest_ = FloorPlanDigest(parsed.plan);
+  const int64_t t0 = now_ns_();
+  RouteOptions route;
+  route.body_radius_m = config_.routes().body_radius_m();
+  route.cell_m = config_.routes().cell_m();
+  route.snap_m = config_.routes().snap_m();
+  routes_ = std::make_unique<RoutePlanner>(parsed.plan, route);
+  explored_.reset();
+  last_plan_pose_.reset();
+  const v1::ExploredConfig& e = config_.explored();
+  if (e.enabled()) {
+    RoomOptions rooms;
+    rooms.max_door_m = e.max_door_m();
+    ExploredOptions explored;
+    explored.cell_m = e.cell_m();
+    explored.max_ray_m = e.max_ray_m();
+    explored.min_visit_poses = static_cast<int>(e.min_visit_poses());
+    explored.body_radius_m = route.body_radius_m;
+    explored_ = std::make_unique<ExploredMap>(
+        parsed.plan, std::make_shared<const RoomMap>(parsed.plan, rooms), explored);
+    explored_sent_ = explored_->revision();
+  }
+  spdlog::info("routes on a {} x {} grid of {:.2f} m, {} rooms, in {:.0f} ms", routes_->grid().nx,
+               routes_->grid().ny, routes_->grid().cell_m,
+               explored_ ? explored_->rooms()->rooms().size() : 0,
+               static_cast<double>(now_ns_() - t0) * 1e-6);
   return {};
+}
+
+std::string Engine::PlanRoute(const v1::Command::Route& request, v1::RouteReply* reply) {
+  if (!routes_) return "no floor plan";
+  if (!last_plan_pose_ || last_plan_pose_->alignment_version() == 0)
+    return "no position on the plan yet";
+  const int64_t t0 = now_ns_();
+  const Route route = routes_->Plan({last_plan_pose_->x(), last_plan_pose_->y()},
+                                    {request.to_x(), request.to_y()});
+  if (!route.ok()) return route.error;
+  for (const Eigen::Vector2d& p : route.path) {
+    v1::PlanPoint* point = reply->add_path();
+    point->set_x(p.x());
+    point->set_y(p.y());
+  }
+  reply->set_length_m(route.length_m);
+  reply->set_goal_moved_m(route.goal_moved_m);
+  *reply->mutable_from_reliability() = last_plan_pose_->reliability();
+  reply->set_time_ms(static_cast<double>(now_ns_() - t0) * 1e-6);
+  return {};
+}
+
+void Engine::ExploreWalls(const std::vector<WallPoint>& points) {
+  if (!explored_ || !last_plan_pose_ || !tracker_.has_alignment() ||
+      last_plan_pose_->reliability().flag() != v1::Reliability::RELIABLE)
+    return;
+  const Se2& T = tracker_.alignment().T_plan_slam;
+  std::vector<Eigen::Vector2d> plan;
+  plan.reserve(points.size());
+  for (const WallPoint& w : points) plan.push_back(T * w.p.cast<double>());
+  explored_->AddWalls({last_plan_pose_->x(), last_plan_pose_->y()}, plan);
+}
+
+void Engine::PublishExplored() {
+  if (!explored_ || explored_->revision() == explored_sent_) return;
+  explored_sent_ = explored_->revision();
+  publish_(Topic::kExplored, ToProto(*explored_, plan_id_, floor_, latest_stamp_ns_));
 }
 
 WallExtractionOptions Engine::BandedWallOptions() const {
@@ -266,6 +331,7 @@ void Engine::OnMeshDelta(const Envelope& e) {
                         " meshes scanned longest ago evicted for mesh " +
                         std::to_string(mesh.mesh_id));
   }
+  ExploreWalls(points);
   store_.Upsert(mesh.mesh_id, std::move(points), mesh.stamp_ns);
   if (mesh.change == v1::MeshDelta::ADDED && !known)
     counters_.set_meshes_added(counters_.meshes_added() + 1);
@@ -325,6 +391,17 @@ void Engine::OnHeadsetPose(const Envelope& e) {
   }
   publish_(Topic::kPlanPose, out);
   counters_.set_plan_poses_out(counters_.plan_poses_out() + 1);
+  if (pose.stamp_ns != *last_pose_stamp_ns_) return;  // a late pose: not where the wearer is
+  last_plan_pose_ = out;
+  if (explored_) {
+    if (out.reliability().flag() == v1::Reliability::RELIABLE && out.alignment_version() > 0)
+      explored_->AddVisit({out.x(), out.y()});
+    if (pose.stamp_ns >= next_explored_ns_) {
+      PublishExplored();
+      next_explored_ns_ =
+          pose.stamp_ns + static_cast<int64_t>(config_.explored().publish_period_s() * 1e9);
+    }
+  }
 }
 
 void Engine::UseOdometry(v1::HeadsetPose::Odometry odometry) {
@@ -379,6 +456,7 @@ const char* CommandName(v1::Command::CommandCase c) {
     case v1::Command::kFlip: return "flip";
     case v1::Command::kReset: return "reset";
     case v1::Command::kGetState: return "get_state";
+    case v1::Command::kRoute: return "route";
     case v1::Command::COMMAND_NOT_SET: break;
   }
   return "";
@@ -441,6 +519,19 @@ void Engine::OnCommand(const Envelope& e) {
         for (std::string& id : ListPlanIds(config_.plan_dir())) reply.add_plans(std::move(id));
         done = "state";
         break;
+      case v1::Command::kRoute: {
+        error = PlanRoute(cmd.route(), reply.mutable_route());
+        if (error.empty()) {
+          char text[160];
+          std::snprintf(text, sizeof(text), "route of %.1f m in %zu legs to (%.2f, %.2f)",
+                        reply.route().length_m(), static_cast<size_t>(reply.route().path_size() - 1),
+                        cmd.route().to_x(), cmd.route().to_y());
+          done = text;
+        } else {
+          reply.clear_route();
+        }
+        break;
+      }
       case v1::Command::COMMAND_NOT_SET: break;
     }
   }
@@ -450,7 +541,8 @@ void Engine::OnCommand(const Envelope& e) {
   if (!error.empty()) {
     counters_.set_commands_refused(counters_.commands_refused() + 1);
     spdlog::warn("command refused: {}{}", prefix, error);
-  } else if (cmd.command_case() != v1::Command::kGetState) {
+  } else if (cmd.command_case() != v1::Command::kGetState &&
+             cmd.command_case() != v1::Command::kRoute) {
     spdlog::info("command: {}{}", prefix, done);
     // Always: after a reset or a new plan, version 0 tells late joiners the old one is void.
     PublishAlignment();

@@ -13,8 +13,11 @@
 #include <unordered_map>
 #include <vector>
 
+#include "core/explored_map.h"
 #include "core/frames.h"
 #include "core/registration.h"
+#include "core/rooms.h"
+#include "core/route_planner.h"
 #include "core/tracker.h"
 #include "core/wall_store.h"
 #include "floorpose/v1/config.pb.h"
@@ -94,6 +97,10 @@ class Engine {
   const WallStore& store() const { return store_; }
   // The configuration in use: as configured, for the device's odometry (ForOdometry).
   const v1::FloorposedConfig& config() const { return config_; }
+  // What the wearer has explored on the loaded plan; null without a plan or when disabled.
+  const ExploredMap* explored() const { return explored_.get(); }
+  // Publishes the explored map now if it changed since the last one.
+  void PublishExplored();
 
  private:
   std::string LoadPlan(const std::string& path, const std::string& floor);
@@ -110,6 +117,11 @@ class Engine {
   bool Mine(const Envelope& e) const { return e.device_id == config_.dds().device_id(); }
   // Tracks the device with the options for its odometry from now on (ForOdometry).
   void UseOdometry(v1::HeadsetPose::Odometry odometry);
+  // Command.route: the route from the latest plan pose, or why there is none.
+  std::string PlanRoute(const v1::Command::Route& request, v1::RouteReply* reply);
+  // The walls of a mesh just stored, traced from the wearer into the explored map while
+  // the position is RELIABLE.
+  void ExploreWalls(const std::vector<WallPoint>& points);
 
   const v1::FloorposedConfig base_config_;  // as configured
   v1::FloorposedConfig config_;             // ...for the device's odometry
@@ -122,6 +134,13 @@ class Engine {
   WallStore store_;
   std::string floor_;
   std::string plan_path_;  // as loaded, with its FloorPlanDigest
+  std::string plan_id_;
+  // Made with each plan: routes, its rooms and the explored map on it.
+  std::unique_ptr<RoutePlanner> routes_;
+  std::unique_ptr<ExploredMap> explored_;
+  uint64_t explored_sent_ = 0;  // revision last published
+  int64_t next_explored_ns_ = 0;
+  std::optional<v1::PlanPose> last_plan_pose_;  // as published
   uint64_t plan_digest_ = 0;
   v1::DaemonStatus::Counters counters_;
   struct LastRegistration {

@@ -153,6 +153,11 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"tracking { window_s: -5 }", "tracking.window_s"},
            Case{"tracking { wheel_odometry { window_s: nan } }", "wheel_odometry.window_s"},
            Case{"tracking { wheel_odometry { drift_window: 5000 } }", "drift_window"},
+           Case{"routes { body_radius_m: 0 }", "routes.body_radius_m"},
+           Case{"routes { cell_m: 0.001 }", "cell_m"},
+           Case{"routes { snap_m: nan }", "routes.snap_m"},
+           Case{"explored { max_ray_m: -1 }", "explored.max_ray_m"},
+           Case{"explored { publish_period_s: inf }", "explored.publish_period_s"},
            Case{"status_period_s: 0", "status_period_s"},
            Case{"log_level: \"loud\"", "log_level"},
        }) {

@@ -102,6 +102,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
               virtual_now, t,
               {config.dds().device_id(), ++session_seq, virtual_now, m.SerializeAsString()});
         if (t == Topic::kPlanPose) plan_poses.push_back(static_cast<const v1::PlanPose&>(m));
+        if (t == Topic::kExplored) report->explored = static_cast<const v1::ExploredMap&>(m);
         if (t == Topic::kPlanTrack) {
           ++report->plan_tracks;
           report->last_plan_track = static_cast<const v1::PlanTrack&>(m);
@@ -164,6 +165,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
       engine.OnRegistrationDone(std::move(done));
     }
   }
+  engine.PublishExplored();  // what was explored since the last one
 
   // Score every plan pose that has ground truth.
   std::optional<Se2> best_fit;

@@ -59,6 +59,7 @@ struct EvalReport {
   std::vector<EvalPose> track;
   std::vector<v1::PlanPose> plan_poses;  // as the Engine published them, in order
   size_t plan_tracks = 0;                // PlanTrack messages published
+  std::optional<v1::ExploredMap> explored;  // the last explored map published
   v1::PlanTrack last_plan_track;         // the last of them
 };
 
