@@ -176,12 +176,13 @@ std::string Engine::LoadPlan(const std::string& path, const std::string& floor) 
     explored.body_radius_m = route.body_radius_m;
     explored_ = std::make_unique<ExploredMap>(
         parsed.plan, std::make_shared<const RoomMap>(parsed.plan, rooms), explored);
-    explored_sent_ = explored_->revision();
+    explored_sent_ = explored_->revision() - 1;  // an empty map at once: the plan's rooms
   }
   spdlog::info("routes on a {} x {} grid of {:.2f} m, {} rooms, in {:.0f} ms", routes_->grid().nx,
                routes_->grid().ny, routes_->grid().cell_m,
                explored_ ? explored_->rooms()->rooms().size() : 0,
                static_cast<double>(now_ns_() - t0) * 1e-6);
+  PublishExplored();
   return {};
 }
 

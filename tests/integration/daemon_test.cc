@@ -266,3 +266,71 @@ TEST(FloorposedProcess, PrintConfigRoundTrips) {
 
 }  // namespace
 }  // namespace floorpose
+
+namespace floorpose {
+namespace {
+
+TEST_F(DaemonTest, AnswersRoutesAndPublishesWhatWasExplored) {
+  StartDaemon("explored { publish_period_s: 2 }\n");
+  const sim::DemoWalk walk = Walk(/*pick_error_m=*/0.0, 5);
+  v1::Command route;
+  route.mutable_route()->set_to_x(8.0);
+  route.mutable_route()->set_to_y(4.0);
+  // Before the wearer is on the plan: a clear refusal.
+  const auto early = link_->Request(route, seconds(5));
+  ASSERT_TRUE(early.has_value());
+  EXPECT_FALSE(early->ok());
+  EXPECT_EQ(early->command(), "route");
+  EXPECT_NE(early->message().find("no position on the plan"), std::string::npos) << early->message();
+
+  link_->Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
+  ASSERT_TRUE(link_->WaitUntil([&] { return !link_->alignments.empty(); }, seconds(10)));
+  for (const sim::SimStep& step : walk.steps) {
+    for (const sim::SimMesh& m : step.meshes)
+      link_->Send(Topic::kMeshDelta, tools::ToMeshDelta(m, kFrame, step.stamp_ns), step.stamp_ns);
+    link_->Send(Topic::kHeadsetPose, tools::ToHeadsetPose(step.slam, kFrame, step.stamp_ns),
+                step.stamp_ns);
+    link_->WaitUntil([] { return false; }, std::chrono::milliseconds(15));  // registrations run
+  }
+  ASSERT_TRUE(
+      link_->WaitUntil([&] { return link_->plan_poses.size() == walk.steps.size(); }, seconds(10)));
+  const v1::PlanPose last = link_->plan_poses.back();
+  ASSERT_EQ(last.reliability().flag(), v1::Reliability::RELIABLE) << last.ShortDebugString();
+
+  const auto answer = link_->Request(route, seconds(5));
+  ASSERT_TRUE(answer.has_value());
+  ASSERT_TRUE(answer->ok()) << answer->message();
+  const v1::RouteReply& r = answer->route();
+  ASSERT_GE(r.path_size(), 2);
+  EXPECT_NEAR(r.path(0).x(), last.x(), 1e-9);
+  EXPECT_NEAR(r.path(0).y(), last.y(), 1e-9);
+  EXPECT_NEAR(r.path(r.path_size() - 1).x(), 8.0, 1e-9);
+  EXPECT_NEAR(r.path(r.path_size() - 1).y(), 4.0, 1e-9);
+  EXPECT_GE(r.length_m(), std::hypot(8.0 - last.x(), 4.0 - last.y()) - 1e-9);
+  EXPECT_EQ(r.from_reliability().flag(), last.reliability().flag());
+
+  // Outside the plan: refused, and the daemon carries on.
+  v1::Command away = route;
+  away.mutable_route()->set_to_x(500.0);
+  const auto refused = link_->Request(away, seconds(5));
+  ASSERT_TRUE(refused.has_value());
+  EXPECT_FALSE(refused->ok());
+  EXPECT_NE(refused->message().find("outside the plan"), std::string::npos) << refused->message();
+  EXPECT_FALSE(refused->has_route());
+
+  // The explored map: the room the walk was in, and walls and free space seen.
+  ASSERT_TRUE(link_->WaitUntil(
+      [&] { return link_->explored && link_->explored->visited_size() > 0; }, seconds(10)))
+      << (link_->explored ? link_->explored->ShortDebugString().substr(0, 300) : "none") << " last "
+      << link_->plan_poses.back().ShortDebugString();
+  const v1::ExploredMap& e = *link_->explored;
+  EXPECT_EQ(e.rooms(), 1u);
+  EXPECT_EQ(e.visited(0).id(), 0u);
+  EXPECT_GT(e.free_cells(), 100u);
+  EXPECT_GT(e.wall_cells(), 10u);
+  EXPECT_GT(e.width() * e.height(), e.free_cells());
+  EXPECT_TRUE(daemon_->Running());
+}
+
+}  // namespace
+}  // namespace floorpose

@@ -17,9 +17,10 @@ HeadsetLink::HeadsetLink(uint32_t domain_id, const std::string& cyclone_config,
   alignment_ = std::make_unique<platform::Reader>(*participant_, Topic::kAlignment);
   status_ = std::make_unique<platform::Reader>(*participant_, Topic::kStatus);
   reply_ = std::make_unique<platform::Reader>(*participant_, Topic::kCommandReply);
+  explored_ = std::make_unique<platform::Reader>(*participant_, Topic::kExplored);
   waiter_ = std::make_unique<platform::Waiter>(*participant_);
   for (const platform::Reader* r :
-       {plan_pose_.get(), alignment_.get(), status_.get(), reply_.get()})
+       {plan_pose_.get(), alignment_.get(), status_.get(), reply_.get(), explored_.get()})
     waiter_->Attach(*r);
 }
 
@@ -85,6 +86,7 @@ void HeadsetLink::Poll() {
   });
   take.operator()<v1::CommandReply>(*reply_,
                                     [&](v1::CommandReply r) { replies.push_back(std::move(r)); });
+  take.operator()<v1::ExploredMap>(*explored_, [&](v1::ExploredMap m) { explored = std::move(m); });
 }
 
 }  // namespace floorpose::tools

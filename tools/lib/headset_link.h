@@ -36,6 +36,7 @@ class HeadsetLink {
   std::optional<v1::DaemonStatus> status;
   std::vector<std::string> status_messages;  // every non-empty DaemonStatus.message
   std::vector<v1::CommandReply> replies;
+  std::optional<v1::ExploredMap> explored;  // the latest
   size_t foreign_envelopes = 0;  // outputs of other devices, ignored
   size_t malformed_envelopes = 0;
 
@@ -46,7 +47,7 @@ class HeadsetLink {
   std::string device_id_;
   std::unique_ptr<platform::Participant> participant_;
   std::unique_ptr<platform::Writer> mesh_, pose_, command_;
-  std::unique_ptr<platform::Reader> plan_pose_, alignment_, status_, reply_;
+  std::unique_ptr<platform::Reader> plan_pose_, alignment_, status_, reply_, explored_;
   uint64_t last_request_id_ = 0;
   std::unique_ptr<platform::Waiter> waiter_;
 };
