@@ -75,7 +75,8 @@ bool ExploredMap::Merge(const ExploredMap& other) {
 bool ExploredMap::SetLogOdds(std::vector<float> log_odds) {
   if (log_odds.size() != log_odds_.size()) return false;
   log_odds_ = std::move(log_odds);
-  for (float& l : log_odds_) l = std::isfinite(l) ? std::clamp(l, -options_.clamp, options_.clamp) : 0.0f;
+  for (float& l : log_odds_)
+    l = std::isfinite(l) ? std::clamp(l, -options_.clamp, options_.clamp) : 0.0f;
   ++revision_;
   return true;
 }

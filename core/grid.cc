@@ -132,7 +132,8 @@ std::vector<int> GridAStar(const GridGeometry& grid, const std::vector<uint8_t>&
         if (s.closed[q]) continue;
         if (dx != 0 && dy != 0 && (!passable[y * nx + x + dx] || !passable[(y + dy) * nx + x]))
           continue;
-        const double cost = (dx != 0 && dy != 0 ? M_SQRT2 : 1.0) * (step_weight ? step_weight(q) : 1.0);
+        const double cost =
+            (dx != 0 && dy != 0 ? M_SQRT2 : 1.0) * (step_weight ? step_weight(q) : 1.0);
         if (s.g[c] + cost < s.g[q]) {
           s.g[q] = s.g[c] + cost;
           s.parent[q] = c;
@@ -162,8 +163,8 @@ std::vector<Eigen::Vector2d> PullString(
   return path;
 }
 
-bool WalkSegmentCells(const GridGeometry& grid, const Eigen::Vector2d& a,
-                      const Eigen::Vector2d& b, const std::function<bool(int)>& visit) {
+bool WalkSegmentCells(const GridGeometry& grid, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                      const std::function<bool(int)>& visit) {
   const Eigen::Vector2d fa = (a - grid.origin) / grid.cell_m;
   const Eigen::Vector2d fb = (b - grid.origin) / grid.cell_m;
   if (!fa.allFinite() || !fb.allFinite()) return visit(-1);

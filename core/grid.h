@@ -22,8 +22,8 @@ struct GridGeometry {
 
   // The grid over [min, max] grown by margin_m on every side; cells grow beyond cell_m
   // when needed to stay within max_cells.
-  static GridGeometry Cover(const Eigen::Vector2d& min, const Eigen::Vector2d& max,
-                            double cell_m, double margin_m, double max_cells);
+  static GridGeometry Cover(const Eigen::Vector2d& min, const Eigen::Vector2d& max, double cell_m,
+                            double margin_m, double max_cells);
 
   size_t size() const { return static_cast<size_t>(nx) * static_cast<size_t>(ny); }
   bool InGrid(int ix, int iy) const { return ix >= 0 && iy >= 0 && ix < nx && iy < ny; }
@@ -80,8 +80,8 @@ std::vector<Eigen::Vector2d> PullString(
 // Every cell the segment a-b touches, in order from a (a supercover walk: where it passes
 // exactly through a corner, both cells beside the corner too). Stops early, returning
 // false, when visit returns false; cells outside the grid are passed as -1.
-bool WalkSegmentCells(const GridGeometry& grid, const Eigen::Vector2d& a,
-                      const Eigen::Vector2d& b, const std::function<bool(int)>& visit);
+bool WalkSegmentCells(const GridGeometry& grid, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                      const std::function<bool(int)>& visit);
 
 double PolylineLength(const std::vector<Eigen::Vector2d>& path);
 

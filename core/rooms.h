@@ -29,7 +29,7 @@ struct RoomOptions {
 };
 
 struct Room {
-  int id = 0;                                         // 0, 1, ... in the order of their lowest cell
+  int id = 0;                                        // 0, 1, ... in the order of their lowest cell
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();  // a point inside, near the centroid
   double area_m2 = 0;
 };

@@ -8,15 +8,15 @@
 
 namespace floorpose {
 
-RoutePlanner::RoutePlanner(const FloorPlan& plan, const RouteOptions& options)
-    : options_(options) {
+RoutePlanner::RoutePlanner(const FloorPlan& plan, const RouteOptions& options) : options_(options) {
   // No margin: a route stays within the plan's bounds.
   grid_ = GridGeometry::Cover(plan.min, plan.max, options_.cell_m, 0.0, options_.max_cells);
   const double keep = options_.body_radius_m + grid_.cell_m * M_SQRT1_2;
   passable_ = CellsNearWalls(grid_, plan.segments, keep);
   for (size_t i = 0; i < passable_.size(); ++i) {
     const Eigen::Vector2d c = grid_.CellCentre(static_cast<int>(i));
-    const bool inside = (c.array() >= plan.min.array()).all() && (c.array() <= plan.max.array()).all();
+    const bool inside =
+        (c.array() >= plan.min.array()).all() && (c.array() <= plan.max.array()).all();
     passable_[i] = !passable_[i] && inside;
   }
   LabelComponents(grid_, passable_, &component_);
@@ -31,7 +31,8 @@ RoutePlanner::RoutePlanner(const FloorPlan& plan, const RouteOptions& options)
   coarse_.ny = (grid_.ny + kCoarse - 1) / kCoarse;
   coarse_open_.assign(coarse_.size(), 0);
   for (int i = 0; i < static_cast<int>(grid_.size()); ++i)
-    if (passable_[i]) coarse_open_[(i / grid_.nx / kCoarse) * coarse_.nx + i % grid_.nx / kCoarse] = 1;
+    if (passable_[i])
+      coarse_open_[(i / grid_.nx / kCoarse) * coarse_.nx + i % grid_.nx / kCoarse] = 1;
 }
 
 std::vector<float> RoutePlanner::CoarseDistances(int goal, int start) const {
@@ -102,13 +103,14 @@ Route RoutePlanner::Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to)
     route.error = "the start or the destination is not a position (NaN or infinite)";
     return route;
   }
-  if (grid_.CellOf(from) < 0) return fail("start (%.2f, %.2f) is outside the plan", from.x(), from.y());
+  if (grid_.CellOf(from) < 0)
+    return fail("start (%.2f, %.2f) is outside the plan", from.x(), from.y());
   if (grid_.CellOf(to) < 0)
     return fail("destination (%.2f, %.2f) is outside the plan", to.x(), to.y());
   const int start = Passable(grid_.CellOf(from)) ? grid_.CellOf(from) : Snap(from, -1);
   if (start < 0)
-    return fail("start (%.2f, %.2f) has no free space around it (a wall, or the outside)",
-                from.x(), from.y());
+    return fail("start (%.2f, %.2f) has no free space around it (a wall, or the outside)", from.x(),
+                from.y());
   int goal = grid_.CellOf(to);
   if (!Passable(goal) || component_[goal] != component_[start]) goal = Snap(to, component_[start]);
   if (goal < 0) {
@@ -124,14 +126,18 @@ Route RoutePlanner::Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to)
   const std::lock_guard<std::mutex> lock(search_mutex_);
   const std::vector<float> coarse = CoarseDistances(goal, start);
   const int gx = goal % grid_.nx, gy = goal / grid_.nx;
-  const std::vector<int> cells = GridAStar(grid_, passable_, start, goal, nullptr, [&](int cell) {
-    const double dx = std::abs(cell % grid_.nx - gx), dy = std::abs(cell / grid_.nx - gy);
-    const double octile = std::max(dx, dy) + (M_SQRT2 - 1.0) * std::min(dx, dy);
-    const float d = coarse[(cell / grid_.nx / kCoarse) * coarse_.nx + cell % grid_.nx / kCoarse];
-    // 0.1% over: of two cells with the same estimated total, the one nearer the goal
-    // goes first, instead of every cell of an open room's plateau.
-    return 1.001 * std::max(octile, (static_cast<double>(d) - 2 * M_SQRT2) * kCoarse);
-  }, &scratch_);
+  const std::vector<int> cells = GridAStar(
+      grid_, passable_, start, goal, nullptr,
+      [&](int cell) {
+        const double dx = std::abs(cell % grid_.nx - gx), dy = std::abs(cell / grid_.nx - gy);
+        const double octile = std::max(dx, dy) + (M_SQRT2 - 1.0) * std::min(dx, dy);
+        const float d =
+            coarse[(cell / grid_.nx / kCoarse) * coarse_.nx + cell % grid_.nx / kCoarse];
+        // 0.1% over: of two cells with the same estimated total, the one nearer the goal
+        // goes first, instead of every cell of an open room's plateau.
+        return 1.001 * std::max(octile, (static_cast<double>(d) - 2 * M_SQRT2) * kCoarse);
+      },
+      &scratch_);
   std::vector<Eigen::Vector2d> points;
   points.reserve(cells.size() + 2);
   const bool start_snapped = !Passable(grid_.CellOf(from));

@@ -32,7 +32,7 @@ struct RouteOptions {
 };
 
 struct Route {
-  std::string error;                 // why there is no route; empty when there is one
+  std::string error;                  // why there is no route; empty when there is one
   std::vector<Eigen::Vector2d> path;  // from the start to the destination, plan metres
   double length_m = 0;
   double start_moved_m = 0, goal_moved_m = 0;  // snapped away from a wall by this much

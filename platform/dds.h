@@ -28,8 +28,8 @@ enum class Topic {
   kCommandReply,  // daemon -> app: reliable, keep-all (bounded), volatile
   kExplored,      // daemon -> all: reliable, transient-local, keep-last 1 per device
 };
-inline constexpr Topic kAllTopics[] = {Topic::kMeshDelta, Topic::kHeadsetPose, Topic::kCommand,
-                                       Topic::kPlanPose,  Topic::kAlignment,   Topic::kStatus,
+inline constexpr Topic kAllTopics[] = {Topic::kMeshDelta, Topic::kHeadsetPose,  Topic::kCommand,
+                                       Topic::kPlanPose,  Topic::kAlignment,    Topic::kStatus,
                                        Topic::kPlanTrack, Topic::kCommandReply, Topic::kExplored};
 const char* TopicName(Topic topic);
 std::optional<Topic> TopicFromName(std::string_view name);

@@ -191,8 +191,8 @@ std::string Engine::PlanRoute(const v1::Command::Route& request, v1::RouteReply*
   if (!last_plan_pose_ || last_plan_pose_->alignment_version() == 0)
     return "no position on the plan yet";
   const int64_t t0 = now_ns_();
-  const Route route = routes_->Plan({last_plan_pose_->x(), last_plan_pose_->y()},
-                                    {request.to_x(), request.to_y()});
+  const Route route =
+      routes_->Plan({last_plan_pose_->x(), last_plan_pose_->y()}, {request.to_x(), request.to_y()});
   if (!route.ok()) return route.error;
   for (const Eigen::Vector2d& p : route.path) {
     v1::PlanPoint* point = reply->add_path();
@@ -525,8 +525,9 @@ void Engine::OnCommand(const Envelope& e) {
         if (error.empty()) {
           char text[160];
           std::snprintf(text, sizeof(text), "route of %.1f m in %zu legs to (%.2f, %.2f)",
-                        reply.route().length_m(), static_cast<size_t>(reply.route().path_size() - 1),
-                        cmd.route().to_x(), cmd.route().to_y());
+                        reply.route().length_m(),
+                        static_cast<size_t>(reply.route().path_size() - 1), cmd.route().to_x(),
+                        cmd.route().to_y());
           done = text;
         } else {
           reply.clear_route();

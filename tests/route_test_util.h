@@ -25,10 +25,9 @@ inline double SegmentDistance(const Segment& p, const Segment& q) {
   const double d1 = cross(r, q.a - p.a), d2 = cross(r, q.b - p.a);
   const double d3 = cross(s, p.a - q.a), d4 = cross(s, p.b - q.a);
   if (((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0))) return 0.0;
-  return std::min({(ClosestPointOnSegment(q, p.a) - p.a).norm(),
-                   (ClosestPointOnSegment(q, p.b) - p.b).norm(),
-                   (ClosestPointOnSegment(p, q.a) - q.a).norm(),
-                   (ClosestPointOnSegment(p, q.b) - q.b).norm()});
+  return std::min(
+      {(ClosestPointOnSegment(q, p.a) - p.a).norm(), (ClosestPointOnSegment(q, p.b) - p.b).norm(),
+       (ClosestPointOnSegment(p, q.a) - q.a).norm(), (ClosestPointOnSegment(p, q.b) - q.b).norm()});
 }
 
 // The closest any leg of the path comes to any wall (0 when it crosses one).
@@ -36,7 +35,8 @@ inline double PathClearance(const std::vector<Eigen::Vector2d>& path,
                             const std::vector<Segment>& walls) {
   double closest = std::numeric_limits<double>::infinity();
   for (size_t i = 1; i < path.size(); ++i)
-    for (const Segment& w : walls) closest = std::min(closest, SegmentDistance({path[i - 1], path[i]}, w));
+    for (const Segment& w : walls)
+      closest = std::min(closest, SegmentDistance({path[i - 1], path[i]}, w));
   return closest;
 }
 
@@ -49,7 +49,7 @@ struct Reference {
   double ends_m = 0;     // from the exact ends to those centres: the slack either way
 };
 inline Reference BruteForceShortest(const RoutePlanner& planner, const Eigen::Vector2d& from,
-                                 const Eigen::Vector2d& to) {
+                                    const Eigen::Vector2d& to) {
   const GridGeometry& g = planner.grid();
   const int start = g.CellOf(from), goal = g.CellOf(to);
   std::vector<std::pair<int, int>> steps;

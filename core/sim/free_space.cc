@@ -26,7 +26,8 @@ std::vector<int> LargestComponent(const std::vector<uint8_t>& mask, int nx, int 
   for (int label : labels)
     if (label >= 0) ++sizes[label];
   const int best =
-      count == 0 ? -1 : static_cast<int>(std::max_element(sizes.begin(), sizes.end()) - sizes.begin());
+      count == 0 ? -1
+                 : static_cast<int>(std::max_element(sizes.begin(), sizes.end()) - sizes.begin());
   std::vector<int> cells;
   for (int i = 0; i < nx * ny; ++i)
     if (labels[i] == best && best >= 0) cells.push_back(i);

@@ -27,7 +27,7 @@ TEST(RoomMapTest, EveryOfficeIsARoomAndTheCorridorIsOne) {
   ids.insert(corridor);
   EXPECT_EQ(ids.size(), 9u);
   EXPECT_EQ(ids.count(-1), 0u);
-  EXPECT_EQ(rooms.RoomAt({-5, -5}), -1);  // outside
+  EXPECT_EQ(rooms.RoomAt({-5, -5}), -1);    // outside
   EXPECT_EQ(rooms.RoomAt({2.5, 2.0}), -1);  // in a doorway
   for (const Room& room : rooms.rooms()) {
     EXPECT_EQ(rooms.RoomAt(room.centre), room.id);

@@ -67,8 +67,8 @@ TEST(RoutePlannerTest, RandomPairsAreClearAndNearlyShortest) {
                             rng.Uniform(plan.min.y(), plan.max.y()));
     const Eigen::Vector2d b(rng.Uniform(plan.min.x(), plan.max.x()),
                             rng.Uniform(plan.min.y(), plan.max.y()));
-    if (!planner.Passable(planner.grid().CellOf(a)) || !planner.Passable(planner.grid().CellOf(b)) ||
-        rooms.RoomAt(a) < 0 || rooms.RoomAt(b) < 0)
+    if (!planner.Passable(planner.grid().CellOf(a)) ||
+        !planner.Passable(planner.grid().CellOf(b)) || rooms.RoomAt(a) < 0 || rooms.RoomAt(b) < 0)
       continue;
     SCOPED_TRACE(::testing::Message() << "from " << a.transpose() << " to " << b.transpose());
     ExpectGoodRoute(plan, planner, planner.Plan(a, b), a, b);

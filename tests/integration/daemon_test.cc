@@ -281,7 +281,8 @@ TEST_F(DaemonTest, AnswersRoutesAndPublishesWhatWasExplored) {
   ASSERT_TRUE(early.has_value());
   EXPECT_FALSE(early->ok());
   EXPECT_EQ(early->command(), "route");
-  EXPECT_NE(early->message().find("no position on the plan"), std::string::npos) << early->message();
+  EXPECT_NE(early->message().find("no position on the plan"), std::string::npos)
+      << early->message();
 
   link_->Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
   ASSERT_TRUE(link_->WaitUntil([&] { return !link_->alignments.empty(); }, seconds(10)));

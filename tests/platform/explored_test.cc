@@ -87,7 +87,9 @@ TEST_F(ExploredTest, TheExploredGridMatchesTheWalkedRooms) {
   for (const auto& [room, n] : cells) {
     const double share = static_cast<double>(seen[room]) / static_cast<double>(n);
     std::printf("room %d: %s, %.0f%% seen free\n", room,
-                stayed.count(room) ? "stayed" : entered.count(room) ? "entered" : "never entered",
+                stayed.count(room)    ? "stayed"
+                : entered.count(room) ? "entered"
+                                      : "never entered",
                 100 * share);
     if (stayed.count(room)) {
       EXPECT_GE(share, 0.15) << "room " << room;

@@ -46,9 +46,9 @@ TEST(RoutesRealPlansTest, ClearOfWallsAndNearlyShortest) {
       SCOPED_TRACE(::testing::Message() << "from " << from.transpose() << " to " << to.transpose());
       const auto t0 = std::chrono::steady_clock::now();
       const Route route = planner.Plan(from, to);
-      slowest_ms = std::max(slowest_ms, std::chrono::duration<double, std::milli>(
-                                            std::chrono::steady_clock::now() - t0)
-                                            .count());
+      slowest_ms = std::max(
+          slowest_ms,
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       const testing::Reference ref = testing::BruteForceShortest(planner, from, to);
       if (!std::isfinite(ref.centres_m)) {
         EXPECT_FALSE(route.ok());

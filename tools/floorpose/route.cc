@@ -138,7 +138,8 @@ int RunBenchRoute(const RouteCommandOptions& o) {
 
 void AddPlannerOptions(CLI::App& app, RouteCommandOptions& o) {
   app.add_option("--plan", o.plan, "floor plan (.geojson, .txt or raster .yaml)")->required();
-  app.add_option("--radius", o.route.body_radius_m, "body radius: the route keeps this far from walls, metres")
+  app.add_option("--radius", o.route.body_radius_m,
+                 "body radius: the route keeps this far from walls, metres")
       ->capture_default_str();
   app.add_option("--cell", o.route.cell_m, "grid cell, metres")->capture_default_str();
   app.add_flag("--json", o.json, "one JSON object");

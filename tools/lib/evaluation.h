@@ -57,10 +57,10 @@ struct EvalReport {
   double reliable_fraction = 0;      // of poses flagged RELIABLE
   double reliable_precision_1m = 0;  // of those, the share within 1 m
   std::vector<EvalPose> track;
-  std::vector<v1::PlanPose> plan_poses;  // as the Engine published them, in order
-  size_t plan_tracks = 0;                // PlanTrack messages published
+  std::vector<v1::PlanPose> plan_poses;     // as the Engine published them, in order
+  size_t plan_tracks = 0;                   // PlanTrack messages published
   std::optional<v1::ExploredMap> explored;  // the last explored map published
-  v1::PlanTrack last_plan_track;         // the last of them
+  v1::PlanTrack last_plan_track;            // the last of them
 };
 
 // Runs `recording` against the plan in config.plan_path() (config as the daemon's; the

@@ -37,7 +37,7 @@ class HeadsetLink {
   std::vector<std::string> status_messages;  // every non-empty DaemonStatus.message
   std::vector<v1::CommandReply> replies;
   std::optional<v1::ExploredMap> explored;  // the latest
-  size_t foreign_envelopes = 0;  // outputs of other devices, ignored
+  size_t foreign_envelopes = 0;             // outputs of other devices, ignored
   size_t malformed_envelopes = 0;
 
   platform::Participant& participant() { return *participant_; }
