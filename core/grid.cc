@@ -163,6 +163,22 @@ std::vector<Eigen::Vector2d> PullString(
   return path;
 }
 
+void DropCorners(
+    std::vector<Eigen::Vector2d>* path,
+    const std::function<bool(const Eigen::Vector2d&, const Eigen::Vector2d&)>& line_of_sight) {
+  for (bool dropped = true; dropped;) {
+    dropped = false;
+    for (size_t i = 1; i + 1 < path->size();) {
+      if (line_of_sight((*path)[i - 1], (*path)[i + 1])) {
+        path->erase(path->begin() + static_cast<std::ptrdiff_t>(i));
+        dropped = true;
+      } else {
+        ++i;
+      }
+    }
+  }
+}
+
 bool WalkSegmentCells(const GridGeometry& grid, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
                       const std::function<bool(int)>& visit) {
   const Eigen::Vector2d fa = (a - grid.origin) / grid.cell_m;

@@ -77,6 +77,12 @@ std::vector<Eigen::Vector2d> PullString(
     const std::vector<Eigen::Vector2d>& points,
     const std::function<bool(const Eigen::Vector2d&, const Eigen::Vector2d&)>& line_of_sight);
 
+// Drops every interior point whose neighbours see each other, until none does: the kinks
+// greedy string pulling leaves where a path rounds a corner in several steps.
+void DropCorners(
+    std::vector<Eigen::Vector2d>* path,
+    const std::function<bool(const Eigen::Vector2d&, const Eigen::Vector2d&)>& line_of_sight);
+
 // Every cell the segment a-b touches, in order from a (a supercover walk: where it passes
 // exactly through a corner, both cells beside the corner too). Stops early, returning
 // false, when visit returns false; cells outside the grid are passed as -1.

@@ -148,9 +148,11 @@ Route RoutePlanner::Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to)
   if (!goal_snapped) points.back() = to;
   // The first leg of a snapped start leaves the wall: not pulled, as it is not clear.
   std::vector<Eigen::Vector2d> tail(points.begin() + (start_snapped ? 1 : 0), points.end());
-  route.path = PullString(tail, [this](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  auto sight = [this](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
     return LineOfSight(a, b);
-  });
+  };
+  route.path = PullString(tail, sight);
+  DropCorners(&route.path, sight);
   if (start_snapped) {
     route.start_moved_m = (route.path.front() - from).norm();
     route.path.insert(route.path.begin(), from);
