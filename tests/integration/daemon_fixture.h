@@ -18,6 +18,7 @@
 #include "platform/floor_plan_io.h"
 #include "tests/daemon_test_util.h"
 #include "tools/lib/headset_link.h"
+#include "tools/lib/headset_messages.h"
 #include "tools/lib/process.h"
 
 namespace floorpose {
@@ -88,6 +89,24 @@ class DaemonTest : public ::testing::Test {
   template <typename Pred>
   bool WaitForStatus(Pred pred) {
     return link_->WaitUntil([&] { return link_->status && pred(*link_->status); }, seconds(10));
+  }
+
+  // Sends the walk's wall pick (made at step 1), then its meshes and poses paced like a
+  // fast replay, so that registrations run while the walk goes on; waits for every
+  // plan pose.
+  void PickAndWalk(const sim::DemoWalk& walk) {
+    link_->Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
+    ASSERT_TRUE(link_->WaitUntil([&] { return !link_->alignments.empty(); }, seconds(10)));
+    for (const sim::SimStep& step : walk.steps) {
+      for (const sim::SimMesh& m : step.meshes)
+        link_->Send(Topic::kMeshDelta, tools::ToMeshDelta(m, kFrame, step.stamp_ns), step.stamp_ns);
+      link_->Send(Topic::kHeadsetPose, tools::ToHeadsetPose(step.slam, kFrame, step.stamp_ns),
+                  step.stamp_ns);
+      link_->WaitUntil([] { return false; }, std::chrono::milliseconds(15));
+    }
+    ASSERT_TRUE(link_->WaitUntil([&] { return link_->plan_poses.size() == walk.steps.size(); },
+                                 seconds(10)))
+        << link_->plan_poses.size() << " of " << walk.steps.size();
   }
 
   sim::DemoWalk Walk(double pick_error_m, uint64_t seed) {

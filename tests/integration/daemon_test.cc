@@ -136,18 +136,7 @@ TEST_F(DaemonTest, RegistrationCorrectsAnImpreciseWallPick) {
   ASSERT_TRUE(WaitForStatus([](const v1::DaemonStatus& s) {
     return s.state() == v1::DaemonStatus::WAITING_FOR_ALIGNMENT;
   }));
-  link_->Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
-  ASSERT_TRUE(link_->WaitUntil([&] { return !link_->alignments.empty(); }, seconds(10)));
-  for (const sim::SimStep& step : walk.steps) {
-    for (const sim::SimMesh& m : step.meshes)
-      link_->Send(Topic::kMeshDelta, tools::ToMeshDelta(m, kFrame, step.stamp_ns), step.stamp_ns);
-    link_->Send(Topic::kHeadsetPose, tools::ToHeadsetPose(step.slam, kFrame, step.stamp_ns),
-                step.stamp_ns);
-    // Paced like a fast replay, so that registrations run while the walk goes on.
-    link_->WaitUntil([] { return false; }, std::chrono::milliseconds(15));
-  }
-  ASSERT_TRUE(
-      link_->WaitUntil([&] { return link_->plan_poses.size() == walk.steps.size(); }, seconds(10)));
+  ASSERT_NO_FATAL_FAILURE(PickAndWalk(walk));
   ASSERT_TRUE(WaitForStatus([](const v1::DaemonStatus& s) {
     return s.counters().registrations_accepted() >= 1;
   })) << "status: "
@@ -284,17 +273,7 @@ TEST_F(DaemonTest, AnswersRoutesAndPublishesWhatWasExplored) {
   EXPECT_NE(early->message().find("no position on the plan"), std::string::npos)
       << early->message();
 
-  link_->Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
-  ASSERT_TRUE(link_->WaitUntil([&] { return !link_->alignments.empty(); }, seconds(10)));
-  for (const sim::SimStep& step : walk.steps) {
-    for (const sim::SimMesh& m : step.meshes)
-      link_->Send(Topic::kMeshDelta, tools::ToMeshDelta(m, kFrame, step.stamp_ns), step.stamp_ns);
-    link_->Send(Topic::kHeadsetPose, tools::ToHeadsetPose(step.slam, kFrame, step.stamp_ns),
-                step.stamp_ns);
-    link_->WaitUntil([] { return false; }, std::chrono::milliseconds(15));  // registrations run
-  }
-  ASSERT_TRUE(
-      link_->WaitUntil([&] { return link_->plan_poses.size() == walk.steps.size(); }, seconds(10)));
+  ASSERT_NO_FATAL_FAILURE(PickAndWalk(walk));
   const v1::PlanPose last = link_->plan_poses.back();
   ASSERT_EQ(last.reliability().flag(), v1::Reliability::RELIABLE) << last.ShortDebugString();
 

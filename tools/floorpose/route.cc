@@ -30,22 +30,29 @@ double MsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-bool LoadPlan(const std::string& path, FloorPlan* plan) {
-  FloorPlanParse parse = platform::LoadFloorPlan(path);
+// The plan's route grid, and how long it took to build; null (after a message) when the
+// plan does not load.
+struct LoadedPlanner {
+  std::unique_ptr<RoutePlanner> planner;
+  double build_ms = 0;
+};
+LoadedPlanner LoadPlanner(const RouteCommandOptions& o) {
+  const FloorPlanParse parse = platform::LoadFloorPlan(o.plan);
   if (!parse.ok()) {
-    std::fprintf(stderr, "floorpose: %s: %s\n", path.c_str(), parse.error.c_str());
-    return false;
+    std::fprintf(stderr, "floorpose: %s: %s\n", o.plan.c_str(), parse.error.c_str());
+    return {};
   }
-  *plan = std::move(parse.plan);
-  return true;
+  const auto built = Clock::now();
+  LoadedPlanner out;
+  out.planner = std::make_unique<RoutePlanner>(parse.plan, o.route);
+  out.build_ms = MsSince(built);
+  return out;
 }
 
 int RunRoute(const RouteCommandOptions& o) {
-  FloorPlan plan;
-  if (!LoadPlan(o.plan, &plan)) return 1;
-  const auto built = Clock::now();
-  const RoutePlanner planner(plan, o.route);
-  const double build_ms = MsSince(built);
+  const auto [loaded, build_ms] = LoadPlanner(o);
+  if (!loaded) return 1;
+  const RoutePlanner& planner = *loaded;
   const auto asked = Clock::now();
   const Route route = planner.Plan({o.from[0], o.from[1]}, {o.to[0], o.to[1]});
   const double route_ms = MsSince(asked);
@@ -79,11 +86,9 @@ int RunRoute(const RouteCommandOptions& o) {
 }
 
 int RunBenchRoute(const RouteCommandOptions& o) {
-  FloorPlan plan;
-  if (!LoadPlan(o.plan, &plan)) return 1;
-  const auto built = Clock::now();
-  const RoutePlanner planner(plan, o.route);
-  const double build_ms = MsSince(built);
+  const auto [loaded, build_ms] = LoadPlanner(o);
+  if (!loaded) return 1;
+  const RoutePlanner& planner = *loaded;
   std::vector<int> passable;
   for (int cell = 0; cell < static_cast<int>(planner.grid().size()); ++cell)
     if (planner.Passable(cell)) passable.push_back(cell);
