@@ -93,14 +93,4 @@ std::vector<int> ExploredMap::VisitedRooms() const {
   return rooms;
 }
 
-size_t ExploredMap::CellsBelow(float log_odds) const {
-  return static_cast<size_t>(
-      std::count_if(log_odds_.begin(), log_odds_.end(), [&](float l) { return l < log_odds; }));
-}
-
-size_t ExploredMap::CellsAbove(float log_odds) const {
-  return static_cast<size_t>(
-      std::count_if(log_odds_.begin(), log_odds_.end(), [&](float l) { return l > log_odds; }));
-}
-
 }  // namespace floorpose

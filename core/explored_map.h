@@ -55,8 +55,6 @@ class ExploredMap {
   const RoomMap* rooms() const { return rooms_.get(); }
   // Grows with every change: publishers compare it with the value they last sent.
   uint64_t revision() const { return revision_; }
-  size_t CellsBelow(float log_odds) const;  // e.g. CellsBelow(0): cells seen free
-  size_t CellsAbove(float log_odds) const;
 
  private:
   void Add(int cell, float value);

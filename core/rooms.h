@@ -42,12 +42,11 @@ class RoomMap {
   const std::vector<Room>& rooms() const { return rooms_; }
   const std::vector<Segment>& doors() const { return doors_; }
   const GridGeometry& grid() const { return grid_; }
-  const std::vector<int>& labels() const { return labels_; }  // room id per cell, or -1
 
  private:
   GridGeometry grid_;
   std::vector<Segment> doors_;
-  std::vector<int> labels_;
+  std::vector<int> labels_;  // room id per cell, or -1
   std::vector<Room> rooms_;
 };
 

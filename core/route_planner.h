@@ -50,7 +50,6 @@ class RoutePlanner {
   const RouteOptions& options() const { return options_; }
   const GridGeometry& grid() const { return grid_; }
   bool Passable(int cell) const { return cell >= 0 && passable_[cell]; }
-  const std::vector<uint8_t>& passable() const { return passable_; }
   // Every point of the segment a-b lies in a passable cell.
   bool LineOfSight(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
 
