@@ -50,13 +50,9 @@ class RecoveryTest : public DaemonTest {
         seconds(10));
     return found;
   }
-  // A walk after a wall pick, then SIGTERM (which writes the last snapshot).
+  // A paced walk after a wall pick, then SIGTERM (which writes the last snapshot).
   void WalkAndStop(const sim::DemoWalk& walk) {
-    link_->Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
-    ASSERT_TRUE(link_->WaitUntil([&] { return !link_->alignments.empty(); }, seconds(10)));
-    for (const sim::SimStep& step : walk.steps) SendStep(step);
-    ASSERT_TRUE(link_->WaitUntil([&] { return link_->plan_poses.size() == walk.steps.size(); },
-                                 seconds(10)));
+    ASSERT_NO_FATAL_FAILURE(PickAndWalk(walk));
     ASSERT_EQ(daemon_->Terminate(seconds(5)), 0);
   }
   std::string Log() const {
@@ -142,7 +138,7 @@ TEST_F(RecoveryTest, KilledMidWalkResumesTheAlignmentWithinTwoSeconds) {
 
 TEST_F(RecoveryTest, ACorruptSnapshotIsSetAsideAndTheDaemonStartsClean) {
   StartWithState();
-  WalkAndStop(Walk(/*pick_error_m=*/0.0, 1));
+  ASSERT_NO_FATAL_FAILURE(WalkAndStop(Walk(/*pick_error_m=*/0.0, 1)));
   ASSERT_TRUE(WaitForSnapshot(1));
   // One bit flipped in the middle of the payload.
   {
@@ -174,7 +170,7 @@ TEST_F(RecoveryTest, ACorruptSnapshotIsSetAsideAndTheDaemonStartsClean) {
 
 TEST_F(RecoveryTest, ASnapshotOfAChangedPlanIsNotTrusted) {
   StartWithState();
-  WalkAndStop(Walk(/*pick_error_m=*/0.0, 1));
+  ASSERT_NO_FATAL_FAILURE(WalkAndStop(Walk(/*pick_error_m=*/0.0, 1)));
   ASSERT_TRUE(WaitForSnapshot(1));
   // Someone moved the inner wall in the plan file meanwhile.
   std::string plan = kRoomGeoJson;

@@ -4,6 +4,7 @@
 // same name) can neither feed the daemon nor read it; a permitted one can.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <iterator>
@@ -35,13 +36,16 @@ class SecurityTest : public DaemonTest {
            s.permissions_ca + "' governance: '" + s.governance + "' permissions: '" +
            s.permissions + "' }";
   }
-  // Sends a wall pick and the walk's poses on `link`.
+  // Sends a wall pick and the walk's poses on `link`, paced so that the daemon's keep-last
+  // reader never has to drop one on a loaded machine.
   static void Drive(tools::HeadsetLink& link, const sim::DemoWalk& walk, int64_t stamp_offset) {
     link.Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
-    for (const sim::SimStep& step : walk.steps)
+    for (const sim::SimStep& step : walk.steps) {
       link.Send(Topic::kHeadsetPose,
                 tools::ToHeadsetPose(step.slam, kFrame, step.stamp_ns + stamp_offset),
                 step.stamp_ns + stamp_offset);
+      link.WaitUntil([] { return false; }, std::chrono::milliseconds(5));
+    }
   }
 };
 
