@@ -56,15 +56,22 @@ class DaemonTest : public ::testing::Test {
   // link_security, a secured one).
   void StartDaemon(const std::string& extra_config = "",
                    const platform::DdsSecurity* link_security = nullptr) {
-    const std::string config_path = (dir_ / "floorposed.conf").string();
-    std::ofstream(config_path) << platform::LoopbackDdsConfigText(domain_, "hl-test", dds_extra_)
-                               << "plan_path: \"" << plan_path_ << "\"\n"
-                               << "status_period_s: 0.1\nlog_level: \"debug\"\n"
-                               << extra_config;
+    WriteConfig("hl-test", extra_config, "floorposed.conf");
     LaunchDaemon();
     link_ = std::make_unique<tools::HeadsetLink>(domain_, platform::LoopbackCycloneConfig(),
                                                  "hl-test", link_security);
     ASSERT_TRUE(link_->WaitForDaemon(seconds(15))) << "floorposed did not come up; log in " << dir_;
+  }
+
+  // Writes dir_/file: floorposed for `device` on this test's domain and room plan.
+  std::string WriteConfig(const std::string& device, const std::string& extra_config,
+                          const std::string& file) const {
+    const std::string path = (dir_ / file).string();
+    std::ofstream(path) << platform::LoopbackDdsConfigText(domain_, device, dds_extra_)
+                        << "plan_path: \"" << plan_path_ << "\"\n"
+                        << "status_period_s: 0.1\nlog_level: \"debug\"\n"
+                        << extra_config;
+    return path;
   }
 
   // Starts floorposed (again, after it stopped or was killed) with the same
@@ -94,22 +101,26 @@ class DaemonTest : public ::testing::Test {
   // Sends the walk's wall pick (made at step 1), then its meshes and poses paced like a
   // fast replay, so that registrations run while the walk goes on; waits for every
   // plan pose.
-  void PickAndWalk(const sim::DemoWalk& walk) {
-    link_->Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
-    ASSERT_TRUE(link_->WaitUntil([&] { return !link_->alignments.empty(); }, seconds(10)));
+  void PickAndWalk(const sim::DemoWalk& walk) { PickAndWalk(walk, *link_); }
+  static void PickAndWalk(const sim::DemoWalk& walk, tools::HeadsetLink& link) {
+    link.Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
+    ASSERT_TRUE(link.WaitUntil([&] { return !link.alignments.empty(); }, seconds(10)));
     for (const sim::SimStep& step : walk.steps) {
       for (const sim::SimMesh& m : step.meshes)
-        link_->Send(Topic::kMeshDelta, tools::ToMeshDelta(m, kFrame, step.stamp_ns), step.stamp_ns);
-      link_->Send(Topic::kHeadsetPose, tools::ToHeadsetPose(step.slam, kFrame, step.stamp_ns),
-                  step.stamp_ns);
-      link_->WaitUntil([] { return false; }, std::chrono::milliseconds(15));
+        link.Send(Topic::kMeshDelta, tools::ToMeshDelta(m, kFrame, step.stamp_ns), step.stamp_ns);
+      link.Send(Topic::kHeadsetPose, tools::ToHeadsetPose(step.slam, kFrame, step.stamp_ns),
+                step.stamp_ns);
+      link.WaitUntil([] { return false; }, std::chrono::milliseconds(15));
     }
-    ASSERT_TRUE(link_->WaitUntil([&] { return link_->plan_poses.size() == walk.steps.size(); },
-                                 seconds(10)))
-        << link_->plan_poses.size() << " of " << walk.steps.size();
+    ASSERT_TRUE(
+        link.WaitUntil([&] { return link.plan_poses.size() == walk.steps.size(); }, seconds(10)))
+        << link.plan_poses.size() << " of " << walk.steps.size();
   }
 
-  sim::DemoWalk Walk(double pick_error_m, uint64_t seed) {
+  // A walk through the room along `waypoints` (default: a loop through both halves).
+  static sim::DemoWalk Walk(double pick_error_m, uint64_t seed,
+                            std::vector<Eigen::Vector2d> waypoints = {
+                                {1.5, 1.5}, {2.5, 4.8}, {6.0, 4.8}, {8.8, 2.0}, {6, 1.0}}) {
     sim::DemoWalkOptions o;
     o.seed = seed;
     o.heading_drift_rad_per_m = 0;
@@ -120,8 +131,7 @@ class DaemonTest : public ::testing::Test {
     o.pick_normal_error_rad = pick_error_m > 0 ? 0.05 : 0.0;
     // The same room the daemon loads.
     const FloorPlanParse plan = platform::ParseGeoJsonFloorPlan(kRoomGeoJson, "room");
-    return sim::SimulateDemoWalk(plan.plan,
-                                 {{1.5, 1.5}, {2.5, 4.8}, {6.0, 4.8}, {8.8, 2.0}, {6, 1.0}}, o);
+    return sim::SimulateDemoWalk(plan.plan, waypoints, o);
   }
 
   fs::path dir_;

@@ -32,6 +32,8 @@ int main(int argc, char** argv) {
       floorpose::tools::AddCalibrateCommand);
   add("route", "the shortest route a wearer can walk between two points of a floor plan",
       floorpose::tools::AddRouteCommand);
+  add("dashboard", "serve a live map of every wearer to browsers on the local network",
+      floorpose::tools::AddDashboardCommand);
   add("bench", "time the registration methods and the closest-wall index",
       floorpose::tools::AddBenchCommand);
   CLI11_PARSE(app, argc, argv);

@@ -1,0 +1,118 @@
+// `floorpose dashboard`: the team lead's live map of every wearer, served to browsers on
+// the local network (tools/lib/dashboard.h; the page is in tools/dashboard/).
+#include <spdlog/spdlog.h>
+
+#include <csignal>
+#include <memory>
+#include <thread>
+
+#include "platform/floor_plan_io.h"
+#include "tools/floorpose/commands.h"
+#include "tools/floorpose/dds_options.h"
+#include "tools/lib/dashboard.h"
+
+namespace floorpose::tools {
+namespace {
+
+struct DashboardCommandOptions {
+  std::string plan;
+  std::string plans_dir;
+  std::vector<std::string> names;  // ID=NAME
+  DashboardServerOptions server;
+  DdsOptions dds;
+};
+
+// The plans to draw: one file, or every plan of a directory (as the daemon's plan_dir).
+bool LoadPlans(const DashboardCommandOptions& o, std::vector<FloorPlan>* plans) {
+  std::vector<std::string> paths;
+  if (!o.plan.empty()) paths.push_back(o.plan);
+  if (!o.plans_dir.empty()) {
+    const std::vector<std::string> ids = platform::ListPlanIds(o.plans_dir);
+    if (ids.empty()) {
+      spdlog::error("--plans {}: no floor plans there", o.plans_dir);
+      return false;
+    }
+    for (const std::string& id : ids) {
+      std::string path, error;
+      if (platform::FindPlanFile(o.plans_dir, id, &path, &error)) paths.push_back(path);
+    }
+  }
+  for (const std::string& path : paths) {
+    FloorPlanParse parse = platform::LoadFloorPlan(path);
+    if (!parse.ok()) {
+      spdlog::error("{}: {}", path, parse.error);
+      if (!o.plan.empty()) return false;  // the one plan asked for
+      continue;                           // one bad file of a directory: the others still show
+    }
+    spdlog::info("plan '{}': {} walls from {}", parse.plan.id, parse.plan.segments.size(), path);
+    plans->push_back(std::move(parse.plan));
+  }
+  if (plans->empty())
+    spdlog::warn(
+        "no floor plan to draw: wearers are listed, not shown on a map "
+        "(give --plan or --plans)");
+  return true;
+}
+
+int RunDashboard(DashboardCommandOptions o) {
+  for (const std::string& n : o.names) {
+    const size_t eq = n.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == n.size()) {
+      spdlog::error("--name {}: expected DEVICE_ID=NAME", n);
+      return 2;
+    }
+    o.server.dashboard.names[n.substr(0, eq)] = n.substr(eq + 1);
+  }
+  if (!(o.server.dashboard.stale_after_s > 0)) {
+    spdlog::error("--stale-after must be positive");
+    return 2;
+  }
+  std::vector<FloorPlan> plans;
+  if (!LoadPlans(o, &plans)) return 1;
+  o.server.domain_id = o.dds.domain_id;
+  o.server.cyclone_config = o.dds.Config();
+
+  // SIGINT and SIGTERM are taken by this thread alone, before any other starts.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  std::unique_ptr<Dashboard> dashboard;
+  try {
+    dashboard = std::make_unique<Dashboard>(o.server, std::move(plans));
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 1;
+  }
+  spdlog::info("dashboard on http://{}:{}/ (DDS domain {})", o.server.host, dashboard->port(),
+               o.server.domain_id);
+  std::thread server([&] { dashboard->Serve(); });
+  int sig = 0;
+  sigwait(&signals, &sig);
+  spdlog::info("signal {}: stopping", sig);
+  dashboard->Stop();
+  server.join();
+  return 0;
+}
+
+}  // namespace
+
+Run AddDashboardCommand(CLI::App& app) {
+  auto o = std::make_shared<DashboardCommandOptions>();
+  auto* plan = app.add_option("--plan", o->plan, "the floor plan to draw");
+  app.add_option("--plans", o->plans_dir, "a directory of floor plans (as the daemon's plan_dir)")
+      ->excludes(plan);
+  app.add_option("--port", o->server.port, "HTTP port (0: any free one, logged)")
+      ->capture_default_str();
+  app.add_option("--host", o->server.host, "address to listen on")->capture_default_str();
+  app.add_option("--stale-after", o->server.dashboard.stale_after_s,
+                 "seconds without data after which a wearer is greyed")
+      ->capture_default_str();
+  app.add_option("--name", o->names, "DEVICE_ID=NAME: the name shown for a device (repeatable)");
+  o->dds.Add(app);
+  return [o] { return RunDashboard(*o); };
+}
+
+}  // namespace floorpose::tools

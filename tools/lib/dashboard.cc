@@ -1,0 +1,347 @@
+#include "tools/lib/dashboard.h"
+
+#include <httplib.h>
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "platform/dds.h"
+
+namespace floorpose::tools {
+
+// The page, its script and style, compiled in from tools/dashboard/ (dashboard_assets.cc,
+// made by CMake): served by the tool itself, so the dashboard works with no network.
+struct DashboardAsset {
+  const char* path;
+  const char* content_type;
+  const char* body;
+};
+extern const DashboardAsset kDashboardAssets[];
+
+namespace {
+
+using json = nlohmann::json;
+using Clock = DashboardState::Clock;
+using platform::Topic;
+
+double Mm(double v) { return std::round(v * 1000.0) / 1000.0; }
+
+// The reliability classes the page colours by.
+const char* FlagClass(int flag) {
+  switch (flag) {
+    case v1::Reliability::RELIABLE: return "reliable";
+    case v1::Reliability::DEGRADED: return "degraded";
+    default: return "lost";
+  }
+}
+
+bool Finite(const v1::PlanPose& p) {
+  return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.heading());
+}
+
+}  // namespace
+
+DashboardState::Device& DashboardState::Touch(const std::string& device, Clock::time_point now) {
+  Device& d = devices_[device];
+  d.last_message = now;
+  d.version = ++version_;
+  return d;
+}
+
+void DashboardState::Append(Device& d, const v1::PlanPose& p) {
+  if (!d.trail.empty() && p.source_stamp_ns() <= d.trail.back().stamp_ns) return;
+  d.trail.push_back({p.x(), p.y(), p.reliability().flag(), p.source_stamp_ns()});
+  while (d.trail.size() > options_.trail_points) {
+    d.trail.pop_front();
+    ++d.trail_first_seq;
+  }
+}
+
+void DashboardState::OnPlanPose(const std::string& device, const v1::PlanPose& pose,
+                                Clock::time_point now) {
+  if (!Finite(pose)) return;
+  {
+    std::lock_guard lock(mu_);
+    Device& d = Touch(device, now);
+    d.last_pose = now;
+    // A late pose (older than the one shown) is history, not where the wearer is.
+    if (!d.pose || pose.source_stamp_ns() >= d.pose->source_stamp_ns()) d.pose = pose;
+    Append(d, pose);
+  }
+  changed_.notify_all();
+}
+
+void DashboardState::OnPlanTrack(const std::string& device, const v1::PlanTrack& track,
+                                 Clock::time_point now) {
+  {
+    std::lock_guard lock(mu_);
+    Device& d = Touch(device, now);
+    // The daemon re-projected its recent track with a new alignment: it replaces ours,
+    // keeping the poses that came after it.
+    std::deque<TrailPoint> newer;
+    const int64_t last =
+        track.poses_size() ? track.poses(track.poses_size() - 1).source_stamp_ns() : INT64_MIN;
+    for (const TrailPoint& t : d.trail)
+      if (t.stamp_ns > last) newer.push_back(t);
+    d.trail.clear();
+    for (const v1::PlanPose& p : track.poses())
+      if (Finite(p)) Append(d, p);
+    for (const TrailPoint& t : newer) d.trail.push_back(t);
+    while (d.trail.size() > options_.trail_points) d.trail.pop_front();
+    ++d.trail_epoch;
+    d.trail_first_seq = 0;
+  }
+  changed_.notify_all();
+}
+
+void DashboardState::OnAlignment(const std::string& device, const v1::Alignment& alignment,
+                                 Clock::time_point now) {
+  {
+    std::lock_guard lock(mu_);
+    Touch(device, now).alignment = alignment;
+  }
+  changed_.notify_all();
+}
+
+void DashboardState::OnStatus(const std::string& device, const v1::DaemonStatus& status,
+                              Clock::time_point now) {
+  {
+    std::lock_guard lock(mu_);
+    Touch(device, now).status = status;
+  }
+  changed_.notify_all();
+}
+
+std::string DashboardState::Frame(Cursor* cursor, Clock::time_point now) const {
+  std::lock_guard lock(mu_);
+  json frame = {{"stale_after_s", options_.stale_after_s}};
+  json& out = frame["devices"] = json::array();
+  json& ages = frame["ages"] = json::object();
+  json& stale = frame["stale"] = json::array();
+  for (const auto& [id, d] : devices_) {
+    const double age =
+        std::chrono::duration<double>(now - (d.pose ? d.last_pose : d.last_message)).count();
+    ages[id] = std::round(age * 10.0) / 10.0;
+    if (age > options_.stale_after_s) stale.push_back(id);
+    if (d.version <= cursor->version) continue;
+    json dev = {{"id", id}};
+    const auto name = options_.names.find(id);
+    dev["name"] = name == options_.names.end() ? id : name->second;
+    dev["plan"] = d.status ? d.status->plan_id() : "";
+    dev["state"] = d.status ? v1::DaemonStatus::State_Name(d.status->state()) : "";
+    if (d.status && !d.status->message().empty()) dev["message"] = d.status->message();
+    if (d.pose) {
+      const v1::PlanPose& p = *d.pose;
+      dev["pose"] = {{"x", Mm(p.x())},
+                     {"y", Mm(p.y())},
+                     {"heading", std::round(p.heading() * 1e4) / 1e4},
+                     {"floor", p.floor()},
+                     {"flag", FlagClass(p.reliability().flag())},
+                     {"probability", std::round(p.reliability().probability() * 1e3) / 1e3},
+                     {"reason", p.reliability().reason()},
+                     {"alignment_version", p.alignment_version()},
+                     {"stamp_ns", p.source_stamp_ns()}};
+    }
+    if (d.alignment)
+      dev["alignment"] = {{"version", d.alignment->version()},
+                          {"source", v1::Alignment::Source_Name(d.alignment->source())},
+                          {"rmse_m", Mm(d.alignment->stats().inlier_rmse_m())}};
+    // The trail points this browser lacks; all of them after a re-projection.
+    auto [epoch, next] = cursor->trails[id];
+    const bool reset = epoch != d.trail_epoch || next < d.trail_first_seq;
+    const uint64_t from = reset ? d.trail_first_seq : next;
+    json points = json::array();
+    for (uint64_t s = from; s < d.trail_first_seq + d.trail.size(); ++s) {
+      const TrailPoint& t = d.trail[s - d.trail_first_seq];
+      points.push_back({Mm(t.x), Mm(t.y), FlagClass(t.flag)});
+    }
+    if (reset || !points.empty()) dev["trail"] = {{"reset", reset}, {"points", std::move(points)}};
+    cursor->trails[id] = {d.trail_epoch, d.trail_first_seq + d.trail.size()};
+    out.push_back(std::move(dev));
+  }
+  cursor->version = version_;
+  return frame.dump();
+}
+
+void DashboardState::WaitForChange(uint64_t version, std::chrono::milliseconds timeout) const {
+  std::unique_lock lock(mu_);
+  changed_.wait_for(lock, timeout, [&] { return version_ > version || stopped_; });
+}
+
+void DashboardState::Stop() {
+  {
+    std::lock_guard lock(mu_);
+    stopped_ = true;
+  }
+  changed_.notify_all();
+}
+
+size_t DashboardState::devices() const {
+  std::lock_guard lock(mu_);
+  return devices_.size();
+}
+
+std::string PlansJson(const std::vector<FloorPlan>& plans) {
+  json out = {{"plans", json::array()}};
+  for (const FloorPlan& plan : plans) {
+    json walls = json::array();
+    for (const Segment& s : plan.segments)
+      walls.push_back({Mm(s.a.x()), Mm(s.a.y()), Mm(s.b.x()), Mm(s.b.y())});
+    out["plans"].push_back({{"id", plan.id},
+                            {"min", {Mm(plan.min.x()), Mm(plan.min.y())}},
+                            {"max", {Mm(plan.max.x()), Mm(plan.max.y())}},
+                            {"walls", std::move(walls)}});
+  }
+  return out.dump();
+}
+
+struct Dashboard::Impl {
+  DashboardServerOptions options;
+  std::string plans_json;
+  std::unique_ptr<platform::Participant> participant;
+  std::vector<std::unique_ptr<platform::Reader>> readers;
+  std::unique_ptr<platform::Waiter> waiter;
+  std::thread dds_thread;
+  std::atomic<bool> stop{false};
+  httplib::Server http;
+  std::atomic<int> clients{0};
+
+  void ReadDds(DashboardState& state);
+};
+
+void Dashboard::Impl::ReadDds(DashboardState& state) {
+  size_t malformed = 0;
+  auto last_warning = Clock::now() - std::chrono::seconds(10);
+  while (!stop) {
+    waiter->Wait(std::chrono::milliseconds(200));
+    for (auto& reader : readers) {
+      for (const platform::Envelope& e : reader->Take(256)) {
+        const auto now = Clock::now();
+        bool ok = false;
+        switch (reader->topic()) {
+          case Topic::kPlanPose: {
+            v1::PlanPose m;
+            if ((ok = m.ParseFromString(e.payload))) state.OnPlanPose(e.device_id, m, now);
+            break;
+          }
+          case Topic::kPlanTrack: {
+            v1::PlanTrack m;
+            if ((ok = m.ParseFromString(e.payload))) state.OnPlanTrack(e.device_id, m, now);
+            break;
+          }
+          case Topic::kAlignment: {
+            v1::Alignment m;
+            if ((ok = m.ParseFromString(e.payload))) state.OnAlignment(e.device_id, m, now);
+            break;
+          }
+          case Topic::kStatus: {
+            v1::DaemonStatus m;
+            if ((ok = m.ParseFromString(e.payload))) state.OnStatus(e.device_id, m, now);
+            break;
+          }
+          default: ok = true;
+        }
+        if (!ok) {
+          ++malformed;
+          if (now - last_warning > std::chrono::seconds(1)) {
+            spdlog::warn("{} malformed message(s) so far; the latest on {} from device '{}'",
+                         malformed, platform::TopicName(reader->topic()), e.device_id);
+            last_warning = now;
+          }
+        }
+      }
+    }
+  }
+}
+
+Dashboard::Dashboard(DashboardServerOptions options, std::vector<FloorPlan> plans)
+    : impl_(std::make_unique<Impl>()), state_(std::make_unique<DashboardState>(options.dashboard)) {
+  Impl& m = *impl_;
+  m.options = std::move(options);
+  m.plans_json = PlansJson(plans);
+  m.participant =
+      std::make_unique<platform::Participant>(m.options.domain_id, m.options.cyclone_config);
+  m.waiter = std::make_unique<platform::Waiter>(*m.participant);
+  for (Topic t : {Topic::kStatus, Topic::kAlignment, Topic::kPlanTrack, Topic::kPlanPose}) {
+    m.readers.push_back(std::make_unique<platform::Reader>(*m.participant, t));
+    m.waiter->Attach(*m.readers.back());
+  }
+
+  // One thread per open event stream: a team's few dashboards, not the public.
+  m.http.new_task_queue = [] { return new httplib::ThreadPool(64); };
+  for (const DashboardAsset* a = kDashboardAssets; a->path; ++a) {
+    const DashboardAsset asset = *a;
+    m.http.Get(asset.path, [asset](const httplib::Request&, httplib::Response& res) {
+      res.set_content(asset.body, asset.content_type);
+    });
+  }
+  m.http.Get("/api/plans", [this](const httplib::Request&, httplib::Response& res) {
+    res.set_content(impl_->plans_json, "application/json");
+  });
+  m.http.Get("/api/devices", [this](const httplib::Request&, httplib::Response& res) {
+    DashboardState::Cursor fresh;
+    res.set_content(state_->Frame(&fresh, Clock::now()), "application/json");
+  });
+  // Server-sent events: the whole picture first, then what changed, at most every
+  // frame_period_s, and at least every second (ages and staleness move on their own).
+  m.http.Get("/events", [this](const httplib::Request& req, httplib::Response& res) {
+    struct Stream {
+      DashboardState::Cursor cursor;
+      bool started = false;
+    };
+    auto stream = std::make_shared<Stream>();
+    const auto period = std::chrono::duration_cast<std::chrono::milliseconds>(
+        std::chrono::duration<double>(impl_->options.dashboard.frame_period_s));
+    spdlog::info("browser {} connected ({} open)", req.remote_addr, ++impl_->clients);
+    res.set_header("Cache-Control", "no-cache");
+    res.set_header("X-Accel-Buffering", "no");
+    res.set_chunked_content_provider(
+        "text/event-stream",
+        [this, stream, period](size_t, httplib::DataSink& sink) {
+          if (stream->started) {
+            std::this_thread::sleep_for(period);
+            state_->WaitForChange(stream->cursor.version, std::chrono::seconds(1));
+          }
+          stream->started = true;
+          if (state_->stopped()) {
+            sink.done();
+            return true;
+          }
+          const std::string event =
+              "data: " + state_->Frame(&stream->cursor, Clock::now()) + "\n\n";
+          return sink.write(event.data(), event.size());
+        },
+        [this, remote = req.remote_addr](bool) {
+          spdlog::info("browser {} disconnected ({} open)", remote, --impl_->clients);
+        });
+  });
+  m.http.set_logger([](const httplib::Request& req, const httplib::Response& res) {
+    if (res.status >= 400) spdlog::info("{} {} -> {}", req.method, req.path, res.status);
+  });
+
+  port_ = m.options.port == 0
+              ? m.http.bind_to_any_port(m.options.host)
+              : (m.http.bind_to_port(m.options.host, m.options.port) ? m.options.port : -1);
+  if (port_ <= 0)
+    throw std::runtime_error("cannot listen on " + m.options.host + ":" +
+                             std::to_string(m.options.port));
+  m.dds_thread = std::thread([this] { impl_->ReadDds(*state_); });
+}
+
+Dashboard::~Dashboard() {
+  Stop();
+  if (impl_->dds_thread.joinable()) impl_->dds_thread.join();
+}
+
+void Dashboard::Serve() { impl_->http.listen_after_bind(); }
+
+void Dashboard::Stop() {
+  impl_->stop = true;
+  state_->Stop();
+  impl_->waiter->Wake();
+  impl_->http.stop();
+}
+
+}  // namespace floorpose::tools

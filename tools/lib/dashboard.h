@@ -1,0 +1,117 @@
+// The team lead's dashboard (`floorpose dashboard`): every device's plan poses, alignment
+// and status from DDS, kept per device, and served to browsers as JSON and a server-sent
+// event stream. DashboardState is the model (thread-safe: one DDS thread writes, any number
+// of HTTP threads read); Dashboard joins DDS and serves HTTP.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/floor_plan.h"
+#include "floorpose/v1/floorpose.pb.h"
+
+namespace floorpose::tools {
+
+struct DashboardOptions {
+  double stale_after_s = 5.0;   // a device without a plan pose this long is shown greyed
+  size_t trail_points = 600;    // per device; the oldest go first
+  double frame_period_s = 0.1;  // pushes to a browser are coalesced to at most this rate
+  std::map<std::string, std::string> names;  // device id -> name shown; default: the id
+};
+
+class DashboardState {
+ public:
+  using Clock = std::chrono::steady_clock;
+  explicit DashboardState(DashboardOptions options) : options_(std::move(options)) {}
+
+  void OnPlanPose(const std::string& device, const v1::PlanPose& pose, Clock::time_point now);
+  void OnPlanTrack(const std::string& device, const v1::PlanTrack& track, Clock::time_point now);
+  void OnAlignment(const std::string& device, const v1::Alignment& alignment,
+                   Clock::time_point now);
+  void OnStatus(const std::string& device, const v1::DaemonStatus& status, Clock::time_point now);
+
+  // What one browser has been sent so far.
+  struct Cursor {
+    uint64_t version = 0;
+    std::map<std::string, std::pair<uint64_t, uint64_t>> trails;  // device -> (epoch, next seq)
+  };
+  // JSON of the devices changed since *cursor (all of them for a fresh cursor), with every
+  // device's age and the stale ones; advances *cursor. Format in docs/dashboard.md.
+  std::string Frame(Cursor* cursor, Clock::time_point now) const;
+  // Blocks until something changed after `version`, the timeout passes or Stop().
+  void WaitForChange(uint64_t version, std::chrono::milliseconds timeout) const;
+  void Stop();
+  bool stopped() const { return stopped_; }
+  size_t devices() const;
+
+ private:
+  struct TrailPoint {
+    double x, y;
+    int flag;
+    int64_t stamp_ns;
+  };
+  struct Device {
+    std::optional<v1::PlanPose> pose;
+    std::optional<v1::DaemonStatus> status;
+    std::optional<v1::Alignment> alignment;
+    std::deque<TrailPoint> trail;
+    uint64_t trail_epoch = 1;      // bumped when the trail is replaced (a new PlanTrack)
+    uint64_t trail_first_seq = 0;  // seq of trail.front()
+    // Staleness counts from the last plan pose (a daemon still reports status when the
+    // headset went quiet), or from the last message of a device that never had a pose.
+    Clock::time_point last_pose, last_message;
+    uint64_t version = 0;
+  };
+  Device& Touch(const std::string& device, Clock::time_point now);  // under mu_
+  void Append(Device& d, const v1::PlanPose& p);
+
+  DashboardOptions options_;
+  mutable std::mutex mu_;
+  mutable std::condition_variable changed_;
+  std::map<std::string, Device> devices_;
+  uint64_t version_ = 0;
+  std::atomic<bool> stopped_{false};
+};
+
+// The plans a dashboard draws, as JSON: {"plans": [{"id", "min", "max", "walls"}]}.
+std::string PlansJson(const std::vector<FloorPlan>& plans);
+
+struct DashboardServerOptions {
+  uint32_t domain_id = 0;
+  std::string cyclone_config;  // empty: CYCLONEDDS_URI
+  std::string host = "0.0.0.0";
+  int port = 8080;  // 0: any free port
+  DashboardOptions dashboard;
+};
+
+class Dashboard {
+ public:
+  // Joins DDS and binds the port; throws std::runtime_error when either fails.
+  Dashboard(DashboardServerOptions options, std::vector<FloorPlan> plans);
+  ~Dashboard();
+  Dashboard(const Dashboard&) = delete;
+  Dashboard& operator=(const Dashboard&) = delete;
+  int port() const { return port_; }
+  const DashboardState& state() const { return *state_; }
+  // Serves until Stop() (from any thread).
+  void Serve();
+  void Stop();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::unique_ptr<DashboardState> state_;
+  int port_ = 0;
+};
+
+}  // namespace floorpose::tools
