@@ -9,13 +9,13 @@
 #include <cmath>
 #include <fstream>
 #include <iterator>
-#include <regex>
 
 // Eigen before httplib.h: glibc's <resolv.h>, which httplib includes, defines _res, a
 // parameter name in Eigen.
 #include "tests/integration/daemon_fixture.h"
 // clang-format off
 #include "tests/browser/webdriver.h"
+#include "tools/lib/dashboard.h"
 // clang-format on
 
 namespace floorpose {
@@ -74,21 +74,7 @@ int Distance(Rgba a, Rgba b) {
   return std::max({std::abs(a.r - b.r), std::abs(a.g - b.g), std::abs(a.b - b.b)});
 }
 
-class DashboardBrowserTest : public DaemonTest {
- protected:
-  // The dashboard's HTTP port, from its log line "dashboard on http://127.0.0.1:PORT/".
-  int WaitForPort(const fs::path& log) {
-    const std::regex line(R"(dashboard on http://127\.0\.0\.1:(\d+)/)");
-    for (int i = 0; i < 150; ++i) {
-      std::ifstream in(log);
-      const std::string text{std::istreambuf_iterator<char>(in), {}};
-      std::smatch m;
-      if (std::regex_search(text, m, line)) return std::stoi(m[1]);
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    }
-    return 0;
-  }
-};
+using DashboardBrowserTest = DaemonTest;
 
 TEST_F(DashboardBrowserTest, ShowsBothWearersWhereTheirDaemonsPutThemAndGreysTheOneThatStops) {
   // Alice (hl-test, the fixture's daemon and link) and Bob (hl-b), one daemon each.
@@ -104,7 +90,7 @@ TEST_F(DashboardBrowserTest, ShowsBothWearersWhereTheirDaemonsPutThemAndGreysThe
        "--domain", std::to_string(domain_), "--loopback", "--stale-after", "2", "--name",
        "hl-test=Alice", "--name", "hl-b=Bob"},
       dashboard_log.string());
-  const int port = WaitForPort(dashboard_log);
+  const int port = tools::DashboardPortFromLog(dashboard_log.string(), seconds(15));
   ASSERT_GT(port, 0) << "floorpose dashboard did not come up; see " << dashboard_log;
 
   std::unique_ptr<testing::Browser> browser;

@@ -55,5 +55,27 @@ TEST(BenchDaemonTest, TwoHeadsetsEachAnsweredByItsOwnDaemon) {
   fs::remove_all(dir);
 }
 
+// `floorpose bench dashboard`: a team of 20 wearers at 3 Hz, three browsers; every pose
+// reaches every browser's trails and every browser ends on every wearer's last pose.
+TEST(BenchDashboardTest, EveryPoseOfTwentyWearersReachesEveryBrowser) {
+  const fs::path out =
+      fs::path(::testing::TempDir()) / ("bench-dashboard-" + std::to_string(getpid()) + ".json");
+  tools::ChildProcess bench({FLOORPOSE_PATH, "bench", "dashboard", "--seconds", "3", "--domain",
+                             std::to_string(testing::UniqueDomain()), "--json"},
+                            out.string());
+  ASSERT_TRUE(bench.started());
+  ASSERT_EQ(bench.Wait(std::chrono::seconds(60)), 0) << testing::ReadText(out);
+  const std::string text = testing::ReadText(out);
+  const nlohmann::json j = nlohmann::json::parse(text.substr(text.rfind('{')));
+  EXPECT_GE(j["poses_sent"].get<int>(), 20 * 3 * 3);
+  EXPECT_EQ(j["poses_failed"], 0);
+  EXPECT_EQ(j["trail_points_shown"], j["trail_points_expected"]);
+  EXPECT_EQ(j["browsers_up_to_date"], 60);
+  EXPECT_EQ(j["wearers_x_browsers"], 60);
+  for (const char* key : {"latency_ms_p50", "latency_ms_p99", "cpu_percent", "rss_mb_peak"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  fs::remove(out);
+}
+
 }  // namespace
 }  // namespace floorpose

@@ -503,7 +503,11 @@ Run AddBenchCommand(CLI::App& app) {
   CLI::App* daemon_command = app.get_subcommand("daemon");
   Run route = AddBenchRouteCommand(app);
   CLI::App* route_command = app.get_subcommand("route");
-  return [o, registration, snapshot, daemon, daemon_command, route, route_command] {
+  Run dashboard = AddBenchDashboardCommand(app);
+  CLI::App* dashboard_command = app.get_subcommand("dashboard");
+  return [o, registration, snapshot, daemon, daemon_command, route, route_command, dashboard,
+          dashboard_command] {
+    if (dashboard_command->parsed()) return dashboard();
     if (snapshot->parsed()) return RunBenchSnapshot(*o);
     if (daemon_command->parsed()) return daemon();
     if (route_command->parsed()) return route();

@@ -67,42 +67,6 @@ struct BenchDaemonOptions {
   bool json = false;
 };
 
-// What /proc says of a process now.
-struct ProcSample {
-  double rss_mb = 0, hwm_mb = 0;  // VmRSS, VmHWM
-  double cpu_s = 0;               // utime + stime
-};
-
-ProcSample SampleProcess(pid_t pid) {
-  ProcSample s;
-  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
-  std::string key;
-  double kb = 0;
-  std::string line;
-  while (std::getline(status, line)) {
-    std::istringstream in(line);
-    if (!(in >> key >> kb)) continue;
-    if (key == "VmRSS:") s.rss_mb = kb / 1024.0;
-    if (key == "VmHWM:") s.hwm_mb = kb / 1024.0;
-  }
-  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
-  std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
-  const size_t paren = text.rfind(')');  // the command name may hold spaces
-  if (paren == std::string::npos) return s;
-  std::istringstream fields(text.substr(paren + 2));
-  std::string field;
-  double utime = 0, stime = 0;
-  for (int i = 3; fields >> field; ++i) {  // field 3 is the state
-    if (i == 14) utime = std::stod(field);
-    if (i == 15) {
-      stime = std::stod(field);
-      break;
-    }
-  }
-  s.cpu_s = (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
-  return s;
-}
-
 // Registration times (ms) from a daemon's log: "registration: ..., 12.3 ms, drift ...".
 std::vector<double> RegistrationTimes(const std::string& log_path) {
   static const std::regex kLine(R"(registration: .*iterations, ([0-9.]+) ms,)");

@@ -25,6 +25,8 @@ Run AddDashboardCommand(CLI::App& app);
 Run AddBenchDaemonCommand(CLI::App& bench);
 // `floorpose bench route` (route.cc).
 Run AddBenchRouteCommand(CLI::App& bench);
+// `floorpose bench dashboard` (bench_dashboard.cc).
+Run AddBenchDashboardCommand(CLI::App& bench);
 
 // The bundled demo plan and walk: installed beside the binary's prefix, else the source tree.
 std::string DefaultDemoDir();

@@ -4,7 +4,10 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <stdexcept>
 
 #include "platform/dds.h"
@@ -43,11 +46,21 @@ bool Finite(const v1::PlanPose& p) {
 
 }  // namespace
 
-DashboardState::Device& DashboardState::Touch(const std::string& device, Clock::time_point now) {
-  Device& d = devices_[device];
+DashboardState::Device* DashboardState::Touch(const std::string& device, Clock::time_point now) {
+  auto it = devices_.find(device);
+  if (it == devices_.end()) {
+    if (devices_.size() >= options_.max_devices) {
+      if (refused_devices_++ % 1000 == 0)
+        spdlog::warn("{} devices already shown: ignoring device '{}' ({} messages ignored so far)",
+                     devices_.size(), device, refused_devices_);
+      return nullptr;
+    }
+    it = devices_.emplace(device, Device{}).first;
+  }
+  Device& d = it->second;
   d.last_message = now;
   d.version = ++version_;
-  return d;
+  return &d;
 }
 
 void DashboardState::Append(Device& d, const v1::PlanPose& p) {
@@ -64,7 +77,9 @@ void DashboardState::OnPlanPose(const std::string& device, const v1::PlanPose& p
   if (!Finite(pose)) return;
   {
     std::lock_guard lock(mu_);
-    Device& d = Touch(device, now);
+    Device* found = Touch(device, now);
+    if (!found) return;
+    Device& d = *found;
     d.last_pose = now;
     // A late pose (older than the one shown) is history, not where the wearer is.
     if (!d.pose || pose.source_stamp_ns() >= d.pose->source_stamp_ns()) d.pose = pose;
@@ -77,7 +92,9 @@ void DashboardState::OnPlanTrack(const std::string& device, const v1::PlanTrack&
                                  Clock::time_point now) {
   {
     std::lock_guard lock(mu_);
-    Device& d = Touch(device, now);
+    Device* found = Touch(device, now);
+    if (!found) return;
+    Device& d = *found;
     // The daemon re-projected its recent track with a new alignment: it replaces ours,
     // keeping the poses that came after it.
     std::deque<TrailPoint> newer;
@@ -100,7 +117,7 @@ void DashboardState::OnAlignment(const std::string& device, const v1::Alignment&
                                  Clock::time_point now) {
   {
     std::lock_guard lock(mu_);
-    Touch(device, now).alignment = alignment;
+    if (Device* d = Touch(device, now)) d->alignment = alignment;
   }
   changed_.notify_all();
 }
@@ -109,7 +126,7 @@ void DashboardState::OnStatus(const std::string& device, const v1::DaemonStatus&
                               Clock::time_point now) {
   {
     std::lock_guard lock(mu_);
-    Touch(device, now).status = status;
+    if (Device* d = Touch(device, now)) d->status = status;
   }
   changed_.notify_all();
 }
@@ -162,7 +179,8 @@ std::string DashboardState::Frame(Cursor* cursor, Clock::time_point now) const {
     out.push_back(std::move(dev));
   }
   cursor->version = version_;
-  return frame.dump();
+  // Device ids and reasons come off the network: invalid UTF-8 is replaced, not thrown.
+  return frame.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
 void DashboardState::WaitForChange(uint64_t version, std::chrono::milliseconds timeout) const {
@@ -194,7 +212,7 @@ std::string PlansJson(const std::vector<FloorPlan>& plans) {
                             {"max", {Mm(plan.max.x()), Mm(plan.max.y())}},
                             {"walls", std::move(walls)}});
   }
-  return out.dump();
+  return out.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
 struct Dashboard::Impl {
@@ -342,6 +360,19 @@ void Dashboard::Stop() {
   state_->Stop();
   impl_->waiter->Wake();
   impl_->http.stop();
+}
+
+int DashboardPortFromLog(const std::string& log_path, std::chrono::milliseconds timeout) {
+  const std::regex line(R"(dashboard on http://[^:/]+:(\d+)/)");
+  const auto deadline = Clock::now() + timeout;
+  while (true) {
+    std::ifstream in(log_path);
+    const std::string text{std::istreambuf_iterator<char>(in), {}};
+    std::smatch m;
+    if (std::regex_search(text, m, line)) return std::stoi(m[1]);
+    if (Clock::now() > deadline) return 0;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
 }
 
 }  // namespace floorpose::tools

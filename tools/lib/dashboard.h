@@ -27,6 +27,7 @@ struct DashboardOptions {
   size_t trail_points = 600;    // per device; the oldest go first
   double frame_period_s = 0.1;  // pushes to a browser are coalesced to at most this rate
   std::map<std::string, std::string> names;  // device id -> name shown; default: the id
+  size_t max_devices = 256;  // more device ids than a team has: the rest are ignored, logged
 };
 
 class DashboardState {
@@ -72,7 +73,8 @@ class DashboardState {
     Clock::time_point last_pose, last_message;
     uint64_t version = 0;
   };
-  Device& Touch(const std::string& device, Clock::time_point now);  // under mu_
+  // The device's entry, now updated; null when it would be one too many. Under mu_.
+  Device* Touch(const std::string& device, Clock::time_point now);
   void Append(Device& d, const v1::PlanPose& p);
 
   DashboardOptions options_;
@@ -80,6 +82,7 @@ class DashboardState {
   mutable std::condition_variable changed_;
   std::map<std::string, Device> devices_;
   uint64_t version_ = 0;
+  size_t refused_devices_ = 0;
   std::atomic<bool> stopped_{false};
 };
 
@@ -113,5 +116,9 @@ class Dashboard {
   std::unique_ptr<DashboardState> state_;
   int port_ = 0;
 };
+
+// The port of a `floorpose dashboard` started with --port 0, from its log line
+// "dashboard on http://HOST:PORT/"; 0 when it did not appear within the timeout.
+int DashboardPortFromLog(const std::string& log_path, std::chrono::milliseconds timeout);
 
 }  // namespace floorpose::tools

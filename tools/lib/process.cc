@@ -8,6 +8,9 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
 #include <thread>
 
 namespace floorpose::tools {
@@ -86,6 +89,36 @@ std::optional<int> ChildProcess::Stop(std::chrono::milliseconds timeout, bool te
     return std::nullopt;
   }
   return exit_code_;
+}
+
+ProcSample SampleProcess(pid_t pid) {
+  ProcSample s;
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  std::string key;
+  double kb = 0;
+  std::string line;
+  while (std::getline(status, line)) {
+    std::istringstream in(line);
+    if (!(in >> key >> kb)) continue;
+    if (key == "VmRSS:") s.rss_mb = kb / 1024.0;
+    if (key == "VmHWM:") s.hwm_mb = kb / 1024.0;
+  }
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+  const size_t paren = text.rfind(')');  // the command name may hold spaces
+  if (paren == std::string::npos) return s;
+  std::istringstream fields(text.substr(paren + 2));
+  std::string field;
+  double utime = 0, stime = 0;
+  for (int i = 3; fields >> field; ++i) {  // field 3 is the state
+    if (i == 14) utime = std::stod(field);
+    if (i == 15) {
+      stime = std::stod(field);
+      break;
+    }
+  }
+  s.cpu_s = (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
+  return s;
 }
 
 std::string FindFloorposed() {

@@ -41,6 +41,13 @@ class ChildProcess {
   std::chrono::milliseconds stop_time_{0};
 };
 
+// What /proc says of a process now.
+struct ProcSample {
+  double rss_mb = 0, hwm_mb = 0;  // VmRSS, VmHWM
+  double cpu_s = 0;               // utime + stime
+};
+ProcSample SampleProcess(pid_t pid);
+
 // floorposed beside this executable (build tree: ../daemon/floorposed) or $FLOORPOSED.
 std::string FindFloorposed();
 

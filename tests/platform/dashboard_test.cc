@@ -1,0 +1,261 @@
+// The dashboard's model (what each browser is sent) and its server over loopback DDS and
+// HTTP: trails, re-projected tracks, staleness, late and bad input.
+#include "tools/lib/dashboard.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "platform/dds.h"
+#include "platform/floor_plan_io.h"
+#include "tests/daemon_test_util.h"
+// clang-format off
+#include <httplib.h>  // after Eigen: glibc's <resolv.h> defines _res, a name in Eigen
+// clang-format on
+
+namespace floorpose::tools {
+namespace {
+
+using json = nlohmann::json;
+using Clock = DashboardState::Clock;
+using std::chrono::milliseconds;
+using std::chrono::seconds;
+
+v1::PlanPose Pose(double x, double y, int64_t stamp_ns,
+                  v1::Reliability::Flag flag = v1::Reliability::RELIABLE) {
+  v1::PlanPose p;
+  p.set_x(x);
+  p.set_y(y);
+  p.set_heading(0.5);
+  p.set_source_stamp_ns(stamp_ns);
+  p.mutable_reliability()->set_flag(flag);
+  p.mutable_reliability()->set_probability(0.9);
+  p.mutable_reliability()->set_reason("registered");
+  return p;
+}
+
+json FrameOf(const DashboardState& state, DashboardState::Cursor* cursor, Clock::time_point now) {
+  return json::parse(state.Frame(cursor, now));
+}
+
+const json* Device(const json& frame, const std::string& id) {
+  for (const json& d : frame["devices"])
+    if (d["id"] == id) return &d;
+  return nullptr;
+}
+
+TEST(DashboardStateTest, SendsTheWholePictureFirstThenOnlyWhatChanged) {
+  DashboardOptions o;
+  o.names["hl-a"] = "Alice";
+  DashboardState state(o);
+  const auto t0 = Clock::now();
+  for (int k = 0; k < 3; ++k) state.OnPlanPose("hl-a", Pose(k, 1.0, k * 300'000'000), t0);
+  v1::DaemonStatus status;
+  status.set_state(v1::DaemonStatus::TRACKING);
+  status.set_plan_id("office");
+  state.OnStatus("hl-b", status, t0);
+
+  DashboardState::Cursor browser;
+  const json first = FrameOf(state, &browser, t0);
+  ASSERT_EQ(first["devices"].size(), 2u);
+  const json& a = *Device(first, "hl-a");
+  EXPECT_EQ(a["name"], "Alice");
+  EXPECT_EQ(a["pose"]["x"], 2.0);
+  EXPECT_EQ(a["pose"]["flag"], "reliable");
+  EXPECT_EQ(a["trail"]["reset"], true);
+  EXPECT_EQ(a["trail"]["points"].size(), 3u);
+  const json& b = *Device(first, "hl-b");
+  EXPECT_EQ(b["name"], "hl-b");
+  EXPECT_EQ(b["plan"], "office");
+  EXPECT_EQ(b["state"], "TRACKING");
+  EXPECT_FALSE(b.contains("pose"));
+
+  // Nothing new: no device, but every device's age.
+  const json quiet = FrameOf(state, &browser, t0 + milliseconds(500));
+  EXPECT_TRUE(quiet["devices"].empty());
+  EXPECT_EQ(quiet["ages"]["hl-a"], 0.5);
+
+  // One new pose: that device alone, with the one new trail point.
+  state.OnPlanPose("hl-a", Pose(3, 1.0, 900'000'000, v1::Reliability::DEGRADED), t0);
+  const json next = FrameOf(state, &browser, t0);
+  ASSERT_EQ(next["devices"].size(), 1u);
+  EXPECT_EQ(next["devices"][0]["trail"]["reset"], false);
+  EXPECT_EQ(next["devices"][0]["trail"]["points"], json::parse(R"([[3.0, 1.0, "degraded"]])"));
+
+  // A second browser connecting now gets the whole trail.
+  DashboardState::Cursor late;
+  EXPECT_EQ((*Device(FrameOf(state, &late, t0), "hl-a"))["trail"]["points"].size(), 4u);
+}
+
+TEST(DashboardStateTest, ALatePoseIsHistoryAndABadOneIsDropped) {
+  DashboardState state({});
+  const auto t0 = Clock::now();
+  state.OnPlanPose("hl-a", Pose(5, 5, 2'000'000'000), t0);
+  state.OnPlanPose("hl-a", Pose(1, 1, 1'000'000'000), t0);  // older: not where the wearer is
+  state.OnPlanPose("hl-a", Pose(NAN, 1, 3'000'000'000), t0);
+  state.OnPlanPose("hl-a", Pose(1, INFINITY, 3'000'000'000), t0);
+  DashboardState::Cursor c;
+  const json f = FrameOf(state, &c, t0);
+  const json& a = *Device(f, "hl-a");
+  EXPECT_EQ(a["pose"]["x"], 5.0);
+  EXPECT_EQ(a["trail"]["points"].size(), 1u);
+}
+
+TEST(DashboardStateTest, ANewTrackReplacesTheTrailAndKeepsWhatCameAfterIt) {
+  DashboardState state({});
+  const auto t0 = Clock::now();
+  for (int k = 0; k < 5; ++k) state.OnPlanPose("hl-a", Pose(k, 0, k * 100), t0);
+  DashboardState::Cursor c;
+  FrameOf(state, &c, t0);
+  // The daemon re-projected poses 0..3 under a new alignment (shifted 1 m in y); pose 4
+  // came after the track.
+  v1::PlanTrack track;
+  for (int k = 0; k < 4; ++k) *track.add_poses() = Pose(k, 1, k * 100);
+  state.OnPlanTrack("hl-a", track, t0);
+  const json f = FrameOf(state, &c, t0);
+  const json& trail = (*Device(f, "hl-a"))["trail"];
+  EXPECT_EQ(trail["reset"], true);
+  ASSERT_EQ(trail["points"].size(), 5u);
+  EXPECT_EQ(trail["points"][0][1], 1.0);
+  EXPECT_EQ(trail["points"][3][1], 1.0);
+  EXPECT_EQ(trail["points"][4][1], 0.0);
+  // A pose the track already holds is not added twice.
+  state.OnPlanPose("hl-a", Pose(3, 1, 300), t0);
+  EXPECT_FALSE((*Device(FrameOf(state, &c, t0), "hl-a")).contains("trail"));
+}
+
+TEST(DashboardStateTest, TheTrailKeepsItsLatestPointsAndABrowserThatFellBehindStartsOver) {
+  DashboardOptions o;
+  o.trail_points = 10;
+  DashboardState state(o);
+  const auto t0 = Clock::now();
+  DashboardState::Cursor c;
+  for (int k = 0; k < 8; ++k) state.OnPlanPose("hl-a", Pose(k, 0, k), t0);
+  FrameOf(state, &c, t0);
+  for (int k = 8; k < 12; ++k) state.OnPlanPose("hl-a", Pose(k, 0, k), t0);
+  const json more = (*Device(FrameOf(state, &c, t0), "hl-a"))["trail"];
+  EXPECT_EQ(more["reset"], false);
+  EXPECT_EQ(more["points"].size(), 4u);
+  for (int k = 12; k < 40; ++k) state.OnPlanPose("hl-a", Pose(k, 0, k), t0);
+  const json behind = (*Device(FrameOf(state, &c, t0), "hl-a"))["trail"];
+  EXPECT_EQ(behind["reset"], true);
+  ASSERT_EQ(behind["points"].size(), 10u);
+  EXPECT_EQ(behind["points"][0][0], 30.0);
+}
+
+TEST(DashboardStateTest, AWearerWithoutPosesGoesStaleEvenWhileItsDaemonReports) {
+  DashboardOptions o;
+  o.stale_after_s = 2;
+  DashboardState state(o);
+  const auto t0 = Clock::now();
+  state.OnPlanPose("hl-a", Pose(1, 1, 1), t0);
+  state.OnPlanPose("hl-b", Pose(2, 2, 1), t0);
+  v1::DaemonStatus status;
+  state.OnStatus("hl-a", status, t0 + seconds(3));  // the daemon is up, the headset quiet
+  state.OnPlanPose("hl-b", Pose(2, 2, 2), t0 + seconds(3));
+  state.OnStatus("hl-c", status, t0);  // never a pose: counted from its last message
+  DashboardState::Cursor c;
+  const json f = FrameOf(state, &c, t0 + seconds(3));
+  EXPECT_EQ(f["stale"], json::parse(R"(["hl-a", "hl-c"])"));
+  EXPECT_EQ(f["ages"]["hl-a"], 3.0);
+  EXPECT_EQ(f["ages"]["hl-b"], 0.0);
+}
+
+TEST(DashboardStateTest, BadDeviceIdsAndTooManyDevicesNeitherThrowNorGrowWithoutBound) {
+  DashboardOptions o;
+  o.max_devices = 3;
+  DashboardState state(o);
+  const auto t0 = Clock::now();
+  state.OnPlanPose(std::string("hl-\xff\xfe", 5), Pose(1, 1, 1), t0);  // not UTF-8
+  for (int k = 0; k < 10; ++k) state.OnPlanPose("hl-" + std::to_string(k), Pose(k, 1, 1), t0);
+  EXPECT_EQ(state.devices(), 3u);
+  DashboardState::Cursor c;
+  const json f = FrameOf(state, &c, t0);
+  EXPECT_EQ(f["devices"].size(), 3u);
+}
+
+TEST(DashboardPlansTest, ListsEveryPlanWithItsBoundsAndWalls) {
+  const FloorPlanParse plan = platform::ParseGeoJsonFloorPlan(
+      R"({"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {},
+          "geometry": {"type": "LineString", "coordinates": [[0, 0], [4, 0], [4, 3]]}}]})",
+      "lab");
+  ASSERT_TRUE(plan.ok()) << plan.error;
+  const json plans = json::parse(PlansJson({plan.plan}));
+  ASSERT_EQ(plans["plans"].size(), 1u);
+  EXPECT_EQ(plans["plans"][0]["id"], "lab");
+  EXPECT_EQ(plans["plans"][0]["max"], json::parse("[4.0, 3.0]"));
+  EXPECT_EQ(plans["plans"][0]["walls"].size(), 2u);
+}
+
+// The server: DDS in, HTTP out, on loopback.
+TEST(DashboardServerTest, ServesThePageThePlansAndTheEventStreamOfWhatDdsCarries) {
+  DashboardServerOptions o;
+  o.domain_id = testing::UniqueDomain();
+  o.cyclone_config = platform::LoopbackCycloneConfig();
+  o.host = "127.0.0.1";
+  o.port = 0;
+  const FloorPlanParse plan = platform::ParseGeoJsonFloorPlan(
+      R"({"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {},
+          "geometry": {"type": "LineString", "coordinates": [[0, 0], [4, 0]]}}]})",
+      "lab");
+  Dashboard dashboard(o, {plan.plan});
+  std::thread server([&] { dashboard.Serve(); });
+
+  platform::Participant daemon(o.domain_id, o.cyclone_config);
+  platform::Writer poses(daemon, platform::Topic::kPlanPose);
+  const auto deadline = Clock::now() + seconds(10);
+  while (poses.MatchedReaders() == 0 && Clock::now() < deadline)
+    std::this_thread::sleep_for(milliseconds(20));
+  ASSERT_GT(poses.MatchedReaders(), 0);
+  platform::Envelope e{"hl-a", poses.NextSeq(), 1, Pose(1.5, 2.5, 1).SerializeAsString(), 0};
+  ASSERT_TRUE(poses.Write(e));
+  platform::Envelope junk{"hl-junk", poses.NextSeq(), 2, "\xff\xff\xff not protobuf", 0};
+  ASSERT_TRUE(poses.Write(junk));
+
+  httplib::Client http("127.0.0.1", dashboard.port());
+  json devices;
+  for (int i = 0; i < 100; ++i) {
+    auto r = http.Get("/api/devices");
+    ASSERT_TRUE(r);
+    devices = json::parse(r->body);
+    if (!devices["devices"].empty()) break;
+    std::this_thread::sleep_for(milliseconds(50));
+  }
+  ASSERT_EQ(devices["devices"].size(), 1u) << devices.dump();  // the junk made no device
+  EXPECT_EQ(devices["devices"][0]["pose"]["y"], 2.5);
+
+  auto page = http.Get("/");
+  ASSERT_TRUE(page);
+  EXPECT_EQ(page->status, 200);
+  EXPECT_NE(page->body.find("/dashboard.js"), std::string::npos);
+  EXPECT_EQ(page->get_header_value("Content-Type"), "text/html; charset=utf-8");
+  for (const char* asset : {"/dashboard.js", "/dashboard.css"}) {
+    auto r = http.Get(asset);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200) << asset;
+    EXPECT_GT(r->body.size(), 100u) << asset;
+  }
+  auto plans = http.Get("/api/plans");
+  ASSERT_TRUE(plans);
+  EXPECT_EQ(json::parse(plans->body)["plans"][0]["id"], "lab");
+  EXPECT_EQ(http.Get("/nothing-here")->status, 404);
+
+  // The event stream: the whole picture first.
+  std::string stream;
+  auto events = http.Get("/events", [&](const char* data, size_t n) {
+    stream.append(data, n);
+    return stream.find("\n\n") == std::string::npos;
+  });
+  ASSERT_EQ(stream.rfind("data: ", 0), 0u) << stream;
+  const json first = json::parse(stream.substr(6, stream.find("\n\n") - 6));
+  ASSERT_EQ(first["devices"].size(), 1u);
+  EXPECT_EQ(first["devices"][0]["id"], "hl-a");
+
+  dashboard.Stop();
+  server.join();
+}
+
+}  // namespace
+}  // namespace floorpose::tools

@@ -1,0 +1,272 @@
+// `floorpose bench dashboard`: does the dashboard keep up with a team?
+//
+// Starts a real `floorpose dashboard` on a private loopback DDS domain, publishes the plan
+// poses and statuses of N simulated wearers (as N daemons would) at R Hz each, and reads
+// the event stream as B browsers would. Each PlanPose carries, as its source stamp, the
+// CLOCK_REALTIME at which the bench wrote it, so a browser's receipt of it in the stream
+// gives the latency through DDS, the dashboard and HTTP. Reports that latency, the poses
+// that reached every browser's trails, whether every browser ends with every wearer's
+// last pose, and the dashboard's CPU and memory.
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/random.h"
+#include "platform/clock.h"
+#include "platform/dds.h"
+#include "platform/floor_plan_io.h"
+#include "tools/floorpose/commands.h"
+#include "tools/lib/dashboard.h"
+#include "tools/lib/evaluation.h"
+#include "tools/lib/process.h"
+// clang-format off
+#include <httplib.h>  // after Eigen: glibc's <resolv.h> defines _res, a name in Eigen
+// clang-format on
+
+namespace floorpose::tools {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+using platform::Topic;
+using Clock = std::chrono::steady_clock;
+
+struct BenchDashboardOptions {
+  std::string plan;  // empty: the bundled office
+  int devices = 20;
+  double rate_hz = 3.0;
+  double seconds = 30.0;
+  int browsers = 3;
+  int domain = -1;
+  bool json = false;
+};
+
+// One browser: reads /events, keeps what each wearer's trail and pose became.
+struct BrowserStats {
+  std::vector<double> latency_ms;        // of each pose that was a device's latest in a frame
+  std::map<std::string, size_t> points;  // trail points received, per device
+  std::map<std::string, int64_t> last_stamp;
+  size_t frames = 0, bytes = 0, resets = 0;
+  bool connected = false;
+};
+
+void ReadEvents(int port, const std::atomic<bool>& stop, BrowserStats* stats, std::mutex* mu) {
+  httplib::Client http("127.0.0.1", port);
+  http.set_read_timeout(5, 0);
+  std::string buffer;
+  http.Get("/events", [&](const char* data, size_t n) {
+    const int64_t now = platform::WallClockNs();
+    buffer.append(data, n);
+    std::lock_guard lock(*mu);
+    stats->connected = true;
+    stats->bytes += n;
+    for (size_t end; (end = buffer.find("\n\n")) != std::string::npos; buffer.erase(0, end + 2)) {
+      if (buffer.rfind("data: ", 0) != 0) continue;
+      const json frame = json::parse(buffer.substr(6, end - 6), nullptr, false);
+      if (frame.is_discarded()) continue;
+      ++stats->frames;
+      for (const json& d : frame["devices"]) {
+        const std::string id = d["id"];
+        if (d.contains("trail")) {
+          if (d["trail"]["reset"].get<bool>()) {
+            ++stats->resets;
+            stats->points[id] = 0;
+          }
+          stats->points[id] += d["trail"]["points"].size();
+        }
+        if (d.contains("pose")) {
+          const int64_t stamp = d["pose"]["stamp_ns"];
+          if (stamp > stats->last_stamp[id]) stats->latency_ms.push_back((now - stamp) * 1e-6);
+          stats->last_stamp[id] = std::max(stats->last_stamp[id], stamp);
+        }
+      }
+    }
+    return !stop;
+  });
+}
+
+int RunBenchDashboard(const BenchDashboardOptions& o) {
+  const std::string plan_path = o.plan.empty() ? DefaultDemoDir() + "/office.geojson" : o.plan;
+  const FloorPlanParse plan = platform::LoadFloorPlan(plan_path);
+  if (!plan.ok()) {
+    spdlog::error("{}: {}", plan_path, plan.error);
+    return 1;
+  }
+  const uint32_t domain =
+      o.domain >= 0 ? static_cast<uint32_t>(o.domain) : 171 + static_cast<uint32_t>(getpid() % 30);
+  const fs::path log = fs::temp_directory_path() /
+                       ("floorpose-bench-dashboard-" + std::to_string(getpid()) + ".log");
+  std::error_code ec;
+  const std::string self = fs::read_symlink("/proc/self/exe", ec).string();
+  ChildProcess dashboard({self, "dashboard", "--plan", plan_path, "--host", "127.0.0.1", "--port",
+                          "0", "--domain", std::to_string(domain), "--loopback"},
+                         log.string());
+  const int port = DashboardPortFromLog(log.string(), std::chrono::seconds(15));
+  if (port == 0) {
+    spdlog::error("floorpose dashboard did not come up; see {}", log.string());
+    return 1;
+  }
+
+  platform::Participant participant(domain, platform::LoopbackCycloneConfig());
+  platform::Writer poses(participant, Topic::kPlanPose);
+  platform::Writer statuses(participant, Topic::kStatus);
+  for (auto end = Clock::now() + std::chrono::seconds(10);
+       poses.MatchedReaders() == 0 && Clock::now() < end;)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+
+  std::atomic<bool> stop{false};
+  std::mutex mu;
+  std::vector<BrowserStats> browsers(static_cast<size_t>(o.browsers));
+  std::vector<std::thread> readers;
+  for (BrowserStats& b : browsers) readers.emplace_back(ReadEvents, port, std::cref(stop), &b, &mu);
+  for (auto end = Clock::now() + std::chrono::seconds(5); Clock::now() < end;) {
+    std::lock_guard lock(mu);
+    if (std::all_of(browsers.begin(), browsers.end(), [](auto& b) { return b.connected; })) break;
+  }
+
+  // Each wearer walks a circle of 2 m about a point of the plan, at 1 m/s.
+  SplitMix64 rng(7);
+  struct Wearer {
+    std::string id;
+    Eigen::Vector2d centre;
+    double phase;
+  };
+  std::vector<Wearer> wearers;
+  for (int k = 0; k < o.devices; ++k)
+    wearers.push_back({"hl-" + std::to_string(k),
+                       {rng.Uniform(plan.plan.min.x(), plan.plan.max.x()),
+                        rng.Uniform(plan.plan.min.y(), plan.plan.max.y())},
+                       rng.Uniform(0, 2 * M_PI)});
+  const ProcSample before = SampleProcess(dashboard.pid());
+  const auto start = Clock::now();
+  const auto period = std::chrono::duration<double>(1.0 / (o.rate_hz * o.devices));
+  size_t sent = 0, failed = 0;
+  std::map<std::string, int64_t> last_sent;
+  double peak_rss = 0;
+  for (size_t tick = 0;; ++tick) {
+    const auto at = start + std::chrono::duration_cast<Clock::duration>(period * tick);
+    if (at - start > std::chrono::duration<double>(o.seconds)) break;
+    std::this_thread::sleep_until(at);
+    Wearer& w = wearers[tick % wearers.size()];
+    const double t = std::chrono::duration<double>(Clock::now() - start).count();
+    const double a = w.phase + t / 2.0;
+    v1::PlanPose p;
+    p.set_x(w.centre.x() + 2 * std::cos(a));
+    p.set_y(w.centre.y() + 2 * std::sin(a));
+    p.set_heading(a + M_PI / 2);
+    p.set_source_stamp_ns(platform::WallClockNs());
+    p.set_alignment_version(1);
+    p.mutable_reliability()->set_flag(v1::Reliability::RELIABLE);
+    p.mutable_reliability()->set_probability(0.97);
+    p.mutable_reliability()->set_reason("registered");
+    const platform::Envelope e{w.id, poses.NextSeq(), p.source_stamp_ns(), p.SerializeAsString(),
+                               0};
+    if (poses.Write(e)) {
+      ++sent;
+      last_sent[w.id] = p.source_stamp_ns();
+    } else {
+      ++failed;
+    }
+    if (tick % static_cast<size_t>(std::max(1.0, o.rate_hz)) == 0) {  // about 1 Hz a wearer
+      v1::DaemonStatus s;
+      s.set_state(v1::DaemonStatus::TRACKING);
+      s.set_plan_id(plan.plan.id);
+      statuses.Write({w.id, statuses.NextSeq(), p.source_stamp_ns(), s.SerializeAsString(), 0});
+    }
+    if (tick % 100 == 0) peak_rss = std::max(peak_rss, SampleProcess(dashboard.pid()).rss_mb);
+  }
+  const double walk_s = std::chrono::duration<double>(Clock::now() - start).count();
+  const ProcSample after = SampleProcess(dashboard.pid());
+  std::this_thread::sleep_for(std::chrono::seconds(1));  // the last frames
+  stop = true;
+  for (auto& r : readers) r.join();
+  dashboard.Terminate(std::chrono::seconds(5));
+  fs::remove(log, ec);
+
+  std::vector<double> latency;
+  size_t shown = 0, up_to_date = 0, frames = 0, bytes = 0;
+  for (const BrowserStats& b : browsers) {
+    latency.insert(latency.end(), b.latency_ms.begin(), b.latency_ms.end());
+    for (const auto& [id, n] : b.points) shown += n;
+    for (const auto& [id, stamp] : last_sent)
+      up_to_date += b.last_stamp.count(id) && b.last_stamp.at(id) == stamp;
+    frames += b.frames;
+    bytes += b.bytes;
+  }
+  const double cpu_percent = 100.0 * (after.cpu_s - before.cpu_s) / walk_s;
+  const size_t expected = sent * browsers.size();
+  if (o.json) {
+    std::printf("%s\n", json{{"devices", o.devices},
+                             {"rate_hz", o.rate_hz},
+                             {"browsers", o.browsers},
+                             {"seconds", walk_s},
+                             {"poses_sent", sent},
+                             {"poses_failed", failed},
+                             {"trail_points_expected", expected},
+                             {"trail_points_shown", shown},
+                             {"browsers_up_to_date", up_to_date},
+                             {"wearers_x_browsers", last_sent.size() * browsers.size()},
+                             {"latency_ms_p50", Percentile(latency, 0.5)},
+                             {"latency_ms_p99", Percentile(latency, 0.99)},
+                             {"latency_ms_max", Percentile(latency, 1.0)},
+                             {"frames_per_s_per_browser", frames / walk_s / o.browsers},
+                             {"kb_per_s_per_browser", bytes / 1024.0 / walk_s / o.browsers},
+                             {"cpu_percent", cpu_percent},
+                             {"rss_mb_peak", std::max(peak_rss, after.rss_mb)}}
+                            .dump()
+                            .c_str());
+  } else {
+    std::printf("%d wearers at %.1f Hz for %.0f s, %d browsers\n", o.devices, o.rate_hz, walk_s,
+                o.browsers);
+    std::printf("  poses sent %zu (failed %zu); trail points shown %zu of %zu\n", sent, failed,
+                shown, expected);
+    std::printf("  browsers ending on every wearer's last pose: %zu of %zu\n", up_to_date,
+                last_sent.size() * browsers.size());
+    std::printf("  latency DDS -> dashboard -> browser: p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
+                Percentile(latency, 0.5), Percentile(latency, 0.99), Percentile(latency, 1.0));
+    std::printf("  per browser: %.1f frames/s, %.1f kB/s\n", frames / walk_s / o.browsers,
+                bytes / 1024.0 / walk_s / o.browsers);
+    std::printf("  dashboard: cpu %.1f%% of one core, rss %.1f MB (peak)\n", cpu_percent,
+                std::max(peak_rss, after.rss_mb));
+  }
+  return shown == expected && up_to_date == last_sent.size() * browsers.size() ? 0 : 1;
+}
+
+}  // namespace
+
+Run AddBenchDashboardCommand(CLI::App& bench) {
+  auto o = std::make_shared<BenchDashboardOptions>();
+  CLI::App* app = bench.add_subcommand(
+      "dashboard",
+      "a real floorpose dashboard fed N wearers' plan poses over loopback DDS and read by B "
+      "browsers: latency, poses shown, CPU, memory");
+  app->add_option("--plan", o->plan, "floor plan (default: the bundled office)");
+  app->add_option("--devices", o->devices, "wearers")
+      ->check(CLI::Range(1, 200))
+      ->capture_default_str();
+  app->add_option("--rate", o->rate_hz, "plan poses a second per wearer")
+      ->check(CLI::Range(0.1, 100.0))
+      ->capture_default_str();
+  app->add_option("--seconds", o->seconds, "how long")
+      ->check(CLI::Range(1.0, 3600.0))
+      ->capture_default_str();
+  app->add_option("--browsers", o->browsers, "event streams read at once")
+      ->check(CLI::Range(1, 32))
+      ->capture_default_str();
+  app->add_option("--domain", o->domain, "DDS domain id (default: 171-200, from the process id)");
+  app->add_flag("--json", o->json, "print one JSON object");
+  return [o] { return RunBenchDashboard(*o); };
+}
+
+}  // namespace floorpose::tools
