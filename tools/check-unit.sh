@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Verifies systemd/floorposed.service and checks its systemd exposure score (<= 2.0).
+# Verifies a systemd unit (floorposed.service, floorpose-dashboard.service) and checks
+# its systemd exposure score (<= 2.0).
 #
 #   tools/check-unit.sh [UNIT]     (default: systemd/floorposed.service)
 #

@@ -90,8 +90,10 @@ function drawWearers() {
     const dot = element(g, 'circle', 'dot');
     dot.setAttribute('r', 8);
     const label = element(g, 'text');
-    label.setAttribute('x', 12);
+    const leftOfDot = x > p.w - 120;  // near the right edge the name goes on the left
+    label.setAttribute('x', leftOfDot ? -12 : 12);
     label.setAttribute('y', -12);
+    if (leftOfDot) label.setAttribute('text-anchor', 'end');
     label.textContent = d.info.name;
   }
 }
