@@ -54,6 +54,26 @@ v1::ExploredMap ToProto(const ExploredMap& map, const std::string& plan_id,
   return out;
 }
 
+std::string UnpackExploredCells(const v1::ExploredMap& msg, std::vector<int8_t>* cells) {
+  if (!(msg.log_odds_scale() > 0) || !std::isfinite(msg.log_odds_scale()))
+    return "explored map without a log-odds scale";
+  const uint64_t n = uint64_t{msg.width()} * msg.height();
+  if (n == 0 || n > kMaxExploredCells)
+    return "explored map of " + std::to_string(msg.width()) + " x " + std::to_string(msg.height()) +
+           " cells (at most " + std::to_string(kMaxExploredCells) + ")";
+  cells->assign(n, 0);
+  uLongf size = static_cast<uLongf>(n);
+  const int z = uncompress(reinterpret_cast<Bytef*>(cells->data()), &size,
+                           reinterpret_cast<const Bytef*>(msg.log_odds_zlib().data()),
+                           static_cast<uLong>(msg.log_odds_zlib().size()));
+  if (z != Z_OK || size != n) {
+    cells->clear();
+    return "explored map cells do not unpack to " + std::to_string(n) + " bytes (zlib " +
+           std::to_string(z) + ")";
+  }
+  return {};
+}
+
 std::string FromProto(const v1::ExploredMap& msg, ExploredMap* map) {
   const GridGeometry& g = map->grid();
   if (msg.width() != static_cast<uint32_t>(g.nx) || msg.height() != static_cast<uint32_t>(g.ny) ||
@@ -63,16 +83,8 @@ std::string FromProto(const v1::ExploredMap& msg, ExploredMap* map) {
            std::to_string(msg.height()) + " cells of " + std::to_string(msg.cell_m()) +
            " m; expected " + std::to_string(g.nx) + " x " + std::to_string(g.ny) + " of " +
            std::to_string(g.cell_m) + " m)";
-  if (!(msg.log_odds_scale() > 0) || !std::isfinite(msg.log_odds_scale()))
-    return "explored map without a log-odds scale";
-  std::vector<int8_t> cells(g.size());
-  uLongf size = static_cast<uLongf>(cells.size());
-  const int z = uncompress(reinterpret_cast<Bytef*>(cells.data()), &size,
-                           reinterpret_cast<const Bytef*>(msg.log_odds_zlib().data()),
-                           static_cast<uLong>(msg.log_odds_zlib().size()));
-  if (z != Z_OK || size != cells.size())
-    return "explored map cells do not unpack to " + std::to_string(cells.size()) + " bytes (zlib " +
-           std::to_string(z) + ")";
+  std::vector<int8_t> cells;
+  if (std::string error = UnpackExploredCells(msg, &cells); !error.empty()) return error;
   std::map<int, int> visits;
   const int rooms = map->rooms() ? static_cast<int>(map->rooms()->rooms().size()) : 0;
   for (const auto& r : msg.visited()) {

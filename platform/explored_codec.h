@@ -1,7 +1,9 @@
 // The explored map on the wire (v1::ExploredMap): int8 log-odds, zlib-compressed.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "core/explored_map.h"
 #include "floorpose/v1/floorpose.pb.h"
@@ -18,5 +20,11 @@ v1::ExploredMap ToProto(const ExploredMap& map, const std::string& plan_id,
 // and room visits replace the map's. The error says what does not fit (another grid,
 // a corrupt or truncated payload); then the map is unchanged.
 std::string FromProto(const v1::ExploredMap& msg, ExploredMap* map);
+
+// The message's cells as sent: width * height signed bytes (log-odds times
+// log_odds_scale), row by row from origin_y upwards. The error says what is wrong (no
+// scale, a grid over kMaxExploredCells, a corrupt or truncated payload).
+inline constexpr uint64_t kMaxExploredCells = uint64_t{1} << 26;
+std::string UnpackExploredCells(const v1::ExploredMap& msg, std::vector<int8_t>* cells);
 
 }  // namespace floorpose::platform

@@ -1,7 +1,8 @@
 // The dashboard end to end (label browser): two wearers walk through the room, each with
 // a floorposed of its own on one loopback DDS domain; `floorpose dashboard` serves the
 // page to Debian's headless Chromium, driven over WebDriver. The page must show both
-// where their daemons put them, to the pixel, and grey the one that stopped.
+// where their daemons put them, to the pixel, grey the one that stopped, and tint what
+// the team explored.
 #include <gtest/gtest.h>
 #include <png.h>
 
@@ -204,6 +205,18 @@ TEST_F(DashboardBrowserTest, ShowsBothWearersWhereTheirDaemonsPutThemAndGreysThe
       darkest = std::min(darkest, std::max({c.r, c.g, c.b}));
     }
   EXPECT_LT(darkest, 90) << "no wall drawn where the inner wall is";
+  // The team's explored map tints the room where the two walked and looked.
+  const Eigen::Vector2d south_west = screen(0, 0) * dpr, north_east = screen(10, 6) * dpr;
+  size_t tinted = 0, pixels = 0;
+  for (int y = static_cast<int>(north_east.y()) + 4; y < static_cast<int>(south_west.y()) - 4; ++y)
+    for (int x = static_cast<int>(south_west.x()) + 4; x < static_cast<int>(north_east.x()) - 4;
+         ++x) {
+      const Rgba c = image.At(x, y);
+      tinted += c.b - c.r > 25;
+      ++pixels;
+    }
+  EXPECT_GT(static_cast<double>(tinted) / static_cast<double>(pixels), 0.2)
+      << tinted << " of " << pixels << " pixels of the room tinted as explored";
 
   browser.reset();
   EXPECT_EQ(dashboard.Terminate(seconds(5)), 0) << "see " << dashboard_log;

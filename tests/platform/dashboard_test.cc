@@ -3,6 +3,8 @@
 #include "tools/lib/dashboard.h"
 
 #include <gtest/gtest.h>
+#include <png.h>
+#include <zlib.h>
 
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -174,6 +176,81 @@ TEST(DashboardStateTest, BadDeviceIdsAndTooManyDevicesNeitherThrowNorGrowWithout
   DashboardState::Cursor c;
   const json f = FrameOf(state, &c, t0);
   EXPECT_EQ(f["devices"].size(), 3u);
+}
+
+// A grid of width x 2 cells on plan `plan`, the bytes as given, zlib-packed.
+v1::ExploredMap Explored(const std::string& plan, std::vector<int8_t> cells, uint32_t width = 4,
+                         double origin_x = -1.0) {
+  v1::ExploredMap m;
+  m.set_plan_id(plan);
+  m.set_origin_x(origin_x);
+  m.set_origin_y(-1.0);
+  m.set_cell_m(0.5);
+  m.set_width(width);
+  m.set_height(static_cast<uint32_t>(cells.size()) / width);
+  m.set_log_odds_scale(32);
+  uLongf size = compressBound(static_cast<uLong>(cells.size()));
+  std::string packed(size, '\0');
+  compress2(reinterpret_cast<Bytef*>(packed.data()), &size,
+            reinterpret_cast<const Bytef*>(cells.data()), static_cast<uLong>(cells.size()), 1);
+  packed.resize(size);
+  m.set_log_odds_zlib(packed);
+  return m;
+}
+
+TEST(DashboardExploredTest, TheTeamsMapIsEveryWearersGridSummedNorthUp) {
+  DashboardState state({});
+  const auto t0 = Clock::now();
+  std::string error;
+  // Row 0 is the southern row (y from origin_y upwards).
+  v1::ExploredMap a = Explored("lab", {-64, -64, 0, 0, 0, 0, 0, 64});
+  auto* room = a.add_visited();
+  room->set_id(2);
+  room->set_x(1.5);
+  room->set_y(0.25);
+  ASSERT_TRUE(state.OnExplored("hl-a", a, t0, &error)) << error;
+  v1::ExploredMap b = Explored("lab", {0, 0, -64, 0, 0, 0, 0, 0});
+  *b.add_visited() = *room;
+  ASSERT_TRUE(state.OnExplored("hl-b", b, t0, &error)) << error;
+  // Another grid of the same plan (another cell layout) is left out, not mixed in.
+  ASSERT_TRUE(state.OnExplored("hl-z", Explored("lab", {-64, -64, -64, -64, -64, -64}, 3, 7.0), t0,
+                               &error));
+  // A corrupt one is refused with the reason.
+  v1::ExploredMap corrupt = Explored("lab", {0, 0, 0, 0, 0, 0, 0, 0});
+  corrupt.set_log_odds_zlib("not zlib");
+  EXPECT_FALSE(state.OnExplored("hl-c", corrupt, t0, &error));
+  EXPECT_NE(error.find("do not unpack"), std::string::npos) << error;
+
+  const std::string png = state.ExploredPng("lab");
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  ASSERT_TRUE(png_image_begin_read_from_memory(&image, png.data(), png.size()));
+  image.format = PNG_FORMAT_RGBA;
+  std::vector<unsigned char> px(PNG_IMAGE_SIZE(image));
+  ASSERT_TRUE(png_image_finish_read(&image, nullptr, px.data(), 0, nullptr));
+  ASSERT_EQ(image.width, 4u);
+  ASSERT_EQ(image.height, 2u);
+  auto alpha = [&](int x, int row_from_top) { return px[(row_from_top * 4 + x) * 4 + 3]; };
+  auto blue = [&](int x, int row_from_top) { return px[(row_from_top * 4 + x) * 4 + 2]; };
+  // Southern row (the image's bottom): free from Alice, free from Bob, unknown.
+  EXPECT_GT(alpha(0, 1), 0);
+  EXPECT_EQ(blue(0, 1), 244);
+  EXPECT_GT(alpha(2, 1), 0);
+  EXPECT_EQ(alpha(3, 1), 0);
+  // Northern row: Alice saw a wall in its last cell.
+  EXPECT_EQ(blue(3, 0), 160);
+  EXPECT_GT(alpha(3, 0), alpha(0, 1));
+  EXPECT_EQ(alpha(0, 0), 0);
+  EXPECT_TRUE(state.ExploredPng("another-plan").empty());
+
+  DashboardState::Cursor c;
+  const json f = FrameOf(state, &c, t0);
+  const json& lab = f["explored"]["lab"];
+  EXPECT_EQ(lab["devices"], 2);
+  EXPECT_EQ(lab["width"], 4);
+  EXPECT_EQ(lab["origin"], json::parse("[-1.0, -1.0]"));
+  EXPECT_EQ(lab["visited"], json::parse("[[1.5, 0.25]]"));    // one room, entered by both
+  EXPECT_FALSE(FrameOf(state, &c, t0).contains("explored"));  // sent once until it changes
 }
 
 TEST(DashboardPlansTest, ListsEveryPlanWithItsBoundsAndWalls) {

@@ -8,6 +8,7 @@ const SVG = 'http://www.w3.org/2000/svg';
 
 const plans = new Map();   // id -> {id, min, max, walls}
 const devices = new Map(); // id -> {info, trail: [[x, y, flag]], age, stale}
+const explored = new Map(); // plan id -> {info, image}: the team's explored map
 let planId = null;         // the plan on screen
 let choseByHand = false;
 let drawQueued = false;
@@ -37,6 +38,14 @@ function drawPlan() {
   ctx.clearRect(0, 0, map.clientWidth, map.clientHeight);
   if (!plan) return;
   const p = projection(plan);
+  // Under the walls, the team's explored map (one pixel a cell) and its visited rooms.
+  const team = explored.get(planId);
+  if (team && team.image && team.image.complete && team.image.naturalWidth) {
+    const e = team.info, size = p.s * e.cell_m;
+    ctx.imageSmoothingEnabled = false;
+    ctx.drawImage(team.image, p.px(e.origin[0]), p.py(e.origin[1] + e.height * e.cell_m),
+                  e.width * size, e.height * size);
+  }
   ctx.strokeStyle = getComputedStyle(document.documentElement).getPropertyValue('--wall');
   ctx.lineWidth = Math.max(1.5, Math.min(4, p.s * 0.08));
   ctx.lineCap = 'round';
@@ -46,6 +55,12 @@ function drawPlan() {
     ctx.lineTo(p.px(bx), p.py(by));
   }
   ctx.stroke();
+  if (team) {
+    ctx.fillStyle = '#1946a0';
+    ctx.font = '12px system-ui, sans-serif';
+    ctx.textAlign = 'center';
+    for (const [x, y] of team.info.visited) ctx.fillText('\u2713 visited', p.px(x), p.py(y));
+  }
 }
 
 function element(parent, tag, cls) {
@@ -169,6 +184,15 @@ function apply(frame) {
     delete info.trail;
     d.info = info;
     devices.set(info.id, d);
+  }
+  for (const [id, info] of Object.entries(frame.explored || {})) {
+    const image = new Image();
+    image.onload = () => {
+      explored.set(id, {info, image});
+      if (id === planId) drawPlan();
+    };
+    image.src = `/api/explored/${encodeURIComponent(id)}.png?v=${info.version}`;
+    if (!explored.has(id)) explored.set(id, {info, image: null});
   }
   const stale = new Set(frame.stale);
   for (const [id, d] of devices) {

@@ -1,6 +1,7 @@
 #include "tools/lib/dashboard.h"
 
 #include <httplib.h>
+#include <png.h>
 #include <spdlog/spdlog.h>
 
 #include <cmath>
@@ -8,9 +9,11 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <regex>
+#include <set>
 #include <stdexcept>
 
 #include "platform/dds.h"
+#include "platform/explored_codec.h"
 
 namespace floorpose::tools {
 
@@ -131,6 +134,89 @@ void DashboardState::OnStatus(const std::string& device, const v1::DaemonStatus&
   changed_.notify_all();
 }
 
+bool DashboardState::OnExplored(const std::string& device, const v1::ExploredMap& map,
+                                Clock::time_point now, std::string* error) {
+  std::vector<int8_t> cells;
+  *error = platform::UnpackExploredCells(map, &cells);
+  if (!error->empty()) return false;
+  if (!std::isfinite(map.origin_x()) || !std::isfinite(map.origin_y()) || !(map.cell_m() > 0) ||
+      !std::isfinite(map.cell_m())) {
+    *error = "explored map with a non-finite origin or cell size";
+    return false;
+  }
+  {
+    std::lock_guard lock(mu_);
+    Device* d = Touch(device, now);
+    if (!d) return true;
+    d->explored = map;
+    d->explored->clear_log_odds_zlib();
+    d->explored_cells = std::move(cells);
+    ++explored_version_;
+  }
+  changed_.notify_all();
+  return true;
+}
+
+std::vector<const DashboardState::Device*> DashboardState::ExploredOf(
+    const std::string& plan_id) const {
+  std::vector<const Device*> out;
+  for (const auto& [id, d] : devices_) {
+    if (!d.explored || d.explored->plan_id() != plan_id) continue;
+    const v1::ExploredMap& first = out.empty() ? *d.explored : *out.front()->explored;
+    if (d.explored->width() == first.width() && d.explored->height() == first.height() &&
+        std::abs(d.explored->cell_m() - first.cell_m()) < 1e-9 &&
+        std::abs(d.explored->origin_x() - first.origin_x()) < 1e-6 &&
+        std::abs(d.explored->origin_y() - first.origin_y()) < 1e-6)
+      out.push_back(&d);
+  }
+  return out;
+}
+
+std::string DashboardState::ExploredPng(const std::string& plan_id) const {
+  std::lock_guard lock(mu_);
+  auto cached = png_cache_.find(plan_id);
+  if (cached != png_cache_.end() && cached->second.first == explored_version_)
+    return cached->second.second;
+  const std::vector<const Device*> maps = ExploredOf(plan_id);
+  if (maps.empty()) return {};
+  const v1::ExploredMap& g = *maps.front()->explored;
+  const size_t n = maps.front()->explored_cells.size();
+  std::vector<int> sum(n, 0);
+  for (const Device* d : maps)
+    for (size_t i = 0; i < n; ++i) sum[i] += d->explored_cells[i];
+  // RGBA, rows as the grid has them (from origin_y upwards): written bottom-up below.
+  std::vector<unsigned char> rgba(n * 4, 0);
+  for (size_t i = 0; i < n; ++i) {
+    if (sum[i] == 0) continue;
+    const double strength = std::min(1.0, std::abs(sum[i]) / 64.0);
+    unsigned char* px = &rgba[i * 4];
+    if (sum[i] < 0) {  // free: seen through
+      px[0] = 66, px[1] = 133, px[2] = 244;
+      px[3] = static_cast<unsigned char>(20 + 60 * strength);
+    } else {  // a wall the headset saw
+      px[0] = 25, px[1] = 70, px[2] = 160;
+      px[3] = static_cast<unsigned char>(60 + 120 * strength);
+    }
+  }
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  image.width = g.width();
+  image.height = g.height();
+  image.format = PNG_FORMAT_RGBA;
+  const auto stride = -static_cast<png_int_32>(g.width() * 4);  // bottom-up: north up
+  png_alloc_size_t size = 0;
+  std::string png;
+  if (png_image_write_to_memory(&image, nullptr, &size, 0, rgba.data(), stride, nullptr)) {
+    png.resize(size);
+    if (!png_image_write_to_memory(&image, png.data(), &size, 0, rgba.data(), stride, nullptr))
+      png.clear();
+    png.resize(size);
+  }
+  if (png.empty()) spdlog::warn("explored map of plan '{}': {}", plan_id, image.message);
+  png_cache_[plan_id] = {explored_version_, png};
+  return png;
+}
+
 std::string DashboardState::Frame(Cursor* cursor, Clock::time_point now) const {
   std::lock_guard lock(mu_);
   json frame = {{"stale_after_s", options_.stale_after_s}};
@@ -177,6 +263,27 @@ std::string DashboardState::Frame(Cursor* cursor, Clock::time_point now) const {
     if (reset || !points.empty()) dev["trail"] = {{"reset", reset}, {"points", std::move(points)}};
     cursor->trails[id] = {d.trail_epoch, d.trail_first_seq + d.trail.size()};
     out.push_back(std::move(dev));
+  }
+  if (cursor->explored_version < explored_version_) {
+    std::set<std::string> plans;
+    for (const auto& [id, d] : devices_)
+      if (d.explored) plans.insert(d.explored->plan_id());
+    json& explored = frame["explored"] = json::object();
+    for (const std::string& plan : plans) {
+      const std::vector<const Device*> maps = ExploredOf(plan);
+      const v1::ExploredMap& g = *maps.front()->explored;
+      std::map<uint32_t, const v1::ExploredMap::Room*> visited;  // the union, by room id
+      for (const Device* d : maps)
+        for (const auto& r : d->explored->visited()) visited.emplace(r.id(), &r);
+      json rooms = json::array();
+      for (const auto& [id, r] : visited) rooms.push_back({Mm(r->x()), Mm(r->y())});
+      explored[plan] = {
+          {"version", explored_version_}, {"origin", {Mm(g.origin_x()), Mm(g.origin_y())}},
+          {"cell_m", g.cell_m()},         {"width", g.width()},
+          {"height", g.height()},         {"devices", maps.size()},
+          {"rooms", g.rooms()},           {"visited", std::move(rooms)}};
+    }
+    cursor->explored_version = explored_version_;
   }
   cursor->version = version_;
   // Device ids and reasons come off the network: invalid UTF-8 is replaced, not thrown.
@@ -238,6 +345,7 @@ void Dashboard::Impl::ReadDds(DashboardState& state) {
       for (const platform::Envelope& e : reader->Take(256)) {
         const auto now = Clock::now();
         bool ok = false;
+        std::string why = "not the topic's message";
         switch (reader->topic()) {
           case Topic::kPlanPose: {
             v1::PlanPose m;
@@ -259,13 +367,18 @@ void Dashboard::Impl::ReadDds(DashboardState& state) {
             if ((ok = m.ParseFromString(e.payload))) state.OnStatus(e.device_id, m, now);
             break;
           }
+          case Topic::kExplored: {
+            v1::ExploredMap m;
+            ok = m.ParseFromString(e.payload) && state.OnExplored(e.device_id, m, now, &why);
+            break;
+          }
           default: ok = true;
         }
         if (!ok) {
           ++malformed;
           if (now - last_warning > std::chrono::seconds(1)) {
-            spdlog::warn("{} malformed message(s) so far; the latest on {} from device '{}'",
-                         malformed, platform::TopicName(reader->topic()), e.device_id);
+            spdlog::warn("{} bad message(s) so far; the latest on {} from device '{}': {}",
+                         malformed, platform::TopicName(reader->topic()), e.device_id, why);
             last_warning = now;
           }
         }
@@ -282,7 +395,8 @@ Dashboard::Dashboard(DashboardServerOptions options, std::vector<FloorPlan> plan
   m.participant =
       std::make_unique<platform::Participant>(m.options.domain_id, m.options.cyclone_config);
   m.waiter = std::make_unique<platform::Waiter>(*m.participant);
-  for (Topic t : {Topic::kStatus, Topic::kAlignment, Topic::kPlanTrack, Topic::kPlanPose}) {
+  for (Topic t :
+       {Topic::kStatus, Topic::kAlignment, Topic::kPlanTrack, Topic::kPlanPose, Topic::kExplored}) {
     m.readers.push_back(std::make_unique<platform::Reader>(*m.participant, t));
     m.waiter->Attach(*m.readers.back());
   }
@@ -298,6 +412,17 @@ Dashboard::Dashboard(DashboardServerOptions options, std::vector<FloorPlan> plan
   m.http.Get("/api/plans", [this](const httplib::Request&, httplib::Response& res) {
     res.set_content(impl_->plans_json, "application/json");
   });
+  m.http.Get(R"(/api/explored/([^/]+)\.png)",
+             [this](const httplib::Request& req, httplib::Response& res) {
+               const std::string png = state_->ExploredPng(req.matches[1]);
+               if (png.empty()) {
+                 res.status = 404;
+                 res.set_content("no explored map of that plan yet\n", "text/plain");
+                 return;
+               }
+               res.set_header("Cache-Control", "no-cache");
+               res.set_content(png, "image/png");
+             });
   m.http.Get("/api/devices", [this](const httplib::Request&, httplib::Response& res) {
     DashboardState::Cursor fresh;
     res.set_content(state_->Frame(&fresh, Clock::now()), "application/json");

@@ -40,11 +40,20 @@ class DashboardState {
   void OnAlignment(const std::string& device, const v1::Alignment& alignment,
                    Clock::time_point now);
   void OnStatus(const std::string& device, const v1::DaemonStatus& status, Clock::time_point now);
+  // A device's explored map; false (and kept out) when its cells do not unpack.
+  bool OnExplored(const std::string& device, const v1::ExploredMap& map, Clock::time_point now,
+                  std::string* error);
+
+  // The team's explored map of a plan: the latest grid of every device on it summed (the
+  // log-odds of independent observers add up), as an RGBA PNG, north up: free cells a
+  // light tint, seen walls a darker one, unknown transparent. Empty when none was sent.
+  std::string ExploredPng(const std::string& plan_id) const;
 
   // What one browser has been sent so far.
   struct Cursor {
     uint64_t version = 0;
     std::map<std::string, std::pair<uint64_t, uint64_t>> trails;  // device -> (epoch, next seq)
+    uint64_t explored_version = 0;
   };
   // JSON of the devices changed since *cursor (all of them for a fresh cursor), with every
   // device's age and the stale ones; advances *cursor. Format in docs/dashboard.md.
@@ -65,6 +74,8 @@ class DashboardState {
     std::optional<v1::PlanPose> pose;
     std::optional<v1::DaemonStatus> status;
     std::optional<v1::Alignment> alignment;
+    std::optional<v1::ExploredMap> explored;  // without its packed cells
+    std::vector<int8_t> explored_cells;
     std::deque<TrailPoint> trail;
     uint64_t trail_epoch = 1;      // bumped when the trail is replaced (a new PlanTrack)
     uint64_t trail_first_seq = 0;  // seq of trail.front()
@@ -76,12 +87,17 @@ class DashboardState {
   // The device's entry, now updated; null when it would be one too many. Under mu_.
   Device* Touch(const std::string& device, Clock::time_point now);
   void Append(Device& d, const v1::PlanPose& p);
+  // The devices' grids of a plan that share the first one's geometry (by device id).
+  std::vector<const Device*> ExploredOf(const std::string& plan_id) const;  // under mu_
 
   DashboardOptions options_;
   mutable std::mutex mu_;
   mutable std::condition_variable changed_;
   std::map<std::string, Device> devices_;
   uint64_t version_ = 0;
+  uint64_t explored_version_ = 0;
+  mutable std::map<std::string, std::pair<uint64_t, std::string>>
+      png_cache_;  // plan -> (version, png)
   size_t refused_devices_ = 0;
   std::atomic<bool> stopped_{false};
 };
