@@ -505,9 +505,12 @@ Run AddBenchCommand(CLI::App& app) {
   CLI::App* route_command = app.get_subcommand("route");
   Run dashboard = AddBenchDashboardCommand(app);
   CLI::App* dashboard_command = app.get_subcommand("dashboard");
+  Run global = AddBenchGlobalCommand(app);
+  CLI::App* global_command = app.get_subcommand("global");
   return [o, registration, snapshot, daemon, daemon_command, route, route_command, dashboard,
-          dashboard_command] {
+          dashboard_command, global, global_command] {
     if (dashboard_command->parsed()) return dashboard();
+    if (global_command->parsed()) return global();
     if (snapshot->parsed()) return RunBenchSnapshot(*o);
     if (daemon_command->parsed()) return daemon();
     if (route_command->parsed()) return route();

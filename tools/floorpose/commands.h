@@ -27,6 +27,8 @@ Run AddBenchDaemonCommand(CLI::App& bench);
 Run AddBenchRouteCommand(CLI::App& bench);
 // `floorpose bench dashboard` (bench_dashboard.cc).
 Run AddBenchDashboardCommand(CLI::App& bench);
+// `floorpose bench global` (bench_global.cc).
+Run AddBenchGlobalCommand(CLI::App& bench);
 
 // The bundled demo plan and walk: installed beside the binary's prefix, else the source tree.
 std::string DefaultDemoDir();

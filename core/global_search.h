@@ -1,0 +1,83 @@
+// Global localization without a wall pick (issue 7): where on the whole plan, at which of
+// all headings, do the wall points seen so far fit? Branch-and-bound correlative matching
+// after Hess et al. 2016 ("Real-time loop closure in 2D LIDAR SLAM", section V): a
+// likelihood grid of the plan's walls, max-pooled into a pyramid whose level h bounds
+// every translation of a 2^h-cell square from above, searched best first over every
+// rotation. Exact on the grid: no translation scores better than the ones returned.
+// Several distinct places come back when the walls seen so far fit more than one (similar
+// rooms, thesis section 7.6); telling them apart is the caller's business.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <vector>
+
+#include "core/floor_plan.h"
+#include "core/grid.h"
+#include "core/se2.h"
+
+namespace floorpose {
+
+struct GlobalSearchOptions {
+  double cell_m = 0.1;           // translation step and likelihood grid cell
+  double sigma_m = 0.1;          // a point d from a wall scores exp(-d^2 / (2 sigma^2))
+  int depth = 7;                 // pyramid levels: the coarsest node is 2^(depth-1) cells wide
+  double margin_m = 1.0;         // the grid covers the plan's bounds and this much around them
+  double max_cells = 4e6;        // cells grow beyond cell_m to stay within this
+  double rotation_step_rad = 0;  // 0: one cell at the cloud's farthest point (Hess eq. 7)
+  size_t max_points = 400;       // the cloud is thinned (voxels, then a stride) to this many
+  size_t places = 4;             // distinct places returned at most, best first
+  double distinct_m = 1.5;       // places closer than this at the cloud's centre...
+  double distinct_rad = 10.0 * M_PI / 180;  // ...and turned less than this are one place
+  double min_score = 0.25;                  // mean likelihood a place must reach (0..1)...
+  double min_ratio = 0.5;  // ...and this share of the best place's (worse ones tell nothing)
+};
+
+struct GlobalPlace {
+  Se2 T_plan_slam;
+  double score = 0;  // mean likelihood of the thinned cloud there, 0..1
+};
+
+struct GlobalSearchStats {
+  size_t points = 0;     // after thinning
+  size_t rotations = 0;  // tried
+  size_t nodes = 0;      // bounds evaluated
+  double time_ms = 0;    // filled by callers that time it (core has no clock)
+};
+
+class GlobalSearch {
+ public:
+  GlobalSearch(const FloorPlan& plan, GlobalSearchOptions options = {});
+
+  // The best distinct places of the cloud (slam frame) on the plan, best first, each
+  // scoring at least min_score. `rotations` (plan frame minus slam frame, radians)
+  // restricts the headings tried, e.g. to wall-direction candidates; empty tries all.
+  // Non-finite points are ignored; an empty cloud has no place.
+  std::vector<GlobalPlace> Search(const std::vector<Eigen::Vector2d>& points_slam,
+                                  const std::vector<double>& rotations = {},
+                                  GlobalSearchStats* stats = nullptr) const;
+
+  // Mean likelihood of the cloud under T_plan_slam (bilinear-free: nearest cell), 0..1.
+  double Score(const std::vector<Eigen::Vector2d>& points_slam, const Se2& T_plan_slam) const;
+
+  const GridGeometry& grid() const { return grid_; }
+  size_t MemoryBytes() const;
+
+ private:
+  struct Node;
+  // Level h at cell (x, y): the best likelihood of the square [x, x + 2^h) x [y, y + 2^h),
+  // for x, y from -pad_ on (0 outside the plan's grid).
+  float Bound(int h, int x, int y) const {
+    x += pad_;
+    y += pad_;
+    if (x < 0 || y < 0 || x >= stride_ || y >= rows_) return 0.0f;
+    return pyramid_[static_cast<size_t>(h)][static_cast<size_t>(y) * stride_ + x];
+  }
+
+  GlobalSearchOptions options_;
+  GridGeometry grid_;
+  int pad_ = 0, stride_ = 0, rows_ = 0;
+  std::vector<std::vector<float>> pyramid_;
+};
+
+}  // namespace floorpose
