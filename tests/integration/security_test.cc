@@ -8,9 +8,15 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iterator>
+#include <thread>
 
 #include "tests/integration/daemon_fixture.h"
+#include "tools/lib/dashboard.h"
 #include "tools/lib/headset_messages.h"
+// clang-format off
+#include <httplib.h>  // after Eigen: glibc's <resolv.h> defines _res, a name in Eigen
+#include <nlohmann/json.hpp>
+// clang-format on
 
 namespace floorpose {
 namespace {
@@ -20,7 +26,8 @@ class SecurityTest : public DaemonTest {
   void SetUp() override {
     DaemonTest::SetUp();
     // Ours, and a rogue CA that issues an "app" identity of its own.
-    for (const auto& [dir, names] : {std::pair{"pki", "floorposed app"}, {"rogue", "app"}}) {
+    for (const auto& [dir, names] :
+         {std::pair{"pki", "floorposed app dashboard"}, {"rogue", "app"}}) {
       const std::string cmd = std::string(FLOORPOSE_SOURCE_DIR) + "/tools/make-dds-security.sh '" +
                               (dir_ / dir).string() + "' " + names + " > '" +
                               (dir_ / dir).string() + ".log' 2>&1";
@@ -111,6 +118,58 @@ TEST_F(SecurityTest, OnlyAPermittedParticipantFeedsAndReadsTheDaemon) {
   const Pose2& truth = walk.steps.back().true_plan;
   EXPECT_NEAR(link_->plan_poses.back().x(), truth.position.x(), 1e-5);
   EXPECT_NEAR(link_->plan_poses.back().y(), truth.position.y(), 1e-5);
+}
+
+// The team lead's dashboard on a secured domain: with its identity it shows the wearer;
+// without one it joins nothing and shows no one.
+TEST_F(SecurityTest, OnlyADashboardWithAnIdentitySeesTheWearers) {
+  const platform::DdsSecurity app = Identity("pki", "app");
+  dds_extra_ = SecurityConfig(Identity("pki", "floorposed"));
+  StartDaemon("", &app);
+  auto start_dashboard = [&](const std::string& name, std::vector<std::string> security) {
+    std::vector<std::string> argv = {
+        FLOORPOSE_PATH, "dashboard", "--plan", plan_path_, "--host",
+        "127.0.0.1",    "--port",    "0",      "--domain", std::to_string(domain_),
+        "--loopback"};
+    argv.insert(argv.end(), security.begin(), security.end());
+    const std::string log = (dir_ / (name + ".log")).string();
+    auto process = std::make_unique<tools::ChildProcess>(argv, log);
+    const int port = tools::DashboardPortFromLog(log, seconds(15));
+    EXPECT_GT(port, 0) << "see " << log;
+    return std::pair{std::move(process), port};
+  };
+  auto [trusted, trusted_port] = start_dashboard(
+      "trusted", {"--security-dir", (dir_ / "pki").string(), "--identity", "dashboard"});
+  auto [open, open_port] = start_dashboard("open", {});
+  ASSERT_GT(trusted_port, 0);
+  ASSERT_GT(open_port, 0);
+
+  const sim::DemoWalk walk = Walk(/*pick_error_m=*/0.0, 1);
+  Drive(*link_, walk, 0);
+  ASSERT_TRUE(
+      link_->WaitUntil([&] { return link_->plan_poses.size() == walk.steps.size(); }, seconds(10)));
+  auto devices = [](int port) {
+    httplib::Client http("127.0.0.1", port);
+    auto r = http.Get("/api/devices");
+    return r ? nlohmann::json::parse(r->body, nullptr, false) : nlohmann::json();
+  };
+  nlohmann::json seen;
+  for (int i = 0; i < 100; ++i) {
+    seen = devices(trusted_port);
+    if (!seen.is_discarded() && seen.contains("devices") && !seen["devices"].empty() &&
+        seen["devices"][0].contains("pose") &&
+        seen["devices"][0]["pose"]["stamp_ns"] == link_->plan_poses.back().source_stamp_ns())
+      break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_EQ(seen["devices"].size(), 1u) << seen.dump();
+  EXPECT_EQ(seen["devices"][0]["id"], "hl-test");
+  EXPECT_NEAR(seen["devices"][0]["pose"]["x"].get<double>(), link_->plan_poses.back().x(), 1e-3);
+  const nlohmann::json nothing = devices(open_port);
+  ASSERT_TRUE(nothing.contains("devices")) << nothing.dump();
+  EXPECT_TRUE(nothing["devices"].empty()) << nothing.dump();
+  EXPECT_EQ(trusted->Terminate(seconds(5)), 0);
+  EXPECT_EQ(open->Terminate(seconds(5)), 0);
 }
 
 TEST_F(SecurityTest, ADaemonWhoseDocumentsAnotherCASignedDoesNotStart) {

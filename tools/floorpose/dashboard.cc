@@ -18,6 +18,8 @@ struct DashboardCommandOptions {
   std::string plan;
   std::string plans_dir;
   std::vector<std::string> names;  // ID=NAME
+  std::string security_dir;
+  std::string identity = "dashboard";
   DashboardServerOptions server;
   DdsOptions dds;
 };
@@ -71,6 +73,10 @@ int RunDashboard(DashboardCommandOptions o) {
   if (!LoadPlans(o, &plans)) return 1;
   o.server.domain_id = o.dds.domain_id;
   o.server.cyclone_config = o.dds.Config();
+  if (!o.security_dir.empty()) {
+    o.server.security = platform::SecurityFilesIn(o.security_dir, o.identity);
+    spdlog::info("DDS Security: identity '{}' from {}", o.identity, o.security_dir);
+  }
 
   // SIGINT and SIGTERM are taken by this thread alone, before any other starts.
   sigset_t signals;
@@ -111,6 +117,10 @@ Run AddDashboardCommand(CLI::App& app) {
                  "seconds without data after which a wearer is greyed")
       ->capture_default_str();
   app.add_option("--name", o->names, "DEVICE_ID=NAME: the name shown for a device (repeatable)");
+  app.add_option("--security-dir", o->security_dir,
+                 "join a DDS-Security domain with the files tools/make-dds-security.sh made here");
+  app.add_option("--identity", o->identity, "the identity (NAME.pem, NAME.key) in --security-dir")
+      ->capture_default_str();
   o->dds.Add(app);
   return [o] { return RunDashboard(*o); };
 }

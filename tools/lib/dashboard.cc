@@ -393,7 +393,8 @@ Dashboard::Dashboard(DashboardServerOptions options, std::vector<FloorPlan> plan
   m.options = std::move(options);
   m.plans_json = PlansJson(plans);
   m.participant =
-      std::make_unique<platform::Participant>(m.options.domain_id, m.options.cyclone_config);
+      std::make_unique<platform::Participant>(m.options.domain_id, m.options.cyclone_config,
+                                              m.options.security ? &*m.options.security : nullptr);
   m.waiter = std::make_unique<platform::Waiter>(*m.participant);
   for (Topic t :
        {Topic::kStatus, Topic::kAlignment, Topic::kPlanTrack, Topic::kPlanPose, Topic::kExplored}) {

@@ -19,6 +19,7 @@
 
 #include "core/floor_plan.h"
 #include "floorpose/v1/floorpose.pb.h"
+#include "platform/dds.h"
 
 namespace floorpose::tools {
 
@@ -109,7 +110,8 @@ struct DashboardServerOptions {
   uint32_t domain_id = 0;
   std::string cyclone_config;  // empty: CYCLONEDDS_URI
   std::string host = "0.0.0.0";
-  int port = 8080;  // 0: any free port
+  int port = 8080;                                // 0: any free port
+  std::optional<platform::DdsSecurity> security;  // join a secured domain with this identity
   DashboardOptions dashboard;
 };
 
