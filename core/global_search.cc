@@ -23,6 +23,12 @@ struct GlobalSearch::Node {
 
 GlobalSearch::GlobalSearch(const FloorPlan& plan, GlobalSearchOptions options) : options_(options) {
   options_.depth = std::clamp(options_.depth, 1, 12);
+  plan_directions_.assign(180, 0.0);
+  for (const Segment& seg : plan.segments) {
+    const Eigen::Vector2d d = seg.b - seg.a;
+    const double deg = std::fmod(std::atan2(d.y(), d.x()) * 180 / M_PI + 360.0, 180.0);
+    plan_directions_[static_cast<size_t>(deg) % 180] += seg.Length();
+  }
   grid_ = GridGeometry::Cover(plan.min, plan.max, options_.cell_m, options_.margin_m,
                               options_.max_cells);
   const double sigma = std::max(options_.sigma_m, 0.5 * grid_.cell_m);
@@ -61,6 +67,100 @@ GlobalSearch::GlobalSearch(const FloorPlan& plan, GlobalSearchOptions options) :
 size_t GlobalSearch::MemoryBytes() const {
   return pyramid_.size() * static_cast<size_t>(stride_) * static_cast<size_t>(rows_) *
          sizeof(float);
+}
+
+double GlobalSearch::HeadingStep(double reach_m) const {
+  const double cell = grid_.cell_m;
+  double step = options_.rotation_step_rad;
+  if (!(step > 0)) {
+    const double d = std::max(reach_m, cell);
+    step = std::acos(std::clamp(1.0 - cell * cell / (2 * d * d), -1.0, 1.0));
+  }
+  return std::clamp(step, 0.1 * M_PI / 180, 5.0 * M_PI / 180);
+}
+
+std::vector<double> GlobalSearch::WallHeadings(
+    const std::vector<Eigen::Vector2d>& points_slam) const {
+  // The cloud's wall directions: a line fit through each point's neighbours within 0.3 m
+  // (points binned in 0.3 m cells), counted when the neighbours lie along a line.
+  constexpr double kRadius = 0.3;
+  std::map<std::pair<int64_t, int64_t>, std::vector<Eigen::Vector2d>> bins;
+  for (const Eigen::Vector2d& p : points_slam)
+    if (p.allFinite() && p.cwiseAbs().maxCoeff() < 1e6)
+      bins[{static_cast<int64_t>(std::floor(p.x() / kRadius)),
+            static_cast<int64_t>(std::floor(p.y() / kRadius))}]
+          .push_back(p);
+  std::vector<double> cloud(180, 0.0);
+  for (const auto& [key, members] : bins) {
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+    int n = 0;
+    for (int64_t dy = -1; dy <= 1; ++dy)
+      for (int64_t dx = -1; dx <= 1; ++dx) {
+        const auto it = bins.find({key.first + dx, key.second + dy});
+        if (it == bins.end()) continue;
+        for (const Eigen::Vector2d& q : it->second) {
+          mean += q;
+          scatter += q * q.transpose();
+          ++n;
+        }
+      }
+    if (n < 5) continue;
+    mean /= n;
+    const Eigen::Matrix2d cov = scatter / n - mean * mean.transpose();
+    // Direction of the larger eigenvalue, and how line-like (1: a line, 0: a blob).
+    const double tr = cov.trace(), det = cov(0, 0) * cov(1, 1) - cov(0, 1) * cov(1, 0);
+    const double gap = std::sqrt(std::max(0.0, tr * tr / 4 - det));
+    const double large = tr / 2 + gap, small = tr / 2 - gap;
+    if (!(large > 1e-6)) continue;
+    const double angle = 0.5 * std::atan2(2 * cov(0, 1), cov(0, 0) - cov(1, 1));
+    const double deg = std::fmod(angle * 180 / M_PI + 360.0, 180.0);
+    cloud[static_cast<size_t>(deg) % 180] +=
+        static_cast<double>(members.size()) * std::max(0.0, 1.0 - small / large * 10);
+  }
+  // Circular correlation, degree by degree, of the two histograms (each lightly smoothed).
+  auto smooth = [](const std::vector<double>& h) {
+    std::vector<double> out(180, 0.0);
+    for (int i = 0; i < 180; ++i)
+      out[i] = 0.25 * h[(i + 179) % 180] + 0.5 * h[i] + 0.25 * h[(i + 1) % 180];
+    return out;
+  };
+  const std::vector<double> a = smooth(cloud), b = smooth(plan_directions_);
+  std::vector<double> correlation(180, 0.0);
+  for (int shift = 0; shift < 180; ++shift)
+    for (int i = 0; i < 180; ++i) correlation[shift] += a[i] * b[(i + shift) % 180];
+  if (*std::max_element(correlation.begin(), correlation.end()) <= 0) return {};
+  // The best few local maxima, at least 5 degrees apart.
+  std::vector<int> peaks;
+  for (int i = 0; i < 180; ++i)
+    if (correlation[i] > 0 && correlation[i] >= correlation[(i + 179) % 180] &&
+        correlation[i] >= correlation[(i + 1) % 180])
+      peaks.push_back(i);
+  std::sort(peaks.begin(), peaks.end(),
+            [&](int x, int y) { return correlation[x] > correlation[y]; });
+  std::vector<int> chosen;
+  for (int p : peaks) {
+    if (static_cast<int>(chosen.size()) >= options_.heading_peaks) break;
+    bool near = false;
+    for (int c : chosen) near = near || std::min(std::abs(p - c), 180 - std::abs(p - c)) < 5;
+    if (!near) chosen.push_back(p);
+  }
+  // Each alignment and its half turn, widened by the spread in Search's heading steps.
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  size_t count = 0;
+  for (const auto& [key, members] : bins)
+    for (const Eigen::Vector2d& q : members) centre += q, ++count;
+  centre /= static_cast<double>(count);
+  double reach = 0;
+  for (const auto& [key, members] : bins)
+    for (const Eigen::Vector2d& q : members) reach = std::max(reach, (q - centre).norm());
+  std::vector<double> headings;
+  const double step = HeadingStep(reach);
+  const int n = static_cast<int>(std::ceil(options_.heading_spread_rad / step));
+  for (int c : chosen)
+    for (double half : {0.0, M_PI})
+      for (int k = -n; k <= n; ++k) headings.push_back(WrapAngle(c * M_PI / 180 + half + k * step));
+  return headings;
 }
 
 double GlobalSearch::Score(const std::vector<Eigen::Vector2d>& points_slam,
@@ -109,12 +209,7 @@ std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>
   // Headings: every rotation_step (by default one cell of arc at the farthest point).
   std::vector<double> angles = rotations;
   if (angles.empty()) {
-    double step_rad = options_.rotation_step_rad;
-    if (!(step_rad > 0)) {
-      const double d = std::max(reach, cell);
-      step_rad = std::acos(std::clamp(1.0 - cell * cell / (2 * d * d), -1.0, 1.0));
-    }
-    step_rad = std::clamp(step_rad, 0.1 * M_PI / 180, 5.0 * M_PI / 180);
+    const double step_rad = HeadingStep(reach);
     const int n = static_cast<int>(std::ceil(2 * M_PI / step_rad));
     for (int i = 0; i < n; ++i) angles.push_back(WrapAngle(i * 2 * M_PI / n));
   }

@@ -31,6 +31,9 @@ struct GlobalSearchOptions {
   double distinct_rad = 10.0 * M_PI / 180;  // ...and turned less than this are one place
   double min_score = 0.25;                  // mean likelihood a place must reach (0..1)...
   double min_ratio = 0.5;  // ...and this share of the best place's (worse ones tell nothing)
+  // WallHeadings: how many alignments of the wall directions, and how wide around each.
+  int heading_peaks = 4;
+  double heading_spread_rad = 3.0 * M_PI / 180;
 };
 
 struct GlobalPlace {
@@ -57,6 +60,13 @@ class GlobalSearch {
                                   const std::vector<double>& rotations = {},
                                   GlobalSearchStats* stats = nullptr) const;
 
+  // The headings worth trying for a cloud: where the directions of its walls (local line
+  // fits, modulo pi) line up with the plan's (by length, modulo pi), at the best few
+  // alignments and half a turn from each, each widened by +-heading_spread_rad. Empty
+  // when the cloud shows no straight walls. For Search's `rotations`: a building of
+  // right angles needs a few dozen headings instead of every one.
+  std::vector<double> WallHeadings(const std::vector<Eigen::Vector2d>& points_slam) const;
+
   // Mean likelihood of the cloud under T_plan_slam (bilinear-free: nearest cell), 0..1.
   double Score(const std::vector<Eigen::Vector2d>& points_slam, const Se2& T_plan_slam) const;
 
@@ -65,6 +75,8 @@ class GlobalSearch {
 
  private:
   struct Node;
+  // One cell of arc at reach_m (Hess et al. eq. 7), or rotation_step_rad when set.
+  double HeadingStep(double reach_m) const;
   // Level h at cell (x, y): the best likelihood of the square [x, x + 2^h) x [y, y + 2^h),
   // for x, y from -pad_ on (0 outside the plan's grid).
   float Bound(int h, int x, int y) const {
@@ -75,6 +87,7 @@ class GlobalSearch {
   }
 
   GlobalSearchOptions options_;
+  std::vector<double> plan_directions_;  // wall length per degree of direction, modulo pi
   GridGeometry grid_;
   int pad_ = 0, stride_ = 0, rows_ = 0;
   std::vector<std::vector<float>> pyramid_;

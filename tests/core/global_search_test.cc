@@ -142,6 +142,33 @@ TEST(GlobalSearchTest, HeadingsCanBeNarrowedToCandidates) {
   }
 }
 
+TEST(GlobalSearchTest, TheWallsDirectionsNarrowTheHeadingsToAFew) {
+  const FloorPlan plan = testing::AsymmetricRoom();
+  const GlobalSearch search(plan);
+  SplitMix64 rng(11);
+  testing::ScanOptions o;
+  o.noise_m = 0.03;
+  o.clutter_share = 0.2;
+  for (int trial = 0; trial < 6; ++trial) {
+    const Se2 T_slam_plan{rng.Uniform(-M_PI, M_PI), {rng.Uniform(-50, 50), rng.Uniform(-50, 50)}};
+    const testing::Scan scan = MakeScan(plan, Box::Around({5, 3.5}, 12), T_slam_plan, o, rng);
+    const std::vector<double> headings = search.WallHeadings(scan.points);
+    ASSERT_FALSE(headings.empty());
+    GlobalSearchStats all, narrowed;
+    const auto full = search.Search(scan.points, {}, &all);
+    const auto fast = search.Search(scan.points, headings, &narrowed);
+    ASSERT_FALSE(fast.empty());
+    EXPECT_LT(narrowed.rotations * 4, all.rotations);
+    // The same place as the search over every heading.
+    ASSERT_FALSE(full.empty());
+    const auto e = ErrorAt(fast[0].T_plan_slam, full[0].T_plan_slam, {5, 3.5});
+    EXPECT_LT(e.translation_m, 0.15) << "trial " << trial << ": " << testing::Describe(e);
+    EXPECT_LT(e.rotation_rad, testing::Deg(1.0)) << "trial " << trial;
+  }
+  // Points with no straight wall in them suggest nothing.
+  EXPECT_TRUE(search.WallHeadings({{0, 0}, {5, 5}, {NAN, 0}}).empty());
+}
+
 TEST(GlobalSearchTest, NothingToFindInNothing) {
   const GlobalSearch search(testing::AsymmetricRoom());
   EXPECT_TRUE(search.Search({}).empty());
