@@ -30,7 +30,8 @@ RegistrationOptions ToRegistrationOptions(const TrackerOptions& t, AlignmentSour
   r.hough = t.hough;
   r.wall_buffer_m = t.wall_buffer_m;
   r.clip_margin_m = t.clip_margin_m;
-  if (from == AlignmentSource::kWallPick || from == AlignmentSource::kFlip) {
+  if (from == AlignmentSource::kWallPick || from == AlignmentSource::kFlip ||
+      from == AlignmentSource::kGlobalSearch) {
     r.search_window_m = t.pick_search_m;
     r.search_window_rad = t.pick_search_rad;
     r.search_tie_ratio = t.pick_tie_ratio;
@@ -78,6 +79,7 @@ void Tracker::Reset() {
   current_fit_.reset();
   restored_ = false;
   last_start_ns_ = 0;
+  last_global_ns_.reset();
   walked_since_start_m_ = 0;
   ForgetRegistrations();
   history_.clear();
@@ -173,6 +175,26 @@ std::string Tracker::ApplyWallPick(const WallPick& pick, int64_t stamp_ns) {
   if (!T) return "wall pick needs finite points and non-zero normals";
   pick_plan_point_ = pick.plan_point;
   SetAlignment(*T, AlignmentSource::kWallPick, stamp_ns);
+  current_fit_.reset();
+  return {};
+}
+
+bool Tracker::GlobalSearchDue(int64_t now_ns, size_t live_points) const {
+  if (!options_.global_search || !index_ || has_alignment() ||
+      live_points < options_.global_min_points)
+    return false;
+  return !last_global_ns_ ||
+         static_cast<double>(now_ns - *last_global_ns_) * 1e-9 >= options_.global_interval_s;
+}
+
+std::string Tracker::ApplyGlobalPlace(const Se2& T_plan_slam, const Eigen::Vector2d& centre_plan,
+                                      int64_t stamp_ns) {
+  if (!index_) return "no floor plan loaded";
+  if (has_alignment()) return "already aligned";
+  if (!T_plan_slam.t.allFinite() || !std::isfinite(T_plan_slam.theta) || !centre_plan.allFinite())
+    return "non-finite place";
+  pick_plan_point_ = centre_plan;
+  SetAlignment(T_plan_slam, AlignmentSource::kGlobalSearch, stamp_ns);
   current_fit_.reset();
   return {};
 }
@@ -478,7 +500,8 @@ Reliability Tracker::CurrentReliability() const {
     return r;
   }
   if (!has_alignment()) {
-    r.reason = "no alignment: waiting for a wall pick";
+    r.reason = options_.global_search ? "no alignment: searching the plan"
+                                      : "no alignment: waiting for a wall pick";
     return r;
   }
   r = Assess(CurrentFeatures());
@@ -487,7 +510,9 @@ Reliability Tracker::CurrentReliability() const {
     r.flag = ReliabilityFlag::kDegraded;
     r.reason = restored_                                     ? "restored, not yet checked"
                : alignment_.source == AlignmentSource::kFlip ? "flipped, not yet checked"
-                                                             : "wall pick, not yet checked";
+               : alignment_.source == AlignmentSource::kGlobalSearch
+                   ? "placed by searching the plan, not yet checked"
+                   : "wall pick, not yet checked";
   }
   return r;
 }

@@ -73,6 +73,13 @@ struct TrackerOptions {
   double max_interval_s = 3.0;    // ...or after this long with any new points
   uint32_t min_points = 50;       // no registration on fewer points
   size_t history = 16;            // accepted alignments kept
+  // Without a pick: search the whole plan (GlobalSearch) once this many wall points are
+  // in, every global_interval_s; take the best place when the next scores below
+  // global_clear_ratio of it.
+  bool global_search = false;
+  uint32_t global_min_points = 400;
+  double global_interval_s = 3.0;
+  double global_clear_ratio = 0.8;
 };
 
 // Thesis section 6.3.4: one wall point with its normal, seen by the headset (slam
@@ -88,7 +95,7 @@ std::optional<Se2> AlignFromWallPick(const WallPick& pick);
 
 enum class ReliabilityFlag { kReliable, kDegraded, kUnreliable };
 enum class TrackState { kWaitingForPlan, kWaitingForAlignment, kTracking, kDegraded, kLost };
-enum class AlignmentSource { kNone, kWallPick, kFlip, kRegistration };
+enum class AlignmentSource { kNone, kWallPick, kFlip, kRegistration, kGlobalSearch };
 
 // The registration options for a run starting from an alignment of the given source:
 // after a pick or flip, with the correlative search, its rotations about `pivot` (plan).
@@ -192,6 +199,13 @@ class Tracker {
     last_start_ns_ = now_ns;
     walked_since_start_m_ = 0;
   }
+  // Global placement: due without an alignment (no pick), with global_min_points, every
+  // global_interval_s. ApplyGlobalPlace takes a place the search found, as a pick would
+  // be taken: `centre_plan` (the cloud's centre there) is the pivot of the search after.
+  bool GlobalSearchDue(int64_t now_ns, size_t live_points) const;
+  void MarkGlobalSearchStarted(int64_t now_ns) { last_global_ns_ = now_ns; }
+  std::string ApplyGlobalPlace(const Se2& T_plan_slam, const Eigen::Vector2d& centre_plan,
+                               int64_t stamp_ns);
 
   struct Decision {
     bool accepted = false;
@@ -274,6 +288,7 @@ class Tracker {
   std::optional<Se2> pending_place_;  // where doubted first results keep landing
   double place_walk_m_ = 0;
   int64_t last_start_ns_ = 0;
+  std::optional<int64_t> last_global_ns_;
   AlignmentFilter filter_;
   std::optional<Eigen::Vector2d> last_slam_position_;
   double last_slam_heading_ = 0;

@@ -62,6 +62,7 @@ v1::Alignment::Source ToProto(AlignmentSource s) {
     case AlignmentSource::kWallPick: return v1::Alignment::WALL_PICK;
     case AlignmentSource::kFlip: return v1::Alignment::FLIP;
     case AlignmentSource::kRegistration: return v1::Alignment::REGISTRATION;
+    case AlignmentSource::kGlobalSearch: return v1::Alignment::GLOBAL_SEARCH;
     case AlignmentSource::kNone: break;
   }
   return v1::Alignment::SOURCE_UNSPECIFIED;
@@ -109,9 +110,20 @@ std::string Engine::Start() {
   return e;
 }
 
+const GlobalSearch& Engine::GlobalSearchCache::Get() {
+  std::call_once(once_, [this] { search_ = std::make_unique<GlobalSearch>(plan_); });
+  return *search_;
+}
+
 Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
   Done done;
-  if (job.index) {
+  if (job.global) {
+    const int64_t t0 = now_ns();
+    const GlobalSearch& search = job.global->Get();
+    done.places = search.Search(job.cloud, search.WallHeadings(job.cloud));
+    done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
+    done.result.points = static_cast<uint32_t>(job.cloud.size());
+  } else if (job.index) {
     const int64_t t0 = now_ns();
     done.result = Register(job.cloud, job.normals, *job.index, job.initial, job.options);
     if (!job.recent.empty() && done.result.converged) {
@@ -153,6 +165,8 @@ std::string Engine::LoadPlan(const std::string& path, const std::string& floor) 
                parsed.plan.max.x() - parsed.plan.min.x(), parsed.plan.max.y() - parsed.plan.min.y(),
                static_cast<double>(index->MemoryBytes()) / 1e6);
   tracker_.SetPlan(std::move(index));
+  global_ = config_.tracking().global_search() ? std::make_shared<GlobalSearchCache>(parsed.plan)
+                                               : nullptr;
   floor_ = floor;
   plan_path_ = path;
   plan_id_ = parsed.plan.id;
@@ -557,8 +571,45 @@ void Engine::OnCommand(const Envelope& e) {
   publish_(Topic::kCommandReply, reply);
 }
 
+void Engine::OnGlobalSearchDone(const Done& done) {
+  const std::vector<GlobalPlace>& places = done.places;
+  const double ratio = tracker_.options().global_clear_ratio;
+  const bool clear =
+      !places.empty() && (places.size() == 1 || places[1].score < ratio * places[0].score);
+  spdlog::info("global search: {} points, {} place(s), best {:.2f}, next {:.2f}, {:.1f} ms: {}",
+               done.job.cloud.size(), places.size(), places.empty() ? 0.0 : places[0].score,
+               places.size() > 1 ? places[1].score : 0.0, done.result.time_ms,
+               places.empty() ? "no place fits"
+               : clear        ? "placed"
+                              : "more than one place fits; waiting for more walls");
+  if (!clear || tracker_.has_alignment()) return;  // a pick may have come meanwhile
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  for (const Eigen::Vector2d& p : done.job.cloud) centre += p;
+  centre /= static_cast<double>(done.job.cloud.size());
+  const std::string error = tracker_.ApplyGlobalPlace(
+      places[0].T_plan_slam, places[0].T_plan_slam * centre, done.job.stamp_ns);
+  if (!error.empty()) {
+    spdlog::warn("global search: place not taken: {}", error);
+    return;
+  }
+  PublishAlignment();
+  PublishTrack();
+}
+
 std::optional<Engine::Job> Engine::TakeDueJob() {
   if (running_) return std::nullopt;
+  if (global_ && tracker_.GlobalSearchDue(latest_stamp_ns_, store_.points())) {
+    // No pick and no place yet: every wall seen so far, searched over the whole plan.
+    tracker_.MarkGlobalSearchStarted(latest_stamp_ns_);
+    Job job;
+    job.cloud = store_.Snapshot(config_.tracking().max_points(), &job.normals, 0, INT64_MIN);
+    if (job.cloud.size() < tracker_.options().global_min_points) return std::nullopt;
+    job.global = global_;
+    job.index = tracker_.index();
+    job.stamp_ns = latest_stamp_ns_;
+    running_ = true;
+    return job;
+  }
   if (!tracker_.RegistrationDue(latest_stamp_ns_, store_.points(), store_.new_points()))
     return std::nullopt;
   store_.TakeNewPoints();
@@ -593,6 +644,10 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
 
 void Engine::OnRegistrationDone(Done done) {
   running_ = false;
+  if (done.job.global) {
+    OnGlobalSearchDone(done);
+    return;
+  }
   const RegistrationResult& r = done.result;
   counters_.set_registrations(counters_.registrations() + 1);
   const Tracker::Decision d = tracker_.Offer(r, done.refined ? done.job.recent : done.job.cloud,
@@ -751,6 +806,7 @@ std::string Engine::RestoreState(const v1::StateSnapshot& s) {
       case v1::Alignment::WALL_PICK: t.alignment.source = AlignmentSource::kWallPick; break;
       case v1::Alignment::FLIP: t.alignment.source = AlignmentSource::kFlip; break;
       case v1::Alignment::REGISTRATION: t.alignment.source = AlignmentSource::kRegistration; break;
+      case v1::Alignment::GLOBAL_SEARCH: t.alignment.source = AlignmentSource::kGlobalSearch; break;
       default: return refuse("with an alignment of unknown source");
     }
     t.next_version = s.next_version();

@@ -8,6 +8,7 @@
 #include <deque>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -15,6 +16,7 @@
 
 #include "core/explored_map.h"
 #include "core/frames.h"
+#include "core/global_search.h"
 #include "core/registration.h"
 #include "core/rooms.h"
 #include "core/route_planner.h"
@@ -40,6 +42,17 @@ class Engine {
   // Receives every message to publish, with its topic.
   using Publish = std::function<void(Topic, const google::protobuf::Message&)>;
 
+  // The plan's GlobalSearch grids, built on first use by the thread that runs the job.
+  class GlobalSearchCache {
+   public:
+    explicit GlobalSearchCache(FloorPlan plan) : plan_(std::move(plan)) {}
+    const GlobalSearch& Get();
+
+   private:
+    FloorPlan plan_;
+    std::once_flag once_;
+    std::unique_ptr<GlobalSearch> search_;
+  };
   // A registration to run: everything it needs, copied, so it can run on any thread.
   struct Job {
     std::vector<Eigen::Vector2d> cloud, normals;
@@ -52,12 +65,15 @@ class Engine {
     uint64_t version = 0;
     int64_t stamp_ns = 0;
     bool turn = false;  // also measure the walls' rotation (before a first place is taken)
+    // Set: no alignment yet; search the whole plan for the cloud (no registration).
+    std::shared_ptr<GlobalSearchCache> global;
   };
   struct Done {
     Job job;
     RegistrationResult result;
-    bool refined = false;        // the result is job.recent's
-    std::optional<double> turn;  // HoughRotation of job.cloud, when job.turn
+    bool refined = false;             // the result is job.recent's
+    std::optional<double> turn;       // HoughRotation of job.cloud, when job.turn
+    std::vector<GlobalPlace> places;  // of a global job, best first
   };
   // Runs a job; now_ns() is read before and after to fill result.time_ms.
   static Done Run(Job job, const std::function<int64_t()>& now_ns);
@@ -104,6 +120,7 @@ class Engine {
 
  private:
   std::string LoadPlan(const std::string& path, const std::string& floor);
+  void OnGlobalSearchDone(const Done& done);
   // The recent trajectory under the alignment in use (PlanTrack).
   void PublishTrack();
   v1::PlanPose ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) const;
@@ -138,7 +155,8 @@ class Engine {
   // Made with each plan: routes, its rooms and the explored map on it.
   std::unique_ptr<RoutePlanner> routes_;
   std::unique_ptr<ExploredMap> explored_;
-  uint64_t explored_sent_ = 0;  // revision last published
+  std::shared_ptr<GlobalSearchCache> global_;  // when tracking.global_search
+  uint64_t explored_sent_ = 0;                 // revision last published
   int64_t next_explored_ns_ = 0;
   std::optional<v1::PlanPose> last_plan_pose_;  // as published
   uint64_t plan_digest_ = 0;

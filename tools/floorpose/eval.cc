@@ -18,6 +18,7 @@ struct EvalOptions {
   std::string plan, recording, baseline, config, svg, track, session;
   std::string method = v1::RegistrationConfig().method();  // the daemon's default
   bool json = false;
+  bool no_pick = false;
 };
 
 int RunEval(const EvalOptions& o) {
@@ -31,6 +32,7 @@ int RunEval(const EvalOptions& o) {
   }
   config.set_plan_path(o.plan);
   config.mutable_registration()->set_method(o.method);
+  if (o.no_pick) config.mutable_tracking()->set_global_search(true);
   config.set_log_level("warn");
   if (const std::string e = platform::ValidateConfig(config); !e.empty()) {
     spdlog::error("{}", e);
@@ -48,7 +50,8 @@ int RunEval(const EvalOptions& o) {
     }
   }
   EvalReport report;
-  if (!Evaluate(config, o.recording, baseline, &report, &error, session ? &*session : nullptr)) {
+  if (!Evaluate(config, o.recording, baseline, &report, &error, session ? &*session : nullptr,
+                o.no_pick)) {
     spdlog::error("{}", error);
     return 1;
   }
@@ -80,6 +83,9 @@ Run AddEvalCommand(CLI::App& app) {
       ->check(CLI::IsMember({"none", "best-fit"}));
   app.add_option("--config", o->config, "floorposed configuration to evaluate with");
   app.add_flag("--json", o->json, "print one JSON object");
+  app.add_flag("--no-pick", o->no_pick,
+               "drop the recording's wall picks and place the wearer by searching the plan "
+               "(sets tracking.global_search)");
   app.add_option("--svg", o->svg, "draw the plan, both trajectories and the markers here");
   app.add_option("--track", o->track, "write every scored pose here as CSV");
   app.add_option("--session", o->session,

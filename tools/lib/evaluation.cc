@@ -38,7 +38,7 @@ double Percentile(std::vector<double> v, double q) {
 
 bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& recording,
               Baseline baseline, EvalReport* report, std::string* error,
-              platform::RecordingWriter* session) {
+              platform::RecordingWriter* session, bool no_pick) {
   *report = {};
   platform::RecordingReader reader(recording);
   if (!reader.ok()) {
@@ -128,7 +128,14 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     virtual_now = in.stamp_ns;
     if (session) session->Append(virtual_now, in.topic, in.envelope);
     switch (in.topic) {
-      case Topic::kCommand: engine.OnCommand(in.envelope); break;
+      case Topic::kCommand: {
+        v1::Command command;
+        if (no_pick && command.ParseFromString(in.envelope.payload) &&
+            command.command_case() == v1::Command::kWallPick)
+          break;
+        engine.OnCommand(in.envelope);
+        break;
+      }
       case Topic::kMeshDelta: engine.OnMeshDelta(in.envelope); break;
       case Topic::kHeadsetPose: {
         const size_t published = plan_poses.size();
@@ -153,7 +160,10 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     if (baseline != Baseline::kNone) continue;  // baselines never register
     if (auto job = engine.TakeDueJob()) {
       platform::Engine::Done done = platform::Engine::Run(std::move(*job), platform::MonotonicNs);
-      reg_times.push_back(done.result.time_ms);
+      if (done.job.global)
+        ++report->global_searches;
+      else
+        reg_times.push_back(done.result.time_ms);
       // For tuning: how far the result and the alignment in use put the wearer from the
       // truth (the engine logs its decision right after).
       if (latest && spdlog::should_log(spdlog::level::debug))
@@ -217,6 +227,9 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     if (e.marker) marker_errors.push_back(e.error_m);
     reliable += e.reliable;
     reliable_ok += e.reliable && e.error_m <= 1.0;
+    if (e.reliable && report->time_to_first_reliable_s < 0 && !plan_poses.empty())
+      report->time_to_first_reliable_s =
+          static_cast<double>(e.stamp_ns - plan_poses.front().source_stamp_ns()) * 1e-9;
     report->track.push_back(e);
   }
   report->poses = errors.size();
@@ -232,6 +245,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     report->reliable_fraction = static_cast<double>(reliable) / static_cast<double>(errors.size());
     report->reliable_precision_1m =
         reliable ? static_cast<double>(reliable_ok) / static_cast<double>(reliable) : 0.0;
+    report->false_reliable_poses = reliable - reliable_ok;
     const std::vector<EvalPose>& t = report->track;
     report->pick_error_m = t.front().error_m;
     // The first pose under a registered alignment (turning the pick onto the walls'
@@ -278,7 +292,10 @@ std::string ToJson(const EvalReport& r) {
     << ", \"reg_time_ms_max\": " << r.reg_time_ms_max
     << ", \"reliable_fraction\": " << r.reliable_fraction
     << ", \"reliable_precision_1m\": " << r.reliable_precision_1m << ", \"poses\": " << r.poses
-    << ", \"unaligned_poses\": " << r.unaligned_poses << "}";
+    << ", \"unaligned_poses\": " << r.unaligned_poses
+    << ", \"time_to_first_reliable_s\": " << r.time_to_first_reliable_s
+    << ", \"false_reliable_poses\": " << r.false_reliable_poses
+    << ", \"global_searches\": " << r.global_searches << "}";
   return s.str();
 }
 
@@ -288,7 +305,7 @@ std::string ToText(const EvalReport& r) {
   s.precision(3);
   s << "method " << r.method << ", plan " << r.plan_id << ", scenario " << r.scenario << ", seed "
     << r.seed << ", " << r.poses << " poses scored (" << r.unaligned_poses
-    << " before the wall pick not)\n"
+    << " before the first alignment not)\n"
     << "  error mean / p95 / max        " << r.mean_error_m << " / " << r.p95_error_m << " / "
     << r.max_error_m << " m\n"
     << "  final error                   " << r.final_error_m << " m\n"
@@ -302,7 +319,10 @@ std::string ToText(const EvalReport& r) {
     << "  registration time median/max  " << r.reg_time_ms_median << " / " << r.reg_time_ms_max
     << " ms\n"
     << "  flagged reliable              " << 100 * r.reliable_fraction << "% of poses, "
-    << 100 * r.reliable_precision_1m << "% of those within 1 m\n";
+    << 100 * r.reliable_precision_1m << "% of those within 1 m\n"
+    << "  first reliable pose after     " << r.time_to_first_reliable_s << " s (-1: none)\n"
+    << "  reliable but over 1 m off     " << r.false_reliable_poses << " poses\n";
+  if (r.global_searches) s << "  whole-plan searches (no pick) " << r.global_searches << "\n";
   return s.str();
 }
 

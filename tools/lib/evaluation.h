@@ -56,6 +56,11 @@ struct EvalReport {
   double reg_time_ms_median = 0, reg_time_ms_max = 0;
   double reliable_fraction = 0;      // of poses flagged RELIABLE
   double reliable_precision_1m = 0;  // of those, the share within 1 m
+  // From the first plan pose to the first scored pose flagged RELIABLE (-1: never), and
+  // the poses flagged RELIABLE while more than 1 m off.
+  double time_to_first_reliable_s = -1;
+  size_t false_reliable_poses = 0;
+  size_t global_searches = 0;  // whole-plan searches run (no pick)
   std::vector<EvalPose> track;
   std::vector<v1::PlanPose> plan_poses;     // as the Engine published them, in order
   size_t plan_tracks = 0;                   // PlanTrack messages published
@@ -67,8 +72,11 @@ struct EvalReport {
 // device id is taken from the recording). False with a message on unreadable input.
 // With `session`, the inputs and everything the Engine publishes are written there as
 // `floorpose record` would have recorded the live session (receive stamps: the inputs').
+// With `no_pick`, the recording's wall picks are dropped (with config tracking.global_search,
+// the wearer is placed by searching the plan).
 bool Evaluate(const v1::FloorposedConfig& config, const std::string& recording, Baseline baseline,
-              EvalReport* report, std::string* error, platform::RecordingWriter* session = nullptr);
+              EvalReport* report, std::string* error, platform::RecordingWriter* session = nullptr,
+              bool no_pick = false);
 
 // The q-quantile (0..1) of v, nearest rank; 0 for an empty v.
 double Percentile(std::vector<double> v, double q);

@@ -1,0 +1,61 @@
+// No wall pick: the daemon's code (Evaluate, as floorposed runs it) places the wearer by
+// searching the whole plan, and the registrations after it track as after a pick.
+#include <gtest/gtest.h>
+
+#include "platform/floor_plan_io.h"
+#include "tests/test_util.h"
+#include "tools/lib/evaluation.h"
+#include "tools/lib/simulate_recording.h"
+
+namespace floorpose::tools {
+namespace {
+
+class GlobalPlacementTest : public testing::TempDirTest {};
+
+TEST_F(GlobalPlacementTest, AWalkWithoutAPickIsPlacedAndNeverReliablyWrong) {
+  const std::string plan_path = FLOORPOSE_SOURCE_DIR "/tools/demo/office.geojson";
+  const FloorPlanParse plan = platform::LoadFloorPlan(plan_path);
+  ASSERT_TRUE(plan.ok()) << plan.error;
+  sim::SimulatorOptions o;
+  o.seed = 1;
+  o.scenario = sim::Scenario::kOffice;
+  SimulateRecordingResult simulated;
+  std::string error;
+  const std::string recording = Path("walk.rec");
+  ASSERT_TRUE(SimulateToRecording(plan.plan, o, nullptr, {}, recording, &simulated, &error))
+      << error;
+  v1::FloorposedConfig config;
+  config.set_plan_path(plan_path);
+
+  // Without the search, a walk without its pick is never placed.
+  EvalReport waiting;
+  ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &waiting, &error, nullptr,
+                       /*no_pick=*/true))
+      << error;
+  EXPECT_EQ(waiting.poses, 0u);
+  EXPECT_EQ(waiting.global_searches, 0u);
+  ASSERT_FALSE(waiting.plan_poses.empty());
+  EXPECT_EQ(waiting.plan_poses.back().reliability().reason(),
+            "no alignment: waiting for a wall pick");
+
+  // With it: placed, tracked to the end, and never RELIABLE while more than 1 m off.
+  config.mutable_tracking()->set_global_search(true);
+  EvalReport placed;
+  ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &placed, &error, nullptr, true))
+      << error;
+  EXPECT_GT(placed.global_searches, 0u);
+  EXPECT_GT(placed.poses, placed.unaligned_poses) << "placed for most of the walk";
+  EXPECT_EQ(placed.false_reliable_poses, 0u);
+  EXPECT_LT(placed.max_error_m, 1.0);
+  EXPECT_EQ(placed.divergences, 0u);
+  EXPECT_GT(placed.time_to_first_reliable_s, 0.0);
+  EXPECT_GT(placed.accepted, 0u);
+  std::printf(
+      "placed after %zu of %zu poses, %zu searches; first reliable after %.1f s; error "
+      "mean %.2f m, max %.2f m\n",
+      placed.unaligned_poses, placed.unaligned_poses + placed.poses, placed.global_searches,
+      placed.time_to_first_reliable_s, placed.mean_error_m, placed.max_error_m);
+}
+
+}  // namespace
+}  // namespace floorpose::tools
