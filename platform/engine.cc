@@ -602,10 +602,9 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
     // No pick and no place yet: every wall seen so far, searched over the whole plan.
     tracker_.MarkGlobalSearchStarted(latest_stamp_ns_);
     Job job;
-    job.cloud = store_.Snapshot(config_.tracking().max_points(), &job.normals, 0, INT64_MIN);
+    job.cloud = store_.Snapshot(config_.tracking().max_points(), nullptr, 0, INT64_MIN);
     if (job.cloud.size() < tracker_.options().global_min_points) return std::nullopt;
     job.global = global_;
-    job.index = tracker_.index();
     job.stamp_ns = latest_stamp_ns_;
     running_ = true;
     return job;

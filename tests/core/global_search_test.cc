@@ -18,16 +18,21 @@ using testing::Box;
 using testing::ErrorAt;
 using testing::MakeScan;
 
+// 3 cm of noise and a fifth of the points clutter.
+testing::ScanOptions NoisyCluttered() {
+  testing::ScanOptions o;
+  o.noise_m = 0.03;
+  o.clutter_share = 0.2;
+  return o;
+}
+
 TEST(GlobalSearchTest, FindsTheRoomAtAnyHeadingAndAnyOffset) {
   const FloorPlan plan = testing::AsymmetricRoom();
   const GlobalSearch search(plan);
   SplitMix64 rng(3);
-  testing::ScanOptions o;
-  o.noise_m = 0.03;
-  o.clutter_share = 0.2;
+  const testing::ScanOptions o = NoisyCluttered();
   for (int trial = 0; trial < 8; ++trial) {
-    // The slam frame: anywhere, turned any way.
-    const Se2 T_slam_plan{rng.Uniform(-M_PI, M_PI), {rng.Uniform(-50, 50), rng.Uniform(-50, 50)}};
+    const Se2 T_slam_plan = testing::RandomSe2(rng, M_PI, 50.0);  // anywhere, any heading
     const Box window = Box::Around({5, 3.5}, 12);
     const testing::Scan scan = MakeScan(plan, window, T_slam_plan, o, rng);
     GlobalSearchStats stats;
@@ -146,11 +151,9 @@ TEST(GlobalSearchTest, TheWallsDirectionsNarrowTheHeadingsToAFew) {
   const FloorPlan plan = testing::AsymmetricRoom();
   const GlobalSearch search(plan);
   SplitMix64 rng(11);
-  testing::ScanOptions o;
-  o.noise_m = 0.03;
-  o.clutter_share = 0.2;
+  const testing::ScanOptions o = NoisyCluttered();
   for (int trial = 0; trial < 6; ++trial) {
-    const Se2 T_slam_plan{rng.Uniform(-M_PI, M_PI), {rng.Uniform(-50, 50), rng.Uniform(-50, 50)}};
+    const Se2 T_slam_plan = testing::RandomSe2(rng, M_PI, 50.0);  // anywhere, any heading
     const testing::Scan scan = MakeScan(plan, Box::Around({5, 3.5}, 12), T_slam_plan, o, rng);
     const std::vector<double> headings = search.WallHeadings(scan.points);
     ASSERT_FALSE(headings.empty());

@@ -101,7 +101,7 @@ double Max(const std::vector<double>& v) {
 }
 
 int RunBenchDaemon(const BenchDaemonOptions& o) {
-  const std::string plan_path = o.plan.empty() ? DefaultDemoDir() + "/office.geojson" : o.plan;
+  const std::string plan_path = o.plan.empty() ? DefaultDemoPlan() : o.plan;
   const FloorPlanParse plan = platform::LoadFloorPlan(plan_path);
   if (!plan.ok()) {
     spdlog::error("{}", plan.error);

@@ -97,7 +97,7 @@ void ReadEvents(int port, const std::atomic<bool>& stop, BrowserStats* stats, st
 }
 
 int RunBenchDashboard(const BenchDashboardOptions& o) {
-  const std::string plan_path = o.plan.empty() ? DefaultDemoDir() + "/office.geojson" : o.plan;
+  const std::string plan_path = o.plan.empty() ? DefaultDemoPlan() : o.plan;
   const FloorPlanParse plan = platform::LoadFloorPlan(plan_path);
   if (!plan.ok()) {
     spdlog::error("{}: {}", plan_path, plan.error);

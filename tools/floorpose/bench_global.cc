@@ -49,7 +49,7 @@ std::optional<double> CastRay(const FloorPlan& plan, const Eigen::Vector2d& p,
 }
 
 int RunBenchGlobal(const BenchGlobalOptions& o) {
-  std::string path = o.plan.empty() ? DefaultDemoDir() + "/office.geojson" : o.plan;
+  const std::string path = o.plan.empty() ? DefaultDemoPlan() : o.plan;
   const FloorPlanParse parse = platform::LoadFloorPlan(path);
   if (!parse.ok()) {
     spdlog::error("{}: {}", path, parse.error);

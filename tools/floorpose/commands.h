@@ -32,5 +32,7 @@ Run AddBenchGlobalCommand(CLI::App& bench);
 
 // The bundled demo plan and walk: installed beside the binary's prefix, else the source tree.
 std::string DefaultDemoDir();
+// Its office plan: the benches' default.
+inline std::string DefaultDemoPlan() { return DefaultDemoDir() + "/office.geojson"; }
 
 }  // namespace floorpose::tools
