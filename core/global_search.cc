@@ -285,4 +285,41 @@ std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>
   return places;
 }
 
+std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
+                                      const std::vector<Eigen::Vector2d>& points_slam,
+                                      const ClosestWallIndex& index, const IcpOptions& icp,
+                                      double cap_m, double distinct_m, double distinct_rad) {
+  std::vector<Eigen::Vector2d> cloud;
+  cloud.reserve(points_slam.size());
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  for (const Eigen::Vector2d& p : points_slam)
+    if (p.allFinite()) cloud.push_back(p), centre += p;
+  if (cloud.empty()) return {};
+  centre /= static_cast<double>(cloud.size());
+  std::vector<GlobalPlace> refined;
+  for (const GlobalPlace& place : places) {
+    GlobalPlace r = place;
+    const RegistrationResult icp_result = RegisterIcp(cloud, index, place.T_plan_slam, icp);
+    if (icp_result.converged && icp_result.T_plan_slam.t.allFinite() &&
+        std::isfinite(icp_result.T_plan_slam.theta))
+      r.T_plan_slam = icp_result.T_plan_slam;
+    RegistrationResult fit;
+    EvaluateFit(cloud, index, r.T_plan_slam, cap_m, icp.inlier_threshold_m, &fit, &r.fit_mse);
+    r.inlier_ratio = static_cast<double>(fit.inliers) / static_cast<double>(cloud.size());
+    refined.push_back(r);
+  }
+  std::stable_sort(refined.begin(), refined.end(), [](const GlobalPlace& a, const GlobalPlace& b) {
+    return a.fit_mse < b.fit_mse;
+  });
+  std::vector<GlobalPlace> distinct;
+  for (const GlobalPlace& r : refined) {
+    const bool same = std::any_of(distinct.begin(), distinct.end(), [&](const GlobalPlace& d) {
+      return (r.T_plan_slam * centre - d.T_plan_slam * centre).norm() < distinct_m &&
+             std::abs(WrapAngle(r.T_plan_slam.theta - d.T_plan_slam.theta)) < distinct_rad;
+    });
+    if (!same) distinct.push_back(r);
+  }
+  return distinct;
+}
+
 }  // namespace floorpose

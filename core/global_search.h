@@ -12,8 +12,10 @@
 #include <cstddef>
 #include <vector>
 
+#include "core/closest_wall_index.h"
 #include "core/floor_plan.h"
 #include "core/grid.h"
+#include "core/registration.h"
 #include "core/se2.h"
 
 namespace floorpose {
@@ -39,6 +41,10 @@ struct GlobalSearchOptions {
 struct GlobalPlace {
   Se2 T_plan_slam;
   double score = 0;  // mean likelihood of the thinned cloud there, 0..1
+  // Filled by RefinePlaces: the mean of min(d, cap)^2 over the whole cloud after ICP
+  // (lower fits better), and the share of its points within the inlier threshold.
+  double fit_mse = 0;
+  double inlier_ratio = 0;
 };
 
 struct GlobalSearchStats {
@@ -71,6 +77,7 @@ class GlobalSearch {
   double Score(const std::vector<Eigen::Vector2d>& points_slam, const Se2& T_plan_slam) const;
 
   const GridGeometry& grid() const { return grid_; }
+  const GlobalSearchOptions& options() const { return options_; }
   size_t MemoryBytes() const;
 
  private:
@@ -92,5 +99,16 @@ class GlobalSearch {
   int pad_ = 0, stride_ = 0, rows_ = 0;
   std::vector<std::vector<float>> pyramid_;
 };
+
+// The search's places polished: each refined by ICP on the plan's walls from where the
+// search put it (the grid's 10 cm cells and heading steps leave a few centimetres and a
+// fraction of a degree), then scored on the whole cloud with distances capped at cap_m
+// (EvaluateFit). The grid's scores blur a near miss and a right place; the refined fits
+// tell them apart. Places that converge onto one another (within distinct_m at the
+// cloud's centre and distinct_rad) are merged; the best fit comes first.
+std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
+                                      const std::vector<Eigen::Vector2d>& points_slam,
+                                      const ClosestWallIndex& index, const IcpOptions& icp,
+                                      double cap_m, double distinct_m, double distinct_rad);
 
 }  // namespace floorpose

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 
 namespace floorpose {
@@ -80,6 +81,8 @@ void Tracker::Reset() {
   restored_ = false;
   last_start_ns_ = 0;
   last_global_ns_.reset();
+  leading_place_.reset();
+  lead_count_ = 0;
   walked_since_start_m_ = 0;
   ForgetRegistrations();
   history_.clear();
@@ -187,16 +190,64 @@ bool Tracker::GlobalSearchDue(int64_t now_ns, size_t live_points) const {
          static_cast<double>(now_ns - *last_global_ns_) * 1e-9 >= options_.global_interval_s;
 }
 
-std::string Tracker::ApplyGlobalPlace(const Se2& T_plan_slam, const Eigen::Vector2d& centre_plan,
-                                      int64_t stamp_ns) {
-  if (!index_) return "no floor plan loaded";
-  if (has_alignment()) return "already aligned";
-  if (!T_plan_slam.t.allFinite() || !std::isfinite(T_plan_slam.theta) || !centre_plan.allFinite())
-    return "non-finite place";
+Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
+                                       const Eigen::Vector2d& centre_slam, int64_t stamp_ns) {
+  Decision d;
+  if (!index_) {
+    d.reason = "no floor plan loaded";
+    return d;
+  }
+  if (has_alignment()) {
+    d.reason = "already aligned";
+    return d;
+  }
+  if (places.empty()) {
+    lead_count_ = 0;
+    d.reason = "no place fits";
+    return d;
+  }
+  const GlobalPlace& best = places.front();
+  if (!best.T_plan_slam.t.allFinite() || !std::isfinite(best.T_plan_slam.theta) ||
+      !centre_slam.allFinite()) {
+    d.reason = "non-finite place";
+    return d;
+  }
+  char text[160];
+  if (best.inlier_ratio < options_.global_min_inliers) {
+    lead_count_ = 0;
+    std::snprintf(text, sizeof text, "the best place fits only %.0f%% of the walls",
+                  100 * best.inlier_ratio);
+    d.reason = text;
+    return d;
+  }
+  const double next =
+      places.size() > 1 ? places[1].fit_mse : std::numeric_limits<double>::infinity();
+  const Eigen::Vector2d centre_plan = best.T_plan_slam * centre_slam;
+  const bool same = leading_place_ && Within(best.T_plan_slam, *leading_place_, 1.0,
+                                             10.0 * M_PI / 180, centre_plan);
+  if (best.fit_mse < options_.global_lead_ratio * next)
+    lead_count_ = same ? lead_count_ + 1 : 1;
+  else
+    lead_count_ = 0;
+  leading_place_ = best.T_plan_slam;
+  const bool clear = best.fit_mse < options_.global_clear_ratio * next;
+  if (!clear && lead_count_ < options_.global_confirm_searches) {
+    std::snprintf(text, sizeof text,
+                  "more than one place fits (the next's error %.1f times the best's); led %u "
+                  "of %u searches",
+                  next / std::max(best.fit_mse, 1e-12), lead_count_,
+                  options_.global_confirm_searches);
+    d.reason = text;
+    return d;
+  }
   pick_plan_point_ = centre_plan;
-  SetAlignment(T_plan_slam, AlignmentSource::kGlobalSearch, stamp_ns);
+  SetAlignment(best.T_plan_slam, AlignmentSource::kGlobalSearch, stamp_ns);
   current_fit_.reset();
-  return {};
+  leading_place_.reset();
+  lead_count_ = 0;
+  d.accepted = true;
+  d.reason = clear ? "clear of the next place" : "kept the lead";
+  return d;
 }
 
 std::string Tracker::Flip(int64_t stamp_ns) {

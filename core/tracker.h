@@ -13,6 +13,7 @@
 
 #include "core/alignment_filter.h"
 #include "core/closest_wall_index.h"
+#include "core/global_search.h"
 #include "core/registration.h"
 #include "core/se2.h"
 
@@ -74,12 +75,19 @@ struct TrackerOptions {
   uint32_t min_points = 50;       // no registration on fewer points
   size_t history = 16;            // accepted alignments kept
   // Without a pick: search the whole plan (GlobalSearch) once this many wall points are
-  // in, every global_interval_s; take the best place when the next scores below
-  // global_clear_ratio of it.
+  // in, every global_interval_s, over the walls of the last global_window_s (0: all).
+  // The places found are refined (RefinePlaces) and the best taken when the next fits
+  // with global_clear_ratio times its error or more, or when it led the next by
+  // global_lead_ratio in global_confirm_searches searches in a row; never when fewer
+  // than global_min_inliers of the walls fit it.
   bool global_search = false;
-  uint32_t global_min_points = 400;
+  uint32_t global_min_points = 150;
   double global_interval_s = 3.0;
-  double global_clear_ratio = 0.8;
+  double global_window_s = 60.0;
+  double global_clear_ratio = 0.5;
+  double global_lead_ratio = 0.8;
+  uint32_t global_confirm_searches = 3;
+  double global_min_inliers = 0.6;
 };
 
 // Thesis section 6.3.4: one wall point with its normal, seen by the headset (slam
@@ -157,6 +165,10 @@ struct TrackerState {
 
 class Tracker {
  public:
+  struct Decision {
+    bool accepted = false;
+    std::string reason;
+  };
   explicit Tracker(TrackerOptions options) : options_(std::move(options)) {}
 
   // A new plan drops the alignment: it belonged to the old plan.
@@ -200,17 +212,15 @@ class Tracker {
     walked_since_start_m_ = 0;
   }
   // Global placement: due without an alignment (no pick), with global_min_points, every
-  // global_interval_s. ApplyGlobalPlace takes a place the search found, as a pick would
-  // be taken: `centre_plan` (the cloud's centre there) is the pivot of the search after.
+  // global_interval_s. OfferPlaces takes the best of a search's refined places (best
+  // fit first; `centre_slam` is the cloud's centre) when it is clear or has kept the
+  // lead (see TrackerOptions), as a pick would be taken: the cloud's centre on the plan
+  // is the pivot of the correlative search after it.
   bool GlobalSearchDue(int64_t now_ns, size_t live_points) const;
   void MarkGlobalSearchStarted(int64_t now_ns) { last_global_ns_ = now_ns; }
-  std::string ApplyGlobalPlace(const Se2& T_plan_slam, const Eigen::Vector2d& centre_plan,
-                               int64_t stamp_ns);
+  Decision OfferPlaces(const std::vector<GlobalPlace>& places, const Eigen::Vector2d& centre_slam,
+                       int64_t stamp_ns);
 
-  struct Decision {
-    bool accepted = false;
-    std::string reason;
-  };
   // Offers a finished registration that started from alignment `based_on_version` on
   // `cloud`. Fused into the alignment when it still applies, fits the cloud about as
   // well as the alignment in use or better (section 6.4.3), and agrees with it within
@@ -289,6 +299,8 @@ class Tracker {
   double place_walk_m_ = 0;
   int64_t last_start_ns_ = 0;
   std::optional<int64_t> last_global_ns_;
+  std::optional<Se2> leading_place_;  // the best place of the latest searches...
+  uint32_t lead_count_ = 0;           // ...and how many in a row it led by global_lead_ratio
   AlignmentFilter filter_;
   std::optional<Eigen::Vector2d> last_slam_position_;
   double last_slam_heading_ = 0;

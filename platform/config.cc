@@ -174,8 +174,15 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
     return "tracking.clear_ambiguity must be in [0, max_ambiguity]";
   if (k.global_min_points() < 10) return "tracking.global_min_points must be at least 10";
   if (!(k.global_interval_s() > 0)) return "tracking.global_interval_s must be positive";
+  if (!(k.global_window_s() >= 0)) return "tracking.global_window_s must be 0 or positive";
   if (!(k.global_clear_ratio() > 0 && k.global_clear_ratio() <= 1))
     return "tracking.global_clear_ratio must be in (0, 1]";
+  if (!(k.global_lead_ratio() > 0 && k.global_lead_ratio() <= 1))
+    return "tracking.global_lead_ratio must be in (0, 1]";
+  if (k.global_confirm_searches() < 1)
+    return "tracking.global_confirm_searches must be at least 1";
+  if (!(k.global_min_inliers() >= 0 && k.global_min_inliers() <= 1))
+    return "tracking.global_min_inliers must be in [0, 1]";
   const auto& rel = k.reliability();
   if (rel.coefficients_size() != 0 && rel.coefficients_size() != ReliabilityModel::kFeatures + 1)
     return "tracking.reliability.coefficients needs " +
@@ -252,7 +259,11 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.global_search = k.global_search();
   t.global_min_points = k.global_min_points();
   t.global_interval_s = k.global_interval_s();
+  t.global_window_s = k.global_window_s();
   t.global_clear_ratio = k.global_clear_ratio();
+  t.global_lead_ratio = k.global_lead_ratio();
+  t.global_confirm_searches = k.global_confirm_searches();
+  t.global_min_inliers = k.global_min_inliers();
   t.turn_sigma_rad = k.turn_sigma_deg() * M_PI / 180.0;
   const double drift_rad = k.drift_heading_deg() * M_PI / 180.0;
   t.filter.heading_var_per_m = drift_rad * drift_rad;

@@ -121,6 +121,10 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
     const int64_t t0 = now_ns();
     const GlobalSearch& search = job.global->Get();
     done.places = search.Search(job.cloud, search.WallHeadings(job.cloud));
+    if (job.index)
+      done.places = RefinePlaces(done.places, job.cloud, *job.index, job.options.icp,
+                                 job.score_cap_m, search.options().distinct_m,
+                                 search.options().distinct_rad);
     done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
     done.result.points = static_cast<uint32_t>(job.cloud.size());
   } else if (job.index) {
@@ -573,25 +577,18 @@ void Engine::OnCommand(const Envelope& e) {
 
 void Engine::OnGlobalSearchDone(const Done& done) {
   const std::vector<GlobalPlace>& places = done.places;
-  const double ratio = tracker_.options().global_clear_ratio;
-  const bool clear =
-      !places.empty() && (places.size() == 1 || places[1].score < ratio * places[0].score);
-  spdlog::info("global search: {} points, {} place(s), best {:.2f}, next {:.2f}, {:.1f} ms: {}",
-               done.job.cloud.size(), places.size(), places.empty() ? 0.0 : places[0].score,
-               places.size() > 1 ? places[1].score : 0.0, done.result.time_ms,
-               places.empty() ? "no place fits"
-               : clear        ? "placed"
-                              : "more than one place fits; waiting for more walls");
-  if (!clear || tracker_.has_alignment()) return;  // a pick may have come meanwhile
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
   for (const Eigen::Vector2d& p : done.job.cloud) centre += p;
-  centre /= static_cast<double>(done.job.cloud.size());
-  const std::string error = tracker_.ApplyGlobalPlace(
-      places[0].T_plan_slam, places[0].T_plan_slam * centre, done.job.stamp_ns);
-  if (!error.empty()) {
-    spdlog::warn("global search: place not taken: {}", error);
-    return;
-  }
+  centre /= static_cast<double>(std::max<size_t>(1, done.job.cloud.size()));
+  const Tracker::Decision d = tracker_.OfferPlaces(places, centre, done.job.stamp_ns);
+  spdlog::info(
+      "global search: {} points, {} place(s), best fit {:.4f} ({:.0f}% inliers), next {:.4f}, "
+      "{:.1f} ms: {}{}",
+      done.job.cloud.size(), places.size(), places.empty() ? 0.0 : places[0].fit_mse,
+      places.empty() ? 0.0 : 100 * places[0].inlier_ratio,
+      places.size() > 1 ? places[1].fit_mse : 0.0, done.result.time_ms,
+      d.accepted ? "placed: " : "", d.reason);
+  if (!d.accepted) return;
   PublishAlignment();
   PublishTrack();
 }
@@ -602,9 +599,15 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
     // No pick and no place yet: every wall seen so far, searched over the whole plan.
     tracker_.MarkGlobalSearchStarted(latest_stamp_ns_);
     Job job;
-    job.cloud = store_.Snapshot(config_.tracking().max_points(), nullptr, 0, INT64_MIN);
+    const double window_s = tracker_.options().global_window_s;
+    job.cloud = store_.Snapshot(
+        config_.tracking().max_points(), nullptr, 0,
+        window_s > 0 ? latest_stamp_ns_ - static_cast<int64_t>(window_s * 1e9) : INT64_MIN);
     if (job.cloud.size() < tracker_.options().global_min_points) return std::nullopt;
     job.global = global_;
+    job.index = tracker_.index();
+    job.options.icp = tracker_.options().icp;
+    job.score_cap_m = tracker_.options().score_cap_m;
     job.stamp_ns = latest_stamp_ns_;
     running_ = true;
     return job;

@@ -65,8 +65,10 @@ class Engine {
     uint64_t version = 0;
     int64_t stamp_ns = 0;
     bool turn = false;  // also measure the walls' rotation (before a first place is taken)
-    // Set: no alignment yet; search the whole plan for the cloud (no registration).
+    // Set: no alignment yet; search the whole plan for the cloud, then refine the places
+    // on `index` with options.icp and compare their fits capped at score_cap_m.
     std::shared_ptr<GlobalSearchCache> global;
+    double score_cap_m = 0.2;
   };
   struct Done {
     Job job;

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
+#include <limits>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -43,6 +45,7 @@ struct SuiteOptions {
   int jobs = 0;
   std::string config;  // floorposed configuration to evaluate with
   int first_seed = 1;
+  bool no_pick = false;  // drop the walks' wall picks: the daemon searches the plan
 };
 
 struct SuiteRun {
@@ -64,6 +67,61 @@ std::vector<std::string> PlanFiles(const std::vector<std::string>& inputs) {
   }
   std::sort(out.begin(), out.end());
   return out;
+}
+
+// Issue 7's placement figures (runs without a pick, one method), per scenario. The search
+// ends at the first pose flagged RELIABLE: within 1 m, the wearer is placed; more than
+// 1 m off, the search flagged a wrong place RELIABLE. A run never flagged RELIABLE is
+// never placed (its time counts as infinite in the median). After the placement the
+// tracker runs as after a pick; its RELIABLE poses more than 1 m off are counted apart.
+std::string PlacementTable(const std::vector<EvalReport>& reports, const std::string& method,
+                           const std::vector<std::string>& scenarios) {
+  std::ostringstream md;
+  md.setf(std::ios::fixed);
+  md.precision(1);
+  md << "\nPlacement without a pick (" << method
+     << "; the search ends at the first RELIABLE pose):\n\n"
+        "| scenario | runs | placed within 1 m | placed more than 1 m off | never placed | "
+        "seconds to placed, median | slowest | RELIABLE poses > 1 m off after placement "
+        "(runs) |\n|---|---|---|---|---|---|---|---|\n";
+  auto seconds = [](double s) {
+    std::ostringstream out;
+    out.setf(std::ios::fixed);
+    out.precision(1);
+    if (std::isfinite(s))
+      out << s;
+    else
+      out << "never";
+    return out.str();
+  };
+  auto row = [&](const std::string& name, const std::string& scenario) {
+    size_t runs = 0, placed = 0, wrong = 0, false_poses = 0, false_runs = 0;
+    std::vector<double> times;
+    for (const EvalReport& r : reports) {
+      if (r.method != method || (!scenario.empty() && r.scenario != scenario)) continue;
+      ++runs;
+      const auto first = std::find_if(r.track.begin(), r.track.end(),
+                                      [](const EvalPose& p) { return p.reliable; });
+      if (first == r.track.end() || first->error_m > 1.0) {
+        wrong += first != r.track.end();
+        times.push_back(std::numeric_limits<double>::infinity());
+        continue;
+      }
+      ++placed;
+      times.push_back(r.time_to_first_reliable_s);
+      false_poses += r.false_reliable_poses;
+      false_runs += r.false_reliable_poses > 0;
+    }
+    if (!runs) return;
+    std::sort(times.begin(), times.end());
+    md << "| " << name << " | " << runs << " | " << placed << " (" << 100.0 * placed / runs
+       << "%) | " << wrong << " | " << runs - placed - wrong << " | "
+       << seconds(times[(times.size() - 1) / 2]) << " | " << seconds(times.back()) << " | "
+       << false_poses << " (" << false_runs << ") |\n";
+  };
+  for (const std::string& scenario : scenarios) row(scenario, scenario);
+  row("all", "");
+  return md.str();
 }
 
 int RunSuite(const SuiteOptions& o) {
@@ -129,11 +187,12 @@ int RunSuite(const SuiteOptions& o) {
         config.set_log_level("warn");
         const bool registers = method != "none" && method != "best-fit";
         config.mutable_registration()->set_method(registers ? method : "icp");
+        if (o.no_pick) config.mutable_tracking()->set_global_search(true);
         const Baseline baseline = method == "none"       ? Baseline::kNoAlgorithm
                                   : method == "best-fit" ? Baseline::kBestFit
                                                          : Baseline::kNone;
         EvalReport report;
-        if (!Evaluate(config, run.recording, baseline, &report, &error)) {
+        if (!Evaluate(config, run.recording, baseline, &report, &error, nullptr, o.no_pick)) {
           spdlog::error("{} {}: {}", run.recording, method, error);
           ++failures;
           continue;
@@ -301,6 +360,7 @@ int RunSuite(const SuiteOptions& o) {
     md << "| " << scenario << " | " << n << " | " << 100.0 * reliable / n << "% | "
        << (reliable ? 100.0 * reliable_ok / reliable : 0.0) << "% | " << 100.0 * ok / n << "% |\n";
   }
+  if (o.no_pick) md << PlacementTable(reports, first, o.scenarios);
   const auto curve = CalibrationCurve(predicted, within);
   md << "\nCalibration of the published probability (" << first << ", every pose):\n\n"
      << CalibrationTable(curve);
@@ -342,6 +402,9 @@ Run AddEvalSuiteCommand(CLI::App& app) {
   app.add_option("--config", o->config, "floorposed configuration to evaluate with");
   app.add_option("--first-seed", o->first_seed, "seeds run from this one (calibrate on others)")
       ->capture_default_str();
+  app.add_flag("--no-pick", o->no_pick,
+               "drop the walks' wall picks and place the wearer by searching the plan "
+               "(tracking.global_search); adds the placement table");
   return [o] { return RunSuite(*o); };
 }
 

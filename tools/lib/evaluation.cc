@@ -166,7 +166,12 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
         reg_times.push_back(done.result.time_ms);
       // For tuning: how far the result and the alignment in use put the wearer from the
       // truth (the engine logs its decision right after).
-      if (latest && spdlog::should_log(spdlog::level::debug))
+      if (latest && spdlog::should_log(spdlog::level::debug) && done.job.global) {
+        for (const GlobalPlace& place : done.places)
+          spdlog::debug("at {:.1f} s, truth: place scoring {:.3f} is {:.2f} m off at the wearer",
+                        static_cast<double>(latest->stamp_ns - inputs.front().stamp_ns) * 1e-9,
+                        place.score, (place.T_plan_slam * latest->slam - latest->plan).norm());
+      } else if (latest && spdlog::should_log(spdlog::level::debug))
         spdlog::debug(
             "at {:.1f} s, truth: result {:.2f} m off at the wearer, alignment in use {:.2f} m",
             static_cast<double>(latest->stamp_ns - inputs.front().stamp_ns) * 1e-9,
