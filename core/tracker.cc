@@ -4,8 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <cstdio>
+#include <limits>
 
 namespace floorpose {
 
@@ -223,8 +223,8 @@ Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
   const double next =
       places.size() > 1 ? places[1].fit_mse : std::numeric_limits<double>::infinity();
   const Eigen::Vector2d centre_plan = best.T_plan_slam * centre_slam;
-  const bool same = leading_place_ && Within(best.T_plan_slam, *leading_place_, 1.0,
-                                             10.0 * M_PI / 180, centre_plan);
+  const bool same = leading_place_ &&
+                    Within(best.T_plan_slam, *leading_place_, 1.0, 10.0 * M_PI / 180, centre_plan);
   if (best.fit_mse < options_.global_lead_ratio * next)
     lead_count_ = same ? lead_count_ + 1 : 1;
   else

@@ -122,9 +122,9 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
     const GlobalSearch& search = job.global->Get();
     done.places = search.Search(job.cloud, search.WallHeadings(job.cloud));
     if (job.index)
-      done.places = RefinePlaces(done.places, job.cloud, *job.index, job.options.icp,
-                                 job.score_cap_m, search.options().distinct_m,
-                                 search.options().distinct_rad);
+      done.places =
+          RefinePlaces(done.places, job.cloud, *job.index, job.options.icp, job.score_cap_m,
+                       search.options().distinct_m, search.options().distinct_rad);
     done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
     done.result.points = static_cast<uint32_t>(job.cloud.size());
   } else if (job.index) {
