@@ -179,8 +179,7 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
     return "tracking.global_clear_ratio must be in (0, 1]";
   if (!(k.global_lead_ratio() > 0 && k.global_lead_ratio() <= 1))
     return "tracking.global_lead_ratio must be in (0, 1]";
-  if (k.global_confirm_searches() < 1)
-    return "tracking.global_confirm_searches must be at least 1";
+  if (k.global_confirm_searches() < 1) return "tracking.global_confirm_searches must be at least 1";
   if (!(k.global_min_inliers() >= 0 && k.global_min_inliers() <= 1))
     return "tracking.global_min_inliers must be in [0, 1]";
   const auto& rel = k.reliability();
