@@ -285,8 +285,43 @@ std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>
   return places;
 }
 
+namespace {
+
+// Whether segments pq and ab properly cross (touching ends do not count).
+bool Crosses(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Segment& s) {
+  auto side = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    const Eigen::Vector2d u = a - o, v = b - o;
+    return u.x() * v.y() - u.y() * v.x();
+  };
+  const double d1 = side(p, q, s.a), d2 = side(p, q, s.b);
+  const double d3 = side(s.a, s.b, p), d4 = side(s.a, s.b, q);
+  return ((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0));
+}
+
+// Steps of the path (plan frame) that cross a wall.
+uint32_t PathCrossings(const std::vector<Eigen::Vector2d>& path, const FloorPlan& plan) {
+  uint32_t crossings = 0;
+  for (size_t i = 1; i < path.size(); ++i) {
+    const Eigen::Vector2d &p = path[i - 1], &q = path[i];
+    const Eigen::Vector2d lo = p.cwiseMin(q), hi = p.cwiseMax(q);
+    for (const Segment& s : plan.segments) {
+      if (s.a.cwiseMax(s.b).x() < lo.x() || s.a.cwiseMin(s.b).x() > hi.x() ||
+          s.a.cwiseMax(s.b).y() < lo.y() || s.a.cwiseMin(s.b).y() > hi.y())
+        continue;
+      if (Crosses(p, q, s)) {
+        ++crossings;
+        break;
+      }
+    }
+  }
+  return crossings;
+}
+
+}  // namespace
+
 std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
                                       const std::vector<Eigen::Vector2d>& points_slam,
+                                      const std::vector<Eigen::Vector2d>& path_slam,
                                       const ClosestWallIndex& index, const IcpOptions& icp,
                                       double cap_m, double distinct_m, double distinct_rad) {
   std::vector<Eigen::Vector2d> cloud;
@@ -297,6 +332,7 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
   if (cloud.empty()) return {};
   centre /= static_cast<double>(cloud.size());
   std::vector<GlobalPlace> refined;
+  std::vector<Eigen::Vector2d> path_plan;
   for (const GlobalPlace& place : places) {
     GlobalPlace r = place;
     const RegistrationResult icp_result = RegisterIcp(cloud, index, place.T_plan_slam, icp);
@@ -306,6 +342,10 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
     RegistrationResult fit;
     EvaluateFit(cloud, index, r.T_plan_slam, cap_m, icp.inlier_threshold_m, &fit, &r.fit_mse);
     r.inlier_ratio = static_cast<double>(fit.inliers) / static_cast<double>(cloud.size());
+    path_plan.clear();
+    for (const Eigen::Vector2d& p : path_slam)
+      if (p.allFinite()) path_plan.push_back(r.T_plan_slam * p);
+    r.path_crossings = PathCrossings(path_plan, index.plan());
     refined.push_back(r);
   }
   std::stable_sort(refined.begin(), refined.end(), [](const GlobalPlace& a, const GlobalPlace& b) {
@@ -319,6 +359,12 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
     });
     if (!same) distinct.push_back(r);
   }
+  // A place is only as good as the walk it implies: those that take the wearer through
+  // more walls than the fewest go last, so they can be the next place but not the best.
+  uint32_t fewest = UINT32_MAX;
+  for (const GlobalPlace& d : distinct) fewest = std::min(fewest, d.path_crossings);
+  std::stable_partition(distinct.begin(), distinct.end(),
+                        [&](const GlobalPlace& d) { return d.path_crossings <= fewest; });
   return distinct;
 }
 

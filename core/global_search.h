@@ -45,6 +45,9 @@ struct GlobalPlace {
   // (lower fits better), and the share of its points within the inlier threshold.
   double fit_mse = 0;
   double inlier_ratio = 0;
+  // ...and how many steps of the wearer's path there cross a wall of the plan (a place
+  // that walks the wearer through walls is not where they are).
+  uint32_t path_crossings = 0;
 };
 
 struct GlobalSearchStats {
@@ -103,11 +106,15 @@ class GlobalSearch {
 // The search's places polished: each refined by ICP on the plan's walls from where the
 // search put it (the grid's 10 cm cells and heading steps leave a few centimetres and a
 // fraction of a degree), then scored on the whole cloud with distances capped at cap_m
-// (EvaluateFit). The grid's scores blur a near miss and a right place; the refined fits
-// tell them apart. Places that converge onto one another (within distinct_m at the
-// cloud's centre and distinct_rad) are merged; the best fit comes first.
+// (EvaluateFit), and the wearer's path (slam positions, in order) checked for steps
+// through the plan's walls. The grid's scores blur a near miss and a right place; the
+// refined fits tell them apart. Places that converge onto one another (within
+// distinct_m at the cloud's centre and distinct_rad) are merged. Places whose path
+// crosses no more walls than the fewest come first, best fit first among them; then
+// the others, best fit first.
 std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
                                       const std::vector<Eigen::Vector2d>& points_slam,
+                                      const std::vector<Eigen::Vector2d>& path_slam,
                                       const ClosestWallIndex& index, const IcpOptions& icp,
                                       double cap_m, double distinct_m, double distinct_rad);
 

@@ -82,7 +82,8 @@ void Tracker::Reset() {
   last_start_ns_ = 0;
   last_global_ns_.reset();
   leading_place_.reset();
-  lead_count_ = 0;
+  lead_count_ = clear_count_ = 0;
+  placement_confirmed_ = true;
   walked_since_start_m_ = 0;
   ForgetRegistrations();
   history_.clear();
@@ -168,6 +169,7 @@ std::string Tracker::RestoreState(const TrackerState& s) {
   filter_.set_drift_scale(s.drift_scale);
   fused_ = s.fused;
   restored_ = true;
+  placement_confirmed_ = true;
   history_.push_back(alignment_);
   return {};
 }
@@ -179,74 +181,101 @@ std::string Tracker::ApplyWallPick(const WallPick& pick, int64_t stamp_ns) {
   pick_plan_point_ = pick.plan_point;
   SetAlignment(*T, AlignmentSource::kWallPick, stamp_ns);
   current_fit_.reset();
+  placement_confirmed_ = true;  // the wearer's word; the registrations check it
   return {};
 }
 
 bool Tracker::GlobalSearchDue(int64_t now_ns, size_t live_points) const {
-  if (!options_.global_search || !index_ || has_alignment() ||
-      live_points < options_.global_min_points)
-    return false;
-  return !last_global_ns_ ||
-         static_cast<double>(now_ns - *last_global_ns_) * 1e-9 >= options_.global_interval_s;
+  if (!options_.global_search || !index_ || live_points < options_.global_min_points) return false;
+  const bool doubt = !has_alignment() || !placement_confirmed_ || WallsDoNotFit();
+  const double interval = doubt ? options_.global_interval_s : options_.global_check_interval_s;
+  return !last_global_ns_ || static_cast<double>(now_ns - *last_global_ns_) * 1e-9 >= interval;
+}
+
+bool Tracker::WallsDoNotFit() const {
+  return has_alignment() && current_fit_ && current_fit_->points > 0 &&
+         static_cast<double>(current_fit_->inliers) <
+             options_.global_min_inliers * static_cast<double>(current_fit_->points);
 }
 
 Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
-                                       const Eigen::Vector2d& centre_slam, int64_t stamp_ns) {
+                                       const Eigen::Vector2d& centre_slam,
+                                       uint64_t based_on_version, int64_t stamp_ns) {
   Decision d;
   if (!index_) {
     d.reason = "no floor plan loaded";
     return d;
   }
-  if (has_alignment()) {
-    d.reason = "already aligned";
+  if (based_on_version != alignment_.version) {
+    d.reason = "alignment changed while searching";
     return d;
   }
-  if (places.empty()) {
-    lead_count_ = 0;
+  std::vector<GlobalPlace> usable;
+  for (const GlobalPlace& p : places)
+    if (p.T_plan_slam.t.allFinite() && std::isfinite(p.T_plan_slam.theta) &&
+        std::isfinite(p.fit_mse))
+      usable.push_back(p);
+  if (usable.empty() || !centre_slam.allFinite()) {
+    lead_count_ = clear_count_ = 0;
     d.reason = "no place fits";
     return d;
   }
-  const GlobalPlace& best = places.front();
-  if (!best.T_plan_slam.t.allFinite() || !std::isfinite(best.T_plan_slam.theta) ||
-      !centre_slam.allFinite()) {
-    d.reason = "non-finite place";
-    return d;
-  }
-  char text[160];
-  if (best.inlier_ratio < options_.global_min_inliers) {
-    lead_count_ = 0;
-    std::snprintf(text, sizeof text, "the best place fits only %.0f%% of the walls",
-                  100 * best.inlier_ratio);
-    d.reason = text;
-    return d;
-  }
-  const double next =
-      places.size() > 1 ? places[1].fit_mse : std::numeric_limits<double>::infinity();
+  const GlobalPlace& best = usable.front();
   const Eigen::Vector2d centre_plan = best.T_plan_slam * centre_slam;
-  const bool same = leading_place_ &&
-                    Within(best.T_plan_slam, *leading_place_, 1.0, 10.0 * M_PI / 180, centre_plan);
-  if (best.fit_mse < options_.global_lead_ratio * next)
-    lead_count_ = same ? lead_count_ + 1 : 1;
-  else
-    lead_count_ = 0;
+  auto same_place = [&](const Se2& a, const Se2& b) {
+    return Within(a, b, 1.0, 10.0 * M_PI / 180, centre_plan);
+  };
+  const double next =
+      usable.size() > 1 ? usable[1].fit_mse : std::numeric_limits<double>::infinity();
+  const bool fits = best.inlier_ratio >= options_.global_min_inliers;
+  const bool leads = fits && best.fit_mse < options_.global_lead_ratio * next;
+  const bool clear = fits && best.fit_mse < options_.global_clear_ratio * next;
+  const bool same = leading_place_ && same_place(best.T_plan_slam, *leading_place_);
+  lead_count_ = leads ? (same ? lead_count_ : 0) + 1 : 0;
+  clear_count_ = clear ? (same ? clear_count_ : 0) + 1 : 0;
   leading_place_ = best.T_plan_slam;
-  const bool clear = best.fit_mse < options_.global_clear_ratio * next;
-  if (!clear && lead_count_ < options_.global_confirm_searches) {
-    std::snprintf(text, sizeof text,
-                  "more than one place fits (the next's error %.1f times the best's); led %u "
-                  "of %u searches",
-                  next / std::max(best.fit_mse, 1e-12), lead_count_,
-                  options_.global_confirm_searches);
-    d.reason = text;
+  const bool won = clear_count_ >= 2 || lead_count_ >= options_.global_confirm_searches;
+  char text[200];
+  std::snprintf(text, sizeof text,
+                "best fits %.0f%% of the walls, the next's error %.1f times its own; led %u of "
+                "%u searches in a row",
+                100 * best.inlier_ratio, next / std::max(best.fit_mse, 1e-12), lead_count_,
+                options_.global_confirm_searches);
+  d.reason = text;
+
+  const bool in_use = has_alignment() && same_place(best.T_plan_slam, alignment_.T_plan_slam);
+  if (in_use) {
+    if (!placement_confirmed_ && lead_count_ >= options_.global_confirm_searches) {
+      placement_confirmed_ = true;
+      d.reason = "place confirmed: " + d.reason;
+    }
+    return d;
+  }
+  if (has_alignment()) {
+    // Another place: it replaces the one in use only when it kept the lead over
+    // global_confirm_searches checks and fits clearly better.
+    const auto current = std::find_if(usable.begin(), usable.end(), [&](const GlobalPlace& p) {
+      return same_place(p.T_plan_slam, alignment_.T_plan_slam);
+    });
+    const double current_mse =
+        current != usable.end() ? current->fit_mse : std::numeric_limits<double>::infinity();
+    if (lead_count_ < options_.global_confirm_searches ||
+        !(best.fit_mse < options_.global_clear_ratio * current_mse))
+      return d;
+    d.reason = "relocated (the place in use fits " +
+               (std::isfinite(current_mse)
+                    ? std::to_string(static_cast<int>(current_mse / std::max(best.fit_mse, 1e-12))) +
+                          " times worse"
+                    : std::string("nothing")) +
+               "): " + d.reason;
+  } else if (!won) {
     return d;
   }
   pick_plan_point_ = centre_plan;
   SetAlignment(best.T_plan_slam, AlignmentSource::kGlobalSearch, stamp_ns);
   current_fit_.reset();
-  leading_place_.reset();
-  lead_count_ = 0;
+  placement_confirmed_ = lead_count_ >= options_.global_confirm_searches;
   d.accepted = true;
-  d.reason = clear ? "clear of the next place" : "kept the lead";
   return d;
 }
 
@@ -556,6 +585,20 @@ Reliability Tracker::CurrentReliability() const {
     return r;
   }
   r = Assess(CurrentFeatures());
+  if (options_.global_search && WallsDoNotFit()) {
+    // The alignment in use stops explaining the walls (a wrong pick, a wrong place): the
+    // search is checking the plan for a better one.
+    char text[96];
+    std::snprintf(text, sizeof text, "the walls do not fit the alignment (%u of %u)",
+                  current_fit_->inliers, current_fit_->points);
+    r.flag = ReliabilityFlag::kUnreliable;
+    r.reason = text;
+    return r;
+  }
+  if (!placement_confirmed_ && r.flag == ReliabilityFlag::kReliable) {
+    r.flag = ReliabilityFlag::kDegraded;
+    r.reason = "placed by searching the plan, not yet confirmed";
+  }
   if (!current_fit_) {
     // Aligned by hand, not yet checked against the walls: DEGRADED, whatever the odds.
     r.flag = ReliabilityFlag::kDegraded;

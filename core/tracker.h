@@ -76,13 +76,20 @@ struct TrackerOptions {
   size_t history = 16;            // accepted alignments kept
   // Without a pick: search the whole plan (GlobalSearch) once this many wall points are
   // in, every global_interval_s, over the walls of the last global_window_s (0: all).
-  // The places found are refined (RefinePlaces) and the best taken when the next fits
-  // with global_clear_ratio times its error or more, or when it led the next by
-  // global_lead_ratio in global_confirm_searches searches in a row; never when fewer
-  // than global_min_inliers of the walls fit it.
+  // The places found are refined (RefinePlaces). A place leads a search when the next
+  // one's error is at least 1 / global_lead_ratio times its own, and is clear of it at
+  // 1 / global_clear_ratio. The best is taken when it was clear in 2 searches in a row
+  // or led in global_confirm_searches in a row, never when fewer than
+  // global_min_inliers of the walls fit it; it is RELIABLE only once it has led
+  // global_confirm_searches in a row. Once aligned (a pick too) the search goes on as a
+  // check, every global_check_interval_s (global_interval_s while the walls fit the
+  // alignment in use under global_min_inliers or the place is not yet confirmed): another
+  // place that led global_confirm_searches checks in a row and is clear of the one in
+  // use replaces it (recovery).
   bool global_search = false;
   uint32_t global_min_points = 150;
   double global_interval_s = 3.0;
+  double global_check_interval_s = 10.0;
   double global_window_s = 60.0;
   double global_clear_ratio = 0.5;
   double global_lead_ratio = 0.8;
@@ -211,15 +218,20 @@ class Tracker {
     last_start_ns_ = now_ns;
     walked_since_start_m_ = 0;
   }
-  // Global placement: due without an alignment (no pick), with global_min_points, every
-  // global_interval_s. OfferPlaces takes the best of a search's refined places (best
-  // fit first; `centre_slam` is the cloud's centre) when it is clear or has kept the
-  // lead (see TrackerOptions), as a pick would be taken: the cloud's centre on the plan
-  // is the pivot of the correlative search after it.
+  // Global placement and its checks (see TrackerOptions::global_search): due with
+  // global_min_points, every global_interval_s without an alignment and while it is in
+  // doubt, else every global_check_interval_s. OfferPlaces takes a search's refined
+  // places (best fit first; `centre_slam` is the cloud's centre) made while alignment
+  // `based_on_version` was in use (0: none): it places the wearer, confirms the place in
+  // use, or replaces it, as a pick would be taken (the cloud's centre on the plan is the
+  // pivot of the correlative search after it).
   bool GlobalSearchDue(int64_t now_ns, size_t live_points) const;
   void MarkGlobalSearchStarted(int64_t now_ns) { last_global_ns_ = now_ns; }
   Decision OfferPlaces(const std::vector<GlobalPlace>& places, const Eigen::Vector2d& centre_slam,
-                       int64_t stamp_ns);
+                       uint64_t based_on_version, int64_t stamp_ns);
+  // Whether the walls of the latest registration fit the alignment in use under
+  // global_min_inliers (the latest fit says so; nothing before the first).
+  bool WallsDoNotFit() const;
 
   // Offers a finished registration that started from alignment `based_on_version` on
   // `cloud`. Fused into the alignment when it still applies, fits the cloud about as
@@ -300,7 +312,9 @@ class Tracker {
   int64_t last_start_ns_ = 0;
   std::optional<int64_t> last_global_ns_;
   std::optional<Se2> leading_place_;  // the best place of the latest searches...
-  uint32_t lead_count_ = 0;           // ...and how many in a row it led by global_lead_ratio
+  uint32_t lead_count_ = 0;           // ...how many in a row it led by global_lead_ratio...
+  uint32_t clear_count_ = 0;          // ...and was clear by global_clear_ratio
+  bool placement_confirmed_ = true;   // false from a search's place until checks confirm it
   AlignmentFilter filter_;
   std::optional<Eigen::Vector2d> last_slam_position_;
   double last_slam_heading_ = 0;

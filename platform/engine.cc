@@ -121,9 +121,10 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
     const int64_t t0 = now_ns();
     const GlobalSearch& search = job.global->Get();
     done.places = search.Search(job.cloud, search.WallHeadings(job.cloud));
+    if (job.version > 0) done.places.push_back({job.initial});  // the place in use, refined too
     if (job.index)
       done.places =
-          RefinePlaces(done.places, job.cloud, *job.index, job.options.icp, job.score_cap_m,
+          RefinePlaces(done.places, job.cloud, job.path, *job.index, job.options.icp, job.score_cap_m,
                        search.options().distinct_m, search.options().distinct_rad);
     done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
     done.result.points = static_cast<uint32_t>(job.cloud.size());
@@ -402,6 +403,15 @@ void Engine::OnHeadsetPose(const Envelope& e) {
     est.reliability.reason = "headset tracking lost";
   }
   const v1::PlanPose out = ToPlanPose(est, pose.stamp_ns);
+  if (global_) {
+    if (path_.empty() || (pose.pose_slam.position - path_.back().second).norm() >= 0.25)
+      path_.emplace_back(pose.stamp_ns, pose.pose_slam.position);
+    const double window_s = tracker_.options().global_window_s;
+    while (window_s > 0 && !path_.empty() &&
+           path_.front().first < pose.stamp_ns - static_cast<int64_t>(window_s * 1e9))
+      path_.pop_front();
+    while (path_.size() > 20000) path_.pop_front();  // 5 km, when the window is everything
+  }
   if (config_.tracking().track_history_s() > 0) {
     recent_.emplace_back(pose.pose_slam, out);
     const auto horizon = static_cast<int64_t>(config_.tracking().track_history_s() * 1e9);
@@ -580,7 +590,8 @@ void Engine::OnGlobalSearchDone(const Done& done) {
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
   for (const Eigen::Vector2d& p : done.job.cloud) centre += p;
   centre /= static_cast<double>(std::max<size_t>(1, done.job.cloud.size()));
-  const Tracker::Decision d = tracker_.OfferPlaces(places, centre, done.job.stamp_ns);
+  const Tracker::Decision d =
+      tracker_.OfferPlaces(places, centre, done.job.version, done.job.stamp_ns);
   spdlog::info(
       "global search: {} points, {} place(s), best fit {:.4f} ({:.0f}% inliers), next {:.4f}, "
       "{:.1f} ms: {}{}",
@@ -596,7 +607,8 @@ void Engine::OnGlobalSearchDone(const Done& done) {
 std::optional<Engine::Job> Engine::TakeDueJob() {
   if (running_) return std::nullopt;
   if (global_ && tracker_.GlobalSearchDue(latest_stamp_ns_, store_.points())) {
-    // No pick and no place yet: every wall seen so far, searched over the whole plan.
+    // Where on the whole plan do the recent walls fit: to place the wearer, or to check
+    // the place in use (the tracker says which, and how often).
     tracker_.MarkGlobalSearchStarted(latest_stamp_ns_);
     Job job;
     const double window_s = tracker_.options().global_window_s;
@@ -604,10 +616,16 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
         config_.tracking().max_points(), nullptr, 0,
         window_s > 0 ? latest_stamp_ns_ - static_cast<int64_t>(window_s * 1e9) : INT64_MIN);
     if (job.cloud.size() < tracker_.options().global_min_points) return std::nullopt;
+    const int64_t since =
+        window_s > 0 ? latest_stamp_ns_ - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
+    for (const auto& [stamp, position] : path_)
+      if (stamp >= since) job.path.push_back(position);
     job.global = global_;
     job.index = tracker_.index();
     job.options.icp = tracker_.options().icp;
     job.score_cap_m = tracker_.options().score_cap_m;
+    job.initial = tracker_.alignment().T_plan_slam;
+    job.version = tracker_.alignment().version;
     job.stamp_ns = latest_stamp_ns_;
     running_ = true;
     return job;

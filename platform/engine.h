@@ -69,6 +69,7 @@ class Engine {
     // on `index` with options.icp and compare their fits capped at score_cap_m.
     std::shared_ptr<GlobalSearchCache> global;
     double score_cap_m = 0.2;
+    std::vector<Eigen::Vector2d> path;  // the wearer's slam positions over the same window
   };
   struct Done {
     Job job;
@@ -179,6 +180,8 @@ class Engine {
   std::optional<double> eye_z_;  // slam height of the latest pose
   // Recent poses: slam, and as published (for PlanTrack).
   std::deque<std::pair<Pose2, v1::PlanPose>> recent_;
+  // The wearer's path for the global search: slam positions 0.25 m apart, with stamps.
+  std::deque<std::pair<int64_t, Eigen::Vector2d>> path_;
   bool running_ = false;
   uint64_t last_run_generation_ = 0;
 };

@@ -841,9 +841,13 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
         }
       }
     }
-    const double angle = pick_rng.Uniform(-o.max_pick_error_rad, o.max_pick_error_rad);
-    const double offset = pick_rng.Uniform(0.0, o.max_pick_offset_m);
+    double angle = pick_rng.Uniform(-o.max_pick_error_rad, o.max_pick_error_rad);
+    double offset = pick_rng.Uniform(0.0, o.max_pick_offset_m);
     const double direction = pick_rng.Uniform(-M_PI, M_PI);
+    if (o.kidnap_m > 0) {  // the same draws, so a kidnapped walk is the same walk
+      angle = angle < 0 ? -o.kidnap_rad : o.kidnap_rad;
+      offset = o.kidnap_m;
+    }
     // About the wearer: E = Trans(wearer + offset) Rot(angle) Trans(-wearer).
     sim.pick_error =
         Se2{0.0, wearer + offset * Eigen::Vector2d(std::cos(direction), std::sin(direction))} *

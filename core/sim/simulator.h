@@ -121,6 +121,10 @@ struct SimulatorOptions {
   double max_pick_error_rad = 9.0 * M_PI / 180.0;
   double max_pick_offset_m = 2.5;
   double pick_height_m = 1.3;  // above the floor
+  // A kidnapped start (issue 7): when kidnap_m > 0 the pick is exactly this far off at
+  // the wearer (in a random direction) and turned by kidnap_rad (either way).
+  double kidnap_m = 0.0;
+  double kidnap_rad = 0.0;
 };
 
 // A pose of a given trajectory on the plan (e.g. a TUM file): heading and pitch of the

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "tests/registration_scenarios.h"
@@ -183,6 +184,85 @@ TEST(GlobalSearchTest, NothingToFindInNothing) {
   const auto places = search.Search(fog);
   for (const GlobalPlace& p : places) EXPECT_LT(p.score, 0.5);
   EXPECT_LT(search.MemoryBytes(), size_t{20} << 20);
+}
+
+TEST(GlobalSearchTest, RefinedPlacesFitToCentimetresAndComeBestFirst) {
+  const FloorPlan plan = testing::AsymmetricRoom();
+  const GlobalSearch search(plan);
+  const ClosestWallIndex index(plan);
+  SplitMix64 rng(11);
+  const testing::ScanOptions o = NoisyCluttered();
+  for (int trial = 0; trial < 4; ++trial) {
+    const Se2 T_slam_plan = testing::RandomSe2(rng, M_PI, 50.0);
+    const Box window = Box::Around({5, 3.5}, 12);
+    const testing::Scan scan = MakeScan(plan, window, T_slam_plan, o, rng);
+    const std::vector<GlobalPlace> places = search.Search(scan.points);
+    ASSERT_FALSE(places.empty());
+    const std::vector<GlobalPlace> refined =
+        RefinePlaces(places, scan.points, {}, index, IcpOptions{}, 0.2, 1.5, 10.0 * M_PI / 180);
+    ASSERT_FALSE(refined.empty());
+    EXPECT_LE(refined.size(), places.size());
+    const auto e = ErrorAt(refined[0].T_plan_slam, T_slam_plan.Inverse(), window.Centre());
+    EXPECT_LT(e.translation_m, 0.05) << "trial " << trial << ": " << testing::Describe(e);
+    EXPECT_LT(e.rotation_rad, testing::Deg(0.5)) << "trial " << trial;
+    // Four fifths of the points are walls with 3 cm of noise: they fit.
+    EXPECT_GT(refined[0].inlier_ratio, 0.75);
+    for (size_t i = 1; i < refined.size(); ++i) {
+      EXPECT_GE(refined[i].fit_mse, refined[i - 1].fit_mse);
+      // Merged: no two places left on top of each other.
+      EXPECT_GT((refined[i].T_plan_slam.t - refined[0].T_plan_slam.t).norm() +
+                    std::abs(WrapAngle(refined[i].T_plan_slam.theta - refined[0].T_plan_slam.theta)),
+                0.1);
+    }
+  }
+  // Nothing in, nothing out; non-finite points are ignored.
+  EXPECT_TRUE(RefinePlaces({}, {}, {}, index, IcpOptions{}, 0.2, 1.5, 0.17).empty());
+  EXPECT_TRUE(RefinePlaces({GlobalPlace{}}, {Eigen::Vector2d(NAN, 0)}, {}, index, IcpOptions{}, 0.2,
+                           1.5, 0.17)
+                  .empty());
+}
+
+TEST(GlobalSearchTest, PlacesThatWalkTheWearerThroughWallsGoLast) {
+  // Twelve identical rooms; the wearer came along the corridor from 8 m west of room 2's
+  // door, then into the room. Its walls fit every room, but only in some of them does the
+  // walk through the corridor stay clear of walls: not in rooms 0 and 1 (the corridor's
+  // west end is in the way), nor in the south rooms turned round near the east end.
+  const FloorPlan plan = testing::SyntheticOffice(6);
+  GlobalSearchOptions options;
+  options.places = 12;
+  const GlobalSearch search(plan, options);
+  const ClosestWallIndex index(plan);
+  SplitMix64 rng(7);
+  const Se2 T_slam_plan{0.6, {3.0, -7.0}};
+  const Box window{{9.9, 1.9}, {15.1, 6.1}};
+  testing::ScanOptions o;
+  o.noise_m = 0.02;
+  const testing::Scan scan = MakeScan(plan, window, T_slam_plan, o, rng);
+  std::vector<Eigen::Vector2d> path;
+  for (double x = 4.5; x <= 12.5; x += 0.25) path.push_back(T_slam_plan * Eigen::Vector2d(x, 1.0));
+  for (double y = 1.25; y <= 4.0; y += 0.25) path.push_back(T_slam_plan * Eigen::Vector2d(12.5, y));
+  const std::vector<GlobalPlace> places = search.Search(scan.points);
+  const IcpOptions icp;
+  const auto everywhere = RefinePlaces(places, scan.points, {}, index, icp, 0.2, 1.5, 0.17);
+  const auto walkable = RefinePlaces(places, scan.points, path, index, icp, 0.2, 1.5, 0.17);
+  ASSERT_GE(everywhere.size(), 10u);
+  ASSERT_EQ(walkable.size(), everywhere.size());
+  // The places whose walk stays clear of walls come first, then the others.
+  const auto clear_end =
+      std::find_if(walkable.begin(), walkable.end(),
+                   [](const GlobalPlace& p) { return p.path_crossings > 0; });
+  EXPECT_GE(walkable.end() - clear_end, 3);
+  EXPECT_TRUE(std::all_of(clear_end, walkable.end(),
+                          [](const GlobalPlace& p) { return p.path_crossings > 0; }));
+  bool truth_kept = false;
+  for (auto it = walkable.begin(); it != clear_end; ++it) {
+    const GlobalPlace& p = *it;
+    const Eigen::Vector2d start = p.T_plan_slam * path.front();
+    EXPECT_GT(start.x(), 0.0) << "the walk would start west of the building";
+    truth_kept = truth_kept ||
+                 ErrorAt(p.T_plan_slam, T_slam_plan.Inverse(), window.Centre()).translation_m < 0.1;
+  }
+  EXPECT_TRUE(truth_kept);
 }
 
 }  // namespace

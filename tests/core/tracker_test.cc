@@ -502,5 +502,109 @@ TEST(TrackerJumpTest, FarJumpWaitsForConfirmation) {
   EXPECT_THAT(tracker.alignment().T_plan_slam, IsNearlySe2(far.T_plan_slam, 1e-9, 1e-9));
 }
 
+// Placement without a pick (issue 7): the decision on a search's refined places.
+class GlobalPlacementDecisionTest : public TrackerTest {
+ protected:
+  GlobalPlacementDecisionTest() {
+    TrackerOptions o;
+    o.global_search = true;
+    tracker_ = Tracker(o);
+    tracker_.SetPlan(index_);
+    // The truth fits the cloud to a few centimetres; a place 6 m off fits a third as well.
+    truth_place_ = {truth_, 0.9, 0.0004, 0.98};
+    other_place_ = {Se2{truth_.theta, truth_.t + Eigen::Vector2d(6, 0)}, 0.8, 0.0012, 0.9};
+  }
+  Tracker::Decision Offer(std::vector<GlobalPlace> places, int64_t stamp) {
+    return tracker_.OfferPlaces(places, centre_, tracker_.alignment().version, stamp);
+  }
+  GlobalPlace truth_place_, other_place_;
+  const Eigen::Vector2d centre_{1.0, 2.0};  // slam frame
+};
+
+TEST_F(GlobalPlacementDecisionTest, AClearPlaceIsTakenWhenTheNextSearchAgreesAndTrustedAfterThree) {
+  EXPECT_THAT(tracker_.CurrentReliability().reason, HasSubstr("searching the plan"));
+  // Clear of the next (a third of its error), but one search proves little.
+  const Tracker::Decision first = Offer({truth_place_, other_place_}, 1);
+  EXPECT_FALSE(first.accepted);
+  EXPECT_FALSE(tracker_.has_alignment());
+  // The same place clear again: taken, not yet RELIABLE.
+  const Tracker::Decision second = Offer({truth_place_, other_place_}, 2);
+  ASSERT_TRUE(second.accepted) << second.reason;
+  EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kGlobalSearch);
+  EXPECT_THAT(tracker_.alignment().T_plan_slam, IsNearlySe2(truth_, 1e-12, 1e-12));
+  // The next search (a check) leads with the place in use: confirmed.
+  const Tracker::Decision third = Offer({truth_place_, other_place_}, 3);
+  EXPECT_FALSE(third.accepted);
+  EXPECT_THAT(third.reason, HasSubstr("place confirmed"));
+  EXPECT_EQ(tracker_.alignment().version, 1u);
+}
+
+TEST_F(GlobalPlacementDecisionTest, AnUnconfirmedPlaceIsNeverReliable) {
+  ASSERT_FALSE(Offer({truth_place_, other_place_}, 1).accepted);
+  ASSERT_TRUE(Offer({truth_place_, other_place_}, 2).accepted);
+  // Registrations fit it perfectly...
+  const std::vector<Eigen::Vector2d> cloud = Cloud();
+  for (int i = 0; i < 6; ++i) {
+    tracker_.Correct({{2.0 + 0.3 * i, 1.5}, 0, 1.6});
+    tracker_.Offer(ResultFor(truth_, cloud), cloud, tracker_.alignment().version, 10 + i);
+  }
+  // ...yet until a search confirms the place, it is at best DEGRADED.
+  EXPECT_NE(tracker_.CurrentReliability().flag, ReliabilityFlag::kReliable);
+  EXPECT_THAT(tracker_.CurrentReliability().reason, HasSubstr("not yet confirmed"));
+  // The registrations changed the alignment by centimetres: still the same place.
+  GlobalPlace again = truth_place_;
+  again.T_plan_slam = tracker_.alignment().T_plan_slam;
+  EXPECT_THAT(Offer({again, other_place_}, 20).reason, HasSubstr("place confirmed"));
+  EXPECT_EQ(tracker_.CurrentReliability().flag, ReliabilityFlag::kReliable);
+}
+
+TEST_F(GlobalPlacementDecisionTest, LookAlikePlacesAreNotTaken) {
+  GlobalPlace twin = other_place_;
+  twin.fit_mse = truth_place_.fit_mse * 1.1;  // fits nearly as well
+  for (int i = 0; i < 10; ++i) {
+    const Tracker::Decision d = Offer({truth_place_, twin}, i);
+    EXPECT_FALSE(d.accepted);
+    EXPECT_THAT(d.reason, HasSubstr("led 0 of 3"));
+  }
+  EXPECT_FALSE(tracker_.has_alignment());
+  // Nor a place that fits too few of the walls, however clear.
+  GlobalPlace poor = truth_place_;
+  poor.inlier_ratio = 0.4;
+  for (int i = 0; i < 5; ++i) EXPECT_FALSE(Offer({poor}, 20 + i).accepted);
+  // A place that keeps the lead without being clear: taken after three searches.
+  GlobalPlace runner_up = other_place_;
+  runner_up.fit_mse = truth_place_.fit_mse * 1.5;
+  EXPECT_FALSE(Offer({truth_place_, runner_up}, 30).accepted);
+  EXPECT_FALSE(Offer({truth_place_, runner_up}, 31).accepted);
+  EXPECT_TRUE(Offer({truth_place_, runner_up}, 32).accepted);
+}
+
+TEST_F(GlobalPlacementDecisionTest, AWrongPickIsReplacedByAPlaceThatKeepsWinning) {
+  // The pick put the wearer 6 m off (the other place); the walls fit the truth.
+  const Se2 wrong = other_place_.T_plan_slam;
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(wrong, {4, 2}, {1, 0}), 1), "");
+  GlobalPlace in_use = other_place_;
+  in_use.fit_mse = 0.01;  // the place in use, refined: it fits badly
+  in_use.inlier_ratio = 0.3;
+  EXPECT_FALSE(Offer({truth_place_, in_use}, 2).accepted);
+  EXPECT_FALSE(Offer({truth_place_, in_use}, 3).accepted);
+  const Tracker::Decision third = Offer({truth_place_, in_use}, 4);
+  ASSERT_TRUE(third.accepted) << third.reason;
+  EXPECT_THAT(third.reason, HasSubstr("relocated"));
+  EXPECT_THAT(tracker_.alignment().T_plan_slam, IsNearlySe2(truth_, 1e-12, 1e-12));
+  EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kGlobalSearch);
+}
+
+TEST_F(GlobalPlacementDecisionTest, ThePlaceInUseStaysAgainstATieAndStaleSearches) {
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
+  GlobalPlace twin = other_place_;
+  twin.fit_mse = truth_place_.fit_mse * 0.9;  // a look-alike fits marginally better
+  for (int i = 0; i < 10; ++i) EXPECT_FALSE(Offer({twin, truth_place_}, 2 + i).accepted);
+  EXPECT_THAT(tracker_.alignment().T_plan_slam, IsNearlySe2(truth_, 1e-12, 1e-12));
+  // A search made under an alignment since replaced says nothing.
+  EXPECT_THAT(tracker_.OfferPlaces({other_place_}, centre_, 0, 20).reason,
+              HasSubstr("alignment changed"));
+}
+
 }  // namespace
 }  // namespace floorpose

@@ -46,6 +46,7 @@ struct SuiteOptions {
   std::string config;  // floorposed configuration to evaluate with
   int first_seed = 1;
   bool no_pick = false;  // drop the walks' wall picks: the daemon searches the plan
+  bool kidnap = false;   // wrong picks (simulate --kidnap), searched and checked
 };
 
 struct SuiteRun {
@@ -69,6 +70,18 @@ std::vector<std::string> PlanFiles(const std::vector<std::string>& inputs) {
   return out;
 }
 
+// Seconds with one decimal, or "never" (infinite).
+std::string Seconds(double s) {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(1);
+  if (std::isfinite(s))
+    out << s;
+  else
+    out << "never";
+  return out.str();
+}
+
 // Issue 7's placement figures (runs without a pick, one method), per scenario. The search
 // ends at the first pose flagged RELIABLE: within 1 m, the wearer is placed; more than
 // 1 m off, the search flagged a wrong place RELIABLE. A run never flagged RELIABLE is
@@ -84,16 +97,6 @@ std::string PlacementTable(const std::vector<EvalReport>& reports, const std::st
         "| scenario | runs | placed within 1 m | placed more than 1 m off | never placed | "
         "seconds to placed, median | slowest | RELIABLE poses > 1 m off after placement "
         "(runs) |\n|---|---|---|---|---|---|---|---|\n";
-  auto seconds = [](double s) {
-    std::ostringstream out;
-    out.setf(std::ios::fixed);
-    out.precision(1);
-    if (std::isfinite(s))
-      out << s;
-    else
-      out << "never";
-    return out.str();
-  };
   auto row = [&](const std::string& name, const std::string& scenario) {
     size_t runs = 0, placed = 0, wrong = 0, false_poses = 0, false_runs = 0;
     std::vector<double> times;
@@ -116,7 +119,44 @@ std::string PlacementTable(const std::vector<EvalReport>& reports, const std::st
     std::sort(times.begin(), times.end());
     md << "| " << name << " | " << runs << " | " << placed << " (" << 100.0 * placed / runs
        << "%) | " << wrong << " | " << runs - placed - wrong << " | "
-       << seconds(times[(times.size() - 1) / 2]) << " | " << seconds(times.back()) << " | "
+       << Seconds(times[(times.size() - 1) / 2]) << " | " << Seconds(times.back()) << " | "
+       << false_poses << " (" << false_runs << ") |\n";
+  };
+  for (const std::string& scenario : scenarios) row(scenario, scenario);
+  row("all", "");
+  return md.str();
+}
+
+// Issue 7's kidnap figures (wrong picks, 10 m and 90 degrees off), per scenario: runs
+// flagged UNRELIABLE within 5 s of the pick, runs flagged RELIABLE within 1 m within 60 s
+// of it (recovered), the median time to that, and RELIABLE poses more than 1 m off.
+std::string KidnapTable(const std::vector<EvalReport>& reports, const std::string& method,
+                        const std::vector<std::string>& scenarios) {
+  std::ostringstream md;
+  md.setf(std::ios::fixed);
+  md.precision(1);
+  md << "\nKidnapped (" << method
+     << "; a wall pick 10 m and 90 degrees off, times from the pick):\n\n"
+        "| scenario | runs | UNRELIABLE within 5 s | recovered within 60 s | seconds to recovered, "
+        "median | slowest | RELIABLE poses > 1 m off (runs) |\n|---|---|---|---|---|---|---|\n";
+  auto row = [&](const std::string& name, const std::string& scenario) {
+    size_t runs = 0, flagged = 0, recovered = 0, false_poses = 0, false_runs = 0;
+    std::vector<double> times;
+    for (const EvalReport& r : reports) {
+      if (r.method != method || (!scenario.empty() && r.scenario != scenario)) continue;
+      ++runs;
+      flagged += r.time_to_unreliable_s >= 0 && r.time_to_unreliable_s <= 5.0;
+      recovered += r.time_to_recovered_s >= 0 && r.time_to_recovered_s <= 60.0;
+      times.push_back(r.time_to_recovered_s >= 0 ? r.time_to_recovered_s
+                                                 : std::numeric_limits<double>::infinity());
+      false_poses += r.false_reliable_poses;
+      false_runs += r.false_reliable_poses > 0;
+    }
+    if (!runs) return;
+    std::sort(times.begin(), times.end());
+    md << "| " << name << " | " << runs << " | " << flagged << " (" << 100.0 * flagged / runs
+       << "%) | " << recovered << " (" << 100.0 * recovered / runs << "%) | "
+       << Seconds(times[(times.size() - 1) / 2]) << " | " << Seconds(times.back()) << " | "
        << false_poses << " (" << false_runs << ") |\n";
   };
   for (const std::string& scenario : scenarios) row(scenario, scenario);
@@ -173,6 +213,10 @@ int RunSuite(const SuiteOptions& o) {
       sim.seed = run.seed;
       sim.scenario = *sim::ParseScenario(run.scenario);
       if (o.length_m > 0) sim.target_length_m = o.length_m;
+      if (o.kidnap) {
+        sim.kidnap_m = 10.0;
+        sim.kidnap_rad = M_PI / 2;
+      }
       SimulateRecordingResult simulated;
       std::string error;
       if (!SimulateToRecording(loaded[run.plan_path], sim, nullptr, {}, run.recording, &simulated,
@@ -187,7 +231,7 @@ int RunSuite(const SuiteOptions& o) {
         config.set_log_level("warn");
         const bool registers = method != "none" && method != "best-fit";
         config.mutable_registration()->set_method(registers ? method : "icp");
-        if (o.no_pick) config.mutable_tracking()->set_global_search(true);
+        if (o.no_pick || o.kidnap) config.mutable_tracking()->set_global_search(true);
         const Baseline baseline = method == "none"       ? Baseline::kNoAlgorithm
                                   : method == "best-fit" ? Baseline::kBestFit
                                                          : Baseline::kNone;
@@ -361,6 +405,7 @@ int RunSuite(const SuiteOptions& o) {
        << (reliable ? 100.0 * reliable_ok / reliable : 0.0) << "% | " << 100.0 * ok / n << "% |\n";
   }
   if (o.no_pick) md << PlacementTable(reports, first, o.scenarios);
+  if (o.kidnap) md << KidnapTable(reports, first, o.scenarios);
   const auto curve = CalibrationCurve(predicted, within);
   md << "\nCalibration of the published probability (" << first << ", every pose):\n\n"
      << CalibrationTable(curve);
@@ -405,6 +450,10 @@ Run AddEvalSuiteCommand(CLI::App& app) {
   app.add_flag("--no-pick", o->no_pick,
                "drop the walks' wall picks and place the wearer by searching the plan "
                "(tracking.global_search); adds the placement table");
+  app.add_flag("--kidnap", o->kidnap,
+               "start every walk with a wrong wall pick (10 m and 90 degrees off, as "
+               "`simulate --kidnap`) and search the plan (tracking.global_search); adds the "
+               "kidnap table");
   return [o] { return RunSuite(*o); };
 }
 

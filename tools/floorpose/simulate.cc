@@ -102,6 +102,13 @@ Run AddSimulateCommand(CLI::App& app) {
       ->check(CLI::IsMember({"unity", "zup"}))
       ->capture_default_str();
   app.add_flag("--no-mesh", o->no_mesh, "poses and ground truth only");
+  app.add_flag(
+      "--kidnap",
+      [o](int64_t) {
+        o->sim.kidnap_m = 10.0;
+        o->sim.kidnap_rad = M_PI / 2;
+      },
+      "write a wrong wall pick: 10 m and 90 degrees off at the wearer");
   return [o] { return RunSimulate(*o); };
 }
 

@@ -213,6 +213,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     e.alignment_version = p.alignment_version();
     e.registered = registered.count(e.stamp_ns) > 0;
     e.reliable = p.reliability().flag() == v1::Reliability::RELIABLE;
+    e.unreliable = p.reliability().flag() == v1::Reliability::UNRELIABLE;
     e.probability = p.reliability().probability();
     e.reason = p.reliability().reason();
     if (auto f = features.find(e.stamp_ns); f != features.end()) e.features = f->second;
@@ -251,6 +252,17 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     report->reliable_precision_1m =
         reliable ? static_cast<double>(reliable_ok) / static_cast<double>(reliable) : 0.0;
     report->false_reliable_poses = reliable - reliable_ok;
+    const std::vector<EvalPose>& scored = report->track;
+    const auto since_first = [&](auto it) {
+      return it == scored.end()
+                 ? -1.0
+                 : static_cast<double>(it->stamp_ns - scored.front().stamp_ns) * 1e-9;
+    };
+    report->time_to_unreliable_s = since_first(std::find_if(
+        scored.begin(), scored.end(), [](const EvalPose& p) { return p.unreliable; }));
+    report->time_to_recovered_s = since_first(
+        std::find_if(scored.begin(), scored.end(),
+                     [](const EvalPose& p) { return p.reliable && p.error_m <= 1.0; }));
     const std::vector<EvalPose>& t = report->track;
     report->pick_error_m = t.front().error_m;
     // The first pose under a registered alignment (turning the pick onto the walls'
@@ -300,6 +312,8 @@ std::string ToJson(const EvalReport& r) {
     << ", \"unaligned_poses\": " << r.unaligned_poses
     << ", \"time_to_first_reliable_s\": " << r.time_to_first_reliable_s
     << ", \"false_reliable_poses\": " << r.false_reliable_poses
+    << ", \"time_to_unreliable_s\": " << r.time_to_unreliable_s
+    << ", \"time_to_recovered_s\": " << r.time_to_recovered_s
     << ", \"global_searches\": " << r.global_searches << "}";
   return s.str();
 }
@@ -326,8 +340,10 @@ std::string ToText(const EvalReport& r) {
     << "  flagged reliable              " << 100 * r.reliable_fraction << "% of poses, "
     << 100 * r.reliable_precision_1m << "% of those within 1 m\n"
     << "  first reliable pose after     " << r.time_to_first_reliable_s << " s (-1: none)\n"
-    << "  reliable but over 1 m off     " << r.false_reliable_poses << " poses\n";
-  if (r.global_searches) s << "  whole-plan searches (no pick) " << r.global_searches << "\n";
+    << "  reliable but over 1 m off     " << r.false_reliable_poses << " poses\n"
+    << "  first unreliable pose after   " << r.time_to_unreliable_s << " s (-1: none)\n"
+    << "  first reliable within 1 m     " << r.time_to_recovered_s << " s (-1: none)\n";
+  if (r.global_searches) s << "  whole-plan searches           " << r.global_searches << "\n";
   return s.str();
 }
 

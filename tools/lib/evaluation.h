@@ -29,6 +29,7 @@ struct EvalPose {
   double true_x = 0, true_y = 0;
   double error_m = 0;
   bool reliable = false;
+  bool unreliable = false;  // flagged UNRELIABLE (not DEGRADED)
   double probability = 0;  // published probability of being within 1 m
   std::string reason;      // published reliability reason
   // The tracker's reliability features when the pose was published (calibration input).
@@ -60,7 +61,10 @@ struct EvalReport {
   // the poses flagged RELIABLE while more than 1 m off.
   double time_to_first_reliable_s = -1;
   size_t false_reliable_poses = 0;
-  size_t global_searches = 0;  // whole-plan searches run (no pick)
+  // From the first scored pose (a wrong pick: simulate --kidnap) to the first flagged
+  // UNRELIABLE, and to the first RELIABLE within 1 m (-1: never).
+  double time_to_unreliable_s = -1, time_to_recovered_s = -1;
+  size_t global_searches = 0;  // whole-plan searches run (placements and checks)
   std::vector<EvalPose> track;
   std::vector<v1::PlanPose> plan_poses;     // as the Engine published them, in order
   size_t plan_tracks = 0;                   // PlanTrack messages published
