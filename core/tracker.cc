@@ -237,8 +237,8 @@ Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
   const bool won = clear_count_ >= 2 || lead_count_ >= options_.global_confirm_searches;
   char text[200];
   std::snprintf(text, sizeof text,
-                "best fits %.0f%% of the walls, the next's error %.1f times its own; led %u of "
-                "%u searches in a row",
+                "best fits %.0f%% of the walls, the next's error %.1f times its own; in the "
+                "lead %u searches in a row (%u to win)",
                 100 * best.inlier_ratio, next / std::max(best.fit_mse, 1e-12), lead_count_,
                 options_.global_confirm_searches);
   d.reason = text;
@@ -262,12 +262,19 @@ Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
     if (lead_count_ < options_.global_confirm_searches ||
         !(best.fit_mse < options_.global_clear_ratio * current_mse))
       return d;
-    d.reason = "relocated (the place in use fits " +
-               (std::isfinite(current_mse)
-                    ? std::to_string(static_cast<int>(current_mse / std::max(best.fit_mse, 1e-12))) +
-                          " times worse"
-                    : std::string("nothing")) +
-               "): " + d.reason;
+    // A confirmed place (or a pick) that the registrations find fitting stays: a place
+    // that fits the window a little better is a look-alike, not a recovery.
+    if (placement_confirmed_ && !WallsDoNotFit()) {
+      d.reason = "the place in use still fits the walls; " + d.reason;
+      return d;
+    }
+    d.reason =
+        "relocated (the place in use fits " +
+        (std::isfinite(current_mse)
+             ? std::to_string(static_cast<int>(current_mse / std::max(best.fit_mse, 1e-12))) +
+                   " times worse"
+             : std::string("nothing")) +
+        "): " + d.reason;
   } else if (!won) {
     return d;
   }

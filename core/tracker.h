@@ -86,7 +86,7 @@ struct TrackerOptions {
   // alignment in use under global_min_inliers or the place is not yet confirmed): another
   // place that led global_confirm_searches checks in a row and is clear of the one in
   // use replaces it (recovery).
-  bool global_search = false;
+  bool global_search = true;
   uint32_t global_min_points = 150;
   double global_interval_s = 3.0;
   double global_check_interval_s = 10.0;

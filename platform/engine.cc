@@ -124,8 +124,8 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
     if (job.version > 0) done.places.push_back({job.initial});  // the place in use, refined too
     if (job.index)
       done.places =
-          RefinePlaces(done.places, job.cloud, job.path, *job.index, job.options.icp, job.score_cap_m,
-                       search.options().distinct_m, search.options().distinct_rad);
+          RefinePlaces(done.places, job.cloud, job.path, *job.index, job.options.icp,
+                       job.score_cap_m, search.options().distinct_m, search.options().distinct_rad);
     done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
     done.result.points = static_cast<uint32_t>(job.cloud.size());
   } else if (job.index) {

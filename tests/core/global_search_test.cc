@@ -210,9 +210,10 @@ TEST(GlobalSearchTest, RefinedPlacesFitToCentimetresAndComeBestFirst) {
     for (size_t i = 1; i < refined.size(); ++i) {
       EXPECT_GE(refined[i].fit_mse, refined[i - 1].fit_mse);
       // Merged: no two places left on top of each other.
-      EXPECT_GT((refined[i].T_plan_slam.t - refined[0].T_plan_slam.t).norm() +
-                    std::abs(WrapAngle(refined[i].T_plan_slam.theta - refined[0].T_plan_slam.theta)),
-                0.1);
+      EXPECT_GT(
+          (refined[i].T_plan_slam.t - refined[0].T_plan_slam.t).norm() +
+              std::abs(WrapAngle(refined[i].T_plan_slam.theta - refined[0].T_plan_slam.theta)),
+          0.1);
     }
   }
   // Nothing in, nothing out; non-finite points are ignored.
@@ -248,9 +249,8 @@ TEST(GlobalSearchTest, PlacesThatWalkTheWearerThroughWallsGoLast) {
   ASSERT_GE(everywhere.size(), 10u);
   ASSERT_EQ(walkable.size(), everywhere.size());
   // The places whose walk stays clear of walls come first, then the others.
-  const auto clear_end =
-      std::find_if(walkable.begin(), walkable.end(),
-                   [](const GlobalPlace& p) { return p.path_crossings > 0; });
+  const auto clear_end = std::find_if(walkable.begin(), walkable.end(),
+                                      [](const GlobalPlace& p) { return p.path_crossings > 0; });
   EXPECT_GE(walkable.end() - clear_end, 3);
   EXPECT_TRUE(std::all_of(clear_end, walkable.end(),
                           [](const GlobalPlace& p) { return p.path_crossings > 0; }));

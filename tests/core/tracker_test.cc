@@ -564,7 +564,7 @@ TEST_F(GlobalPlacementDecisionTest, LookAlikePlacesAreNotTaken) {
   for (int i = 0; i < 10; ++i) {
     const Tracker::Decision d = Offer({truth_place_, twin}, i);
     EXPECT_FALSE(d.accepted);
-    EXPECT_THAT(d.reason, HasSubstr("led 0 of 3"));
+    EXPECT_THAT(d.reason, HasSubstr("in the lead 0 searches"));
   }
   EXPECT_FALSE(tracker_.has_alignment());
   // Nor a place that fits too few of the walls, however clear.
@@ -583,6 +583,14 @@ TEST_F(GlobalPlacementDecisionTest, AWrongPickIsReplacedByAPlaceThatKeepsWinning
   // The pick put the wearer 6 m off (the other place); the walls fit the truth.
   const Se2 wrong = other_place_.T_plan_slam;
   ASSERT_EQ(tracker_.ApplyWallPick(PickFor(wrong, {4, 2}, {1, 0}), 1), "");
+  // The first registration finds the walls do not fit the pick: UNRELIABLE at once.
+  const std::vector<Eigen::Vector2d> cloud = Cloud();
+  tracker_.Correct({{2.0, 1.5}, 0, 1.6});
+  EXPECT_FALSE(
+      tracker_.Offer(ResultFor(wrong, cloud), cloud, tracker_.alignment().version, 2).accepted);
+  EXPECT_TRUE(tracker_.WallsDoNotFit());
+  EXPECT_EQ(tracker_.CurrentReliability().flag, ReliabilityFlag::kUnreliable);
+  EXPECT_THAT(tracker_.CurrentReliability().reason, HasSubstr("walls do not fit"));
   GlobalPlace in_use = other_place_;
   in_use.fit_mse = 0.01;  // the place in use, refined: it fits badly
   in_use.inlier_ratio = 0.3;
@@ -601,8 +609,22 @@ TEST_F(GlobalPlacementDecisionTest, ThePlaceInUseStaysAgainstATieAndStaleSearche
   twin.fit_mse = truth_place_.fit_mse * 0.9;  // a look-alike fits marginally better
   for (int i = 0; i < 10; ++i) EXPECT_FALSE(Offer({twin, truth_place_}, 2 + i).accepted);
   EXPECT_THAT(tracker_.alignment().T_plan_slam, IsNearlySe2(truth_, 1e-12, 1e-12));
+  // Nor does a place that fits the window clearly better replace a pick whose walls the
+  // registrations find fitting: a look-alike, not a recovery.
+  const std::vector<Eigen::Vector2d> cloud = Cloud();
+  tracker_.Correct({{2.0, 1.5}, 0, 1.6});
+  tracker_.Offer(ResultFor(truth_, cloud), cloud, tracker_.alignment().version, 20);
+  ASSERT_FALSE(tracker_.WallsDoNotFit());
+  twin.fit_mse = truth_place_.fit_mse * 0.3;
+  for (int i = 0; i < 5; ++i) {
+    const Tracker::Decision d = Offer({twin, truth_place_}, 30 + i);
+    EXPECT_FALSE(d.accepted);
+    if (i >= 2) {
+      EXPECT_THAT(d.reason, HasSubstr("still fits the walls"));
+    }
+  }
   // A search made under an alignment since replaced says nothing.
-  EXPECT_THAT(tracker_.OfferPlaces({other_place_}, centre_, 0, 20).reason,
+  EXPECT_THAT(tracker_.OfferPlaces({other_place_}, centre_, 0, 40).reason,
               HasSubstr("alignment changed"));
 }
 

@@ -2,6 +2,8 @@
 // searching the whole plan, and the registrations after it track as after a pick.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "platform/floor_plan_io.h"
 #include "tests/test_util.h"
 #include "tools/lib/evaluation.h"
@@ -28,6 +30,7 @@ TEST_F(GlobalPlacementTest, AWalkWithoutAPickIsPlacedAndNeverReliablyWrong) {
   config.set_plan_path(plan_path);
 
   // Without the search, a walk without its pick is never placed.
+  config.mutable_tracking()->set_global_search(false);
   EvalReport waiting;
   ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &waiting, &error, nullptr,
                        /*no_pick=*/true))
@@ -38,8 +41,9 @@ TEST_F(GlobalPlacementTest, AWalkWithoutAPickIsPlacedAndNeverReliablyWrong) {
   EXPECT_EQ(waiting.plan_poses.back().reliability().reason(),
             "no alignment: waiting for a wall pick");
 
-  // With it: placed, tracked to the end, and never RELIABLE while more than 1 m off.
-  config.mutable_tracking()->set_global_search(true);
+  // With it (the default): placed, tracked to the end, and never RELIABLE while more
+  // than 1 m off.
+  config.mutable_tracking()->clear_global_search();
   EvalReport placed;
   ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &placed, &error, nullptr, true))
       << error;
@@ -55,6 +59,51 @@ TEST_F(GlobalPlacementTest, AWalkWithoutAPickIsPlacedAndNeverReliablyWrong) {
       "mean %.2f m, max %.2f m\n",
       placed.unaligned_poses, placed.unaligned_poses + placed.poses, placed.global_searches,
       placed.time_to_first_reliable_s, placed.mean_error_m, placed.max_error_m);
+}
+
+TEST_F(GlobalPlacementTest, AWrongPickIsFlaggedAndUndone) {
+  // simulate --kidnap: the pick is 10 m and 90 degrees off at the wearer.
+  const std::string plan_path = FLOORPOSE_SOURCE_DIR "/tools/demo/office.geojson";
+  const FloorPlanParse plan = platform::LoadFloorPlan(plan_path);
+  ASSERT_TRUE(plan.ok()) << plan.error;
+  sim::SimulatorOptions o;
+  o.seed = 1;
+  o.scenario = sim::Scenario::kOffice;
+  o.kidnap_m = 10.0;
+  o.kidnap_rad = M_PI / 2;
+  SimulateRecordingResult simulated;
+  std::string error;
+  const std::string recording = Path("kidnapped.rec");
+  ASSERT_TRUE(SimulateToRecording(plan.plan, o, nullptr, {}, recording, &simulated, &error))
+      << error;
+  const Se2& e = simulated.simulation.pick_error;
+  EXPECT_NEAR(std::abs(e.theta), M_PI / 2, 1e-9);
+  const Eigen::Vector2d wearer =
+      simulated.simulation.steps[simulated.simulation.pick_step].true_plan.position;
+  EXPECT_NEAR((e * wearer - wearer).norm(), 10.0, 1e-6);
+
+  v1::FloorposedConfig config;
+  config.set_plan_path(plan_path);
+  // Without the search the tracker cannot undo it: the pick's search reaches 2.5 m.
+  config.mutable_tracking()->set_global_search(false);
+  EvalReport stuck;
+  ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &stuck, &error)) << error;
+  EXPECT_GT(stuck.mean_error_m, 5.0);
+  EXPECT_LT(stuck.time_to_recovered_s, 0.0);
+
+  // With it (the default): flagged UNRELIABLE at once, placed right within a minute,
+  // never RELIABLE while wrong.
+  config.mutable_tracking()->clear_global_search();
+  EvalReport undone;
+  ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &undone, &error)) << error;
+  EXPECT_GE(undone.time_to_unreliable_s, 0.0);
+  EXPECT_LE(undone.time_to_unreliable_s, 5.0);
+  EXPECT_GE(undone.time_to_recovered_s, 0.0);
+  EXPECT_LE(undone.time_to_recovered_s, 60.0);
+  EXPECT_EQ(undone.false_reliable_poses, 0u);
+  EXPECT_LT(undone.final_error_m, 1.0);
+  std::printf("kidnapped: UNRELIABLE after %.1f s, recovered after %.1f s, final error %.2f m\n",
+              undone.time_to_unreliable_s, undone.time_to_recovered_s, undone.final_error_m);
 }
 
 }  // namespace

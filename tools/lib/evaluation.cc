@@ -258,11 +258,11 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
                  ? -1.0
                  : static_cast<double>(it->stamp_ns - scored.front().stamp_ns) * 1e-9;
     };
-    report->time_to_unreliable_s = since_first(std::find_if(
-        scored.begin(), scored.end(), [](const EvalPose& p) { return p.unreliable; }));
-    report->time_to_recovered_s = since_first(
-        std::find_if(scored.begin(), scored.end(),
-                     [](const EvalPose& p) { return p.reliable && p.error_m <= 1.0; }));
+    report->time_to_unreliable_s = since_first(
+        std::find_if(scored.begin(), scored.end(), [](const EvalPose& p) { return p.unreliable; }));
+    report->time_to_recovered_s =
+        since_first(std::find_if(scored.begin(), scored.end(),
+                                 [](const EvalPose& p) { return p.reliable && p.error_m <= 1.0; }));
     const std::vector<EvalPose>& t = report->track;
     report->pick_error_m = t.front().error_m;
     // The first pose under a registered alignment (turning the pick onto the walls'

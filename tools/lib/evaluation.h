@@ -30,8 +30,8 @@ struct EvalPose {
   double error_m = 0;
   bool reliable = false;
   bool unreliable = false;  // flagged UNRELIABLE (not DEGRADED)
-  double probability = 0;  // published probability of being within 1 m
-  std::string reason;      // published reliability reason
+  double probability = 0;   // published probability of being within 1 m
+  std::string reason;       // published reliability reason
   // The tracker's reliability features when the pose was published (calibration input).
   std::array<double, ReliabilityModel::kFeatures> features{};
   uint32_t marker = 0;
