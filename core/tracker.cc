@@ -187,9 +187,9 @@ std::string Tracker::ApplyWallPick(const WallPick& pick, int64_t stamp_ns) {
 
 bool Tracker::GlobalSearchDue(int64_t now_ns, size_t live_points) const {
   if (!options_.global_search || !index_ || live_points < options_.global_min_points) return false;
-  const bool doubt = !has_alignment() || !placement_confirmed_ || WallsDoNotFit();
-  const double interval = doubt ? options_.global_interval_s : options_.global_check_interval_s;
-  return !last_global_ns_ || static_cast<double>(now_ns - *last_global_ns_) * 1e-9 >= interval;
+  if (has_alignment() && placement_confirmed_ && !WallsDoNotFit()) return false;
+  return !last_global_ns_ ||
+         static_cast<double>(now_ns - *last_global_ns_) * 1e-9 >= options_.global_interval_s;
 }
 
 bool Tracker::WallsDoNotFit() const {

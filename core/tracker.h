@@ -82,14 +82,12 @@ struct TrackerOptions {
   // or led in global_confirm_searches in a row, never when fewer than
   // global_min_inliers of the walls fit it; it is RELIABLE only once it has led
   // global_confirm_searches in a row. Once aligned (a pick too) the search goes on as a
-  // check, every global_check_interval_s (global_interval_s while the walls fit the
-  // alignment in use under global_min_inliers or the place is not yet confirmed): another
-  // place that led global_confirm_searches checks in a row and is clear of the one in
-  // use replaces it (recovery).
-  bool global_search = true;
+  // check while in doubt (the place not yet confirmed, or the walls fitting the alignment
+  // in use under global_min_inliers): another place that led global_confirm_searches
+  // checks in a row and is clear of the one in use replaces it (recovery).
+  bool global_search = false;
   uint32_t global_min_points = 150;
   double global_interval_s = 3.0;
-  double global_check_interval_s = 10.0;
   double global_window_s = 60.0;
   double global_clear_ratio = 0.5;
   double global_lead_ratio = 0.8;
@@ -220,9 +218,9 @@ class Tracker {
   }
   // Global placement and its checks (see TrackerOptions::global_search): due with
   // global_min_points, every global_interval_s without an alignment and while it is in
-  // doubt, else every global_check_interval_s. OfferPlaces takes a search's refined
-  // places (best fit first; `centre_slam` is the cloud's centre) made while alignment
-  // `based_on_version` was in use (0: none): it places the wearer, confirms the place in
+  // doubt (never otherwise: a confirmed place whose walls fit is not replaced). OfferPlaces takes a
+  // search's refined places (best fit first; `centre_slam` is the cloud's centre) made while
+  // alignment `based_on_version` was in use (0: none): it places the wearer, confirms the place in
   // use, or replaces it, as a pick would be taken (the cloud's centre on the plan is the
   // pivot of the correlative search after it).
   bool GlobalSearchDue(int64_t now_ns, size_t live_points) const;

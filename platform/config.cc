@@ -175,8 +175,6 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (k.global_min_points() < 10) return "tracking.global_min_points must be at least 10";
   if (!(k.global_interval_s() > 0)) return "tracking.global_interval_s must be positive";
   if (!(k.global_window_s() >= 0)) return "tracking.global_window_s must be 0 or positive";
-  if (!(k.global_check_interval_s() > 0))
-    return "tracking.global_check_interval_s must be positive";
   if (!(k.global_clear_ratio() > 0 && k.global_clear_ratio() <= 1))
     return "tracking.global_clear_ratio must be in (0, 1]";
   if (!(k.global_lead_ratio() > 0 && k.global_lead_ratio() <= 1))
@@ -261,7 +259,6 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.global_min_points = k.global_min_points();
   t.global_interval_s = k.global_interval_s();
   t.global_window_s = k.global_window_s();
-  t.global_check_interval_s = k.global_check_interval_s();
   t.global_clear_ratio = k.global_clear_ratio();
   t.global_lead_ratio = k.global_lead_ratio();
   t.global_confirm_searches = k.global_confirm_searches();

@@ -30,7 +30,6 @@ TEST_F(GlobalPlacementTest, AWalkWithoutAPickIsPlacedAndNeverReliablyWrong) {
   config.set_plan_path(plan_path);
 
   // Without the search, a walk without its pick is never placed.
-  config.mutable_tracking()->set_global_search(false);
   EvalReport waiting;
   ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &waiting, &error, nullptr,
                        /*no_pick=*/true))
@@ -41,9 +40,8 @@ TEST_F(GlobalPlacementTest, AWalkWithoutAPickIsPlacedAndNeverReliablyWrong) {
   EXPECT_EQ(waiting.plan_poses.back().reliability().reason(),
             "no alignment: waiting for a wall pick");
 
-  // With it (the default): placed, tracked to the end, and never RELIABLE while more
-  // than 1 m off.
-  config.mutable_tracking()->clear_global_search();
+  // With it: placed, tracked to the end, and never RELIABLE while more than 1 m off.
+  config.mutable_tracking()->set_global_search(true);
   EvalReport placed;
   ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &placed, &error, nullptr, true))
       << error;
@@ -85,15 +83,14 @@ TEST_F(GlobalPlacementTest, AWrongPickIsFlaggedAndUndone) {
   v1::FloorposedConfig config;
   config.set_plan_path(plan_path);
   // Without the search the tracker cannot undo it: the pick's search reaches 2.5 m.
-  config.mutable_tracking()->set_global_search(false);
   EvalReport stuck;
   ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &stuck, &error)) << error;
   EXPECT_GT(stuck.mean_error_m, 5.0);
   EXPECT_LT(stuck.time_to_recovered_s, 0.0);
 
-  // With it (the default): flagged UNRELIABLE at once, placed right within a minute,
-  // never RELIABLE while wrong.
-  config.mutable_tracking()->clear_global_search();
+  // With it: flagged UNRELIABLE at once, placed right within a minute, never RELIABLE
+  // while wrong.
+  config.mutable_tracking()->set_global_search(true);
   EvalReport undone;
   ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &undone, &error)) << error;
   EXPECT_GE(undone.time_to_unreliable_s, 0.0);
