@@ -12,22 +12,31 @@
 namespace floorpose::tools {
 namespace {
 
-class GlobalPlacementTest : public testing::TempDirTest {};
+class GlobalPlacementTest : public testing::TempDirTest {
+ protected:
+  static constexpr const char* kPlanPath = FLOORPOSE_SOURCE_DIR "/tools/demo/office.geojson";
+  // The office walk of seed 1 on the bundled plan, written to `name` in the test's dir.
+  std::string SimulateOffice(sim::SimulatorOptions o, const std::string& name,
+                             SimulateRecordingResult* simulated) {
+    const FloorPlanParse plan = platform::LoadFloorPlan(kPlanPath);
+    EXPECT_TRUE(plan.ok()) << plan.error;
+    o.seed = 1;
+    o.scenario = sim::Scenario::kOffice;
+    std::string error;
+    const std::string recording = Path(name);
+    EXPECT_TRUE(SimulateToRecording(plan.plan, o, nullptr, {}, recording, simulated, &error))
+        << error;
+    return recording;
+  }
+};
 
 TEST_F(GlobalPlacementTest, AWalkWithoutAPickIsPlacedAndNeverReliablyWrong) {
-  const std::string plan_path = FLOORPOSE_SOURCE_DIR "/tools/demo/office.geojson";
-  const FloorPlanParse plan = platform::LoadFloorPlan(plan_path);
-  ASSERT_TRUE(plan.ok()) << plan.error;
-  sim::SimulatorOptions o;
-  o.seed = 1;
-  o.scenario = sim::Scenario::kOffice;
   SimulateRecordingResult simulated;
+  const std::string recording = SimulateOffice({}, "walk.rec", &simulated);
+  ASSERT_FALSE(HasFailure());
   std::string error;
-  const std::string recording = Path("walk.rec");
-  ASSERT_TRUE(SimulateToRecording(plan.plan, o, nullptr, {}, recording, &simulated, &error))
-      << error;
   v1::FloorposedConfig config;
-  config.set_plan_path(plan_path);
+  config.set_plan_path(kPlanPath);
 
   // Without the search, a walk without its pick is never placed.
   EvalReport waiting;
@@ -61,19 +70,13 @@ TEST_F(GlobalPlacementTest, AWalkWithoutAPickIsPlacedAndNeverReliablyWrong) {
 
 TEST_F(GlobalPlacementTest, AWrongPickIsFlaggedAndUndone) {
   // simulate --kidnap: the pick is 10 m and 90 degrees off at the wearer.
-  const std::string plan_path = FLOORPOSE_SOURCE_DIR "/tools/demo/office.geojson";
-  const FloorPlanParse plan = platform::LoadFloorPlan(plan_path);
-  ASSERT_TRUE(plan.ok()) << plan.error;
   sim::SimulatorOptions o;
-  o.seed = 1;
-  o.scenario = sim::Scenario::kOffice;
   o.kidnap_m = 10.0;
   o.kidnap_rad = M_PI / 2;
   SimulateRecordingResult simulated;
+  const std::string recording = SimulateOffice(o, "kidnapped.rec", &simulated);
+  ASSERT_FALSE(HasFailure());
   std::string error;
-  const std::string recording = Path("kidnapped.rec");
-  ASSERT_TRUE(SimulateToRecording(plan.plan, o, nullptr, {}, recording, &simulated, &error))
-      << error;
   const Se2& e = simulated.simulation.pick_error;
   EXPECT_NEAR(std::abs(e.theta), M_PI / 2, 1e-9);
   const Eigen::Vector2d wearer =
@@ -81,7 +84,7 @@ TEST_F(GlobalPlacementTest, AWrongPickIsFlaggedAndUndone) {
   EXPECT_NEAR((e * wearer - wearer).norm(), 10.0, 1e-6);
 
   v1::FloorposedConfig config;
-  config.set_plan_path(plan_path);
+  config.set_plan_path(kPlanPath);
   // Without the search the tracker cannot undo it: the pick's search reaches 2.5 m.
   EvalReport stuck;
   ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &stuck, &error)) << error;
