@@ -368,6 +368,22 @@ bool Tracker::PlaceConfirmed(const RegistrationResult& result, double walk_m) {
   return place_walk_m_ >= walk_m;
 }
 
+bool Tracker::ExplainsWallsInstead(const RegistrationResult& result,
+                                   const std::vector<Eigen::Vector2d>& cloud, double new_score,
+                                   double old_score) const {
+  if (options_.jump_clear_ratio <= 0 || cloud.empty() ||
+      !(new_score <= options_.jump_clear_ratio * old_score))
+    return false;
+  const double need = options_.jump_clear_inliers * static_cast<double>(cloud.size());
+  const IcpOptions& o = options_.icp;
+  RegistrationResult fits, in_use;
+  EvaluateFit(cloud, *index_, result.T_plan_slam, o.max_correspondence_m, o.inlier_threshold_m,
+              &fits, nullptr);
+  EvaluateFit(cloud, *index_, alignment_.T_plan_slam, o.max_correspondence_m, o.inlier_threshold_m,
+              &in_use, nullptr);
+  return fits.inliers >= need && in_use.inliers < need;
+}
+
 bool Tracker::RegistrationDue(int64_t now_ns, size_t live_points, size_t new_points) const {
   if (!index_ || !has_alignment() || live_points < options_.min_points || new_points == 0)
     return false;
@@ -442,6 +458,10 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
         filter_.Reset(result.T_plan_slam, R + filter_.P(), filter_.pivot());
         d.accepted = true;
         d.reason = "jump confirmed";
+      } else if (ExplainsWallsInstead(result, cloud, new_score, old_score)) {
+        filter_.Reset(result.T_plan_slam, R + filter_.P(), filter_.pivot());
+        d.accepted = true;
+        d.reason = "jump: the walls fit it, not the alignment in use";
       } else {
         pending_jump_ = result.T_plan_slam;
         char text[128];

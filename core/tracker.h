@@ -59,7 +59,17 @@ struct TrackerOptions {
   double confirm_m = 0.5;                    // a gated result is taken when later ones land within
   double confirm_rad = 0.035;                // ...this of it...
   double confirm_walk_m = 10.0;              // ...over this many metres walked...
-  double jump_score_ratio = 0.7;    // ...and it fits the cloud this much better than the one in use
+  double jump_score_ratio = 0.7;  // ...and it fits the cloud this much better than the one in use
+  // A gated result is taken at once, without confirmation, when it explains the walls and
+  // the alignment in use does not: at least jump_clear_inliers of the cloud within the
+  // inlier threshold of a plan wall under the result, fewer under the alignment in use,
+  // and a score at most jump_clear_ratio times the in-use one (0: never at once). A
+  // wheel slipping in a turn or a SLAM's heading jump puts the alignment in use degrees
+  // off in seconds; each correct result after it disagrees with the last as the
+  // odometry goes on slipping, so none would be confirmed. Off for headsets (their
+  // simulated walks slide along corridors whose walls the plan lacks), on for wheels.
+  double jump_clear_ratio = 0.0;
+  double jump_clear_inliers = 0.65;
   double max_ambiguity = 0.7;       // results after a pick with RegistrationResult::ambiguity above
                                     // this: refused until later ones confirm the place (as jumps)
   double first_inlier_ratio = 0.9;  // results after a pick with fewer inliers: refused
@@ -258,11 +268,12 @@ class Tracker {
   // from the registrations (AlignmentFilterOptions::drift_window).
   double drift_scale() const { return filter_.drift_scale(); }
   // Another drift model from now on (the device said it moves on another odometry): the
-  // filter's options and confirm_walk_m of `options`; the alignment, its covariance and
-  // what the filter learnt stay.
+  // filter's options, confirm_walk_m and jump_clear_ratio of `options`; the alignment, its
+  // covariance and what the filter learnt stay.
   void SetOdometryOptions(const TrackerOptions& options) {
     options_.filter = options.filter;
     options_.confirm_walk_m = options.confirm_walk_m;
+    options_.jump_clear_ratio = options.jump_clear_ratio;
     filter_.set_options(options.filter);
   }
 
@@ -285,6 +296,11 @@ class Tracker {
   // Whether the results since this place was first seen kept landing on it (confirm_m,
   // confirm_rad) while the wearer walked walk_m; starts over at a new place.
   bool PlaceConfirmed(const RegistrationResult& result, double walk_m);
+  // Whether a result beyond the gate explains the cloud's walls and the alignment in use
+  // does not (jump_clear_ratio, jump_clear_inliers); scores as in Offer.
+  bool ExplainsWallsInstead(const RegistrationResult& result,
+                            const std::vector<Eigen::Vector2d>& cloud, double new_score,
+                            double old_score) const;
   // Starts the filter over at the alignment in use, as uncertain as a pick at its point
   // (start_pivot_), with this heading variance.
   void StartFilterAtPick(double heading_var);

@@ -182,6 +182,11 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (k.global_confirm_searches() < 1) return "tracking.global_confirm_searches must be at least 1";
   if (!(k.global_min_inliers() >= 0 && k.global_min_inliers() <= 1))
     return "tracking.global_min_inliers must be in [0, 1]";
+  if (!(k.jump_clear_ratio() >= 0 && k.jump_clear_ratio() <= 1 &&
+        k.wheel_odometry().jump_clear_ratio() >= 0 && k.wheel_odometry().jump_clear_ratio() <= 1))
+    return "tracking.jump_clear_ratio and wheel_odometry.jump_clear_ratio must be in [0, 1]";
+  if (!(k.jump_clear_inliers() > 0 && k.jump_clear_inliers() <= 1))
+    return "tracking.jump_clear_inliers must be in (0, 1]";
   const auto& rel = k.reliability();
   if (rel.coefficients_size() != 0 && rel.coefficients_size() != ReliabilityModel::kFeatures + 1)
     return "tracking.reliability.coefficients needs " +
@@ -252,6 +257,8 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.confirm_rad = k.confirm_deg() * M_PI / 180.0;
   t.confirm_walk_m = k.confirm_walk_m();
   t.jump_score_ratio = k.jump_score_ratio();
+  t.jump_clear_ratio = k.jump_clear_ratio();
+  t.jump_clear_inliers = k.jump_clear_inliers();
   t.max_ambiguity = k.max_ambiguity();
   t.first_inlier_ratio = k.first_inlier_ratio();
   t.clear_ambiguity = k.clear_ambiguity();
@@ -301,6 +308,7 @@ v1::FloorposedConfig ForOdometry(v1::FloorposedConfig config, v1::HeadsetPose::O
     t.set_window_s(w.window_s());
     t.set_refine_window_s(w.refine_window_s());
     t.set_confirm_walk_m(w.confirm_walk_m());
+    t.set_jump_clear_ratio(w.jump_clear_ratio());
   }
   return config;
 }

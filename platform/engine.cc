@@ -440,9 +440,9 @@ void Engine::UseOdometry(v1::HeadsetPose::Odometry odometry) {
   tracker_.SetOdometryOptions(ToTrackerOptions(config_));
   spdlog::info(
       "device {} moves on {} odometry: drift_window {}, window_s {}, refine_window_s {}, "
-      "confirm_walk_m {}",
+      "confirm_walk_m {}, jump_clear_ratio {}",
       config_.dds().device_id(), v1::HeadsetPose::Odometry_Name(odometry), t.drift_window(),
-      t.window_s(), t.refine_window_s(), t.confirm_walk_m());
+      t.window_s(), t.refine_window_s(), t.confirm_walk_m(), t.jump_clear_ratio());
 }
 
 v1::PlanPose Engine::ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) const {
@@ -677,7 +677,7 @@ void Engine::OnRegistrationDone(Done done) {
       "registration: {} points, {} inliers, inlier RMSE {:.3f} m, {} iterations, {:.1f} ms, "
       "drift x{:.1f}: {}{}",
       r.points, r.inliers, r.inlier_rmse, r.iterations, r.time_ms, tracker_.drift_scale(),
-      d.accepted ? "accepted" : "rejected: ", d.reason);
+      d.accepted ? "accepted" : "rejected", d.reason.empty() ? "" : ": " + d.reason);
   if (d.accepted) {
     counters_.set_registrations_accepted(counters_.registrations_accepted() + 1);
     PublishAlignment();

@@ -233,6 +233,58 @@ TEST_F(TrackerTest, OfferAcceptsBetterRejectsWorseAndStale) {
   EXPECT_THAT(d.reason, HasSubstr("alignment changed"));
 }
 
+// The odometry slips in a turn (CARMEN csail): the alignment in use is suddenly degrees
+// off, and the correct results after it lie beyond the filter's gate. One that explains
+// the walls the alignment in use no longer explains is taken at once; one that explains
+// them only a little better still waits for confirmation.
+TEST_F(TrackerTest, ResultThatExplainsTheWallsInsteadIsTakenAtOnce) {
+  TrackerOptions on;
+  on.jump_clear_ratio = 0.5;  // as tracking.wheel_odometry sets it
+  tracker_ = Tracker(on);
+  tracker_.SetPlan(index_);
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
+  auto cloud = Cloud();
+  for (int i = 0; i < 5; ++i) {  // a tight filter: several agreeing results
+    const Tracker::Decision d =
+        tracker_.Offer(ResultFor(truth_, cloud), cloud, tracker_.alignment().version, 2 + i);
+    ASSERT_TRUE(d.accepted) << d.reason;
+  }
+  // The slip: the slam frame turns 15 degrees about the wearer and slides 0.6 m.
+  const Eigen::Vector2d wearer_plan(2, 2);
+  tracker_.Correct({truth_.Inverse() * wearer_plan, 0, 1.6});
+  const Se2 slipped = truth_ * Se2{Deg(15), {0.6, -0.3}};
+  const Se2 T_slam_plan = slipped.Inverse();
+  cloud.clear();
+  for (const auto& p : testing::SampleWalls(plan_, 0.02)) cloud.push_back(T_slam_plan * p);
+  const uint64_t v = tracker_.alignment().version;
+
+  // A result a little better than the alignment in use, with few walls on the plan: waits.
+  const Se2 partway = truth_ * Se2{Deg(12), {0.5, -0.25}};
+  Tracker::Decision d = tracker_.Offer(ResultFor(partway, cloud), cloud, v, 10);
+  EXPECT_FALSE(d.accepted);
+  EXPECT_THAT(d.reason, HasSubstr("waits for confirmation"));
+  EXPECT_EQ(tracker_.alignment().version, v);
+
+  // The right place: every wall on the plan, where the alignment in use has few.
+  d = tracker_.Offer(ResultFor(slipped, cloud), cloud, v, 11);
+  EXPECT_TRUE(d.accepted) << d.reason;
+  EXPECT_THAT(d.reason, HasSubstr("the walls fit it, not the alignment in use"));
+  EXPECT_THAT(tracker_.alignment().T_plan_slam, IsNearlySe2(slipped, 1e-6, 1e-6));
+
+  // Off (jump_clear_ratio 0, a headset's default), the same offer waits.
+  Tracker off(TrackerOptions{});
+  off.SetPlan(index_);
+  ASSERT_EQ(off.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
+  auto before = Cloud();
+  for (int i = 0; i < 5; ++i)
+    ASSERT_TRUE(
+        off.Offer(ResultFor(truth_, before), before, off.alignment().version, 2 + i).accepted);
+  off.Correct({truth_.Inverse() * wearer_plan, 0, 1.6});
+  d = off.Offer(ResultFor(slipped, cloud), cloud, off.alignment().version, 11);
+  EXPECT_FALSE(d.accepted);
+  EXPECT_THAT(d.reason, HasSubstr("waits for confirmation"));
+}
+
 TEST_F(TrackerTest, AmbiguousResultAfterAPickIsRefused) {
   tracker_.SetPlan(index_);
   const Se2 picked = Se2{Deg(2), {0.3, -0.2}} * truth_;

@@ -64,6 +64,8 @@ TEST(ConfigTest, ProtoDefaultsMatchTheCoreDefaults) {
   EXPECT_EQ(t.min_walk_m, core.min_walk_m);
   EXPECT_EQ(t.max_ambiguity, core.max_ambiguity);
   EXPECT_EQ(t.first_inlier_ratio, core.first_inlier_ratio);
+  EXPECT_EQ(t.jump_clear_ratio, core.jump_clear_ratio);
+  EXPECT_EQ(t.jump_clear_inliers, core.jump_clear_inliers);
   EXPECT_EQ(t.clear_ambiguity, core.clear_ambiguity);
   EXPECT_EQ(t.pick_tie_ratio, core.pick_tie_ratio);
   EXPECT_EQ(t.search_sigmas, core.search_sigmas);
@@ -142,6 +144,8 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"tracking { max_ambiguity: 1.5 }", "max_ambiguity"},
            Case{"tracking { refine_window_s: -1 }", "refine_window_s"},
            Case{"tracking { first_inlier_ratio: 1.1 }", "first_inlier_ratio"},
+           Case{"tracking { jump_clear_ratio: -0.5 }", "jump_clear_ratio"},
+           Case{"tracking { jump_clear_inliers: 0 }", "jump_clear_inliers"},
            Case{"tracking { clear_ambiguity: 0.8 }", "clear_ambiguity"},
            Case{"registration { pick_tie_ratio: -0.1 }", "pick_tie_ratio"},
            Case{"registration { search_sigmas: -1 }", "search_sigmas"},
@@ -189,6 +193,8 @@ TEST(ConfigTest, WheelOdometryReplacesTheHeadsetsDriftAndWindows) {
   EXPECT_EQ(wheel.tracking().refine_window_s(), 3);
   EXPECT_EQ(wheel.tracking().confirm_walk_m(), 3);
   EXPECT_EQ(headset.tracking().confirm_walk_m(), 10);
+  EXPECT_EQ(headset.tracking().jump_clear_ratio(), 0);
+  EXPECT_EQ(ToTrackerOptions(wheel).jump_clear_ratio, 0.5);
   EXPECT_EQ(ToTrackerOptions(wheel).filter.drift_window, 9);
   EXPECT_EQ(wheel.tracking().drift_heading_deg(), headset.tracking().drift_heading_deg());
 }
