@@ -450,18 +450,17 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
       // Beyond the gate: a wrong minimum, or the alignment in use is wrong. Taken only
       // when registrations keep landing on it while the wearer walks on (snapshots a few
       // seconds apart share most of their points, so one more agreeing result proves
-      // little), and when it fits clearly better than the alignment in use.
+      // little), and when it fits clearly better than the alignment in use; or at once
+      // when the walls fit it and not the alignment in use (jump_clear_ratio).
       const bool agrees = Agrees(result.T_plan_slam, pending_jump_);
       if (!agrees) pending_walk_m_ = 0;
-      if (agrees && pending_walk_m_ >= options_.confirm_walk_m &&
-          new_score < options_.jump_score_ratio * old_score) {
+      const bool confirmed = agrees && pending_walk_m_ >= options_.confirm_walk_m &&
+                             new_score < options_.jump_score_ratio * old_score;
+      if (confirmed || ExplainsWallsInstead(result, cloud, new_score, old_score)) {
         filter_.Reset(result.T_plan_slam, R + filter_.P(), filter_.pivot());
         d.accepted = true;
-        d.reason = "jump confirmed";
-      } else if (ExplainsWallsInstead(result, cloud, new_score, old_score)) {
-        filter_.Reset(result.T_plan_slam, R + filter_.P(), filter_.pivot());
-        d.accepted = true;
-        d.reason = "jump: the walls fit it, not the alignment in use";
+        d.reason =
+            confirmed ? "jump confirmed" : "jump: the walls fit it, not the alignment in use";
       } else {
         pending_jump_ = result.T_plan_slam;
         char text[128];

@@ -238,23 +238,28 @@ TEST_F(TrackerTest, OfferAcceptsBetterRejectsWorseAndStale) {
 // the walls the alignment in use no longer explains is taken at once; one that explains
 // them only a little better still waits for confirmation.
 TEST_F(TrackerTest, ResultThatExplainsTheWallsInsteadIsTakenAtOnce) {
+  // A pick, then several agreeing results (a tight filter), then the wearer at (2, 2).
+  const Eigen::Vector2d wearer_plan(2, 2);
+  auto settle = [&](Tracker& tracker) {
+    tracker.SetPlan(index_);
+    ASSERT_EQ(tracker.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
+    const auto before = Cloud();
+    for (int i = 0; i < 5; ++i) {
+      const Tracker::Decision d =
+          tracker.Offer(ResultFor(truth_, before), before, tracker.alignment().version, 2 + i);
+      ASSERT_TRUE(d.accepted) << d.reason;
+    }
+    tracker.Correct({truth_.Inverse() * wearer_plan, 0, 1.6});
+  };
   TrackerOptions on;
   on.jump_clear_ratio = 0.5;  // as tracking.wheel_odometry sets it
   tracker_ = Tracker(on);
-  tracker_.SetPlan(index_);
-  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
-  auto cloud = Cloud();
-  for (int i = 0; i < 5; ++i) {  // a tight filter: several agreeing results
-    const Tracker::Decision d =
-        tracker_.Offer(ResultFor(truth_, cloud), cloud, tracker_.alignment().version, 2 + i);
-    ASSERT_TRUE(d.accepted) << d.reason;
-  }
+  settle(tracker_);
+  ASSERT_FALSE(HasFatalFailure());
   // The slip: the slam frame turns 15 degrees about the wearer and slides 0.6 m.
-  const Eigen::Vector2d wearer_plan(2, 2);
-  tracker_.Correct({truth_.Inverse() * wearer_plan, 0, 1.6});
   const Se2 slipped = truth_ * Se2{Deg(15), {0.6, -0.3}};
   const Se2 T_slam_plan = slipped.Inverse();
-  cloud.clear();
+  std::vector<Eigen::Vector2d> cloud;
   for (const auto& p : testing::SampleWalls(plan_, 0.02)) cloud.push_back(T_slam_plan * p);
   const uint64_t v = tracker_.alignment().version;
 
@@ -273,13 +278,8 @@ TEST_F(TrackerTest, ResultThatExplainsTheWallsInsteadIsTakenAtOnce) {
 
   // Off (jump_clear_ratio 0, a headset's default), the same offer waits.
   Tracker off(TrackerOptions{});
-  off.SetPlan(index_);
-  ASSERT_EQ(off.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
-  auto before = Cloud();
-  for (int i = 0; i < 5; ++i)
-    ASSERT_TRUE(
-        off.Offer(ResultFor(truth_, before), before, off.alignment().version, 2 + i).accepted);
-  off.Correct({truth_.Inverse() * wearer_plan, 0, 1.6});
+  settle(off);
+  ASSERT_FALSE(HasFatalFailure());
   d = off.Offer(ResultFor(slipped, cloud), cloud, off.alignment().version, 11);
   EXPECT_FALSE(d.accepted);
   EXPECT_THAT(d.reason, HasSubstr("waits for confirmation"));
