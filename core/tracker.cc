@@ -55,6 +55,16 @@ RegistrationOptions Tracker::NextRegistrationOptions() const {
   RegistrationOptions r = ToRegistrationOptions(options_, alignment_.source, std::nullopt);
   if (options_.search_sigmas <= 0 || !last_slam_position_) return r;
   const AlignmentFilter at = FilterAtWearer();
+  if (options_.search_unexplained && pending_jump_ && current_fit_ && current_fit_->points > 0 &&
+      current_fit_->inliers < options_.jump_clear_inliers * current_fit_->points) {
+    // A result disagreed and the walls do not fit the alignment in use either: the
+    // filter's sigmas no longer say how far off it is.
+    r.search_window_m = options_.pick_search_m;
+    r.search_window_rad = options_.pick_search_rad;
+    r.search_tie_ratio = options_.search_tie_ratio;
+    r.search_pivot = at.pivot();
+    return r;
+  }
   const double m = std::min(options_.pick_search_m, options_.search_sigmas * at.position_sigma_m());
   if (m < options_.search_min_m) return r;
   r.search_window_m = m;

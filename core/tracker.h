@@ -70,6 +70,10 @@ struct TrackerOptions {
   // simulated walks slide along corridors whose walls the plan lacks), on for wheels.
   double jump_clear_ratio = 0.0;
   double jump_clear_inliers = 0.65;
+  // After a result beyond the gate, while the alignment in use explains fewer than
+  // jump_clear_inliers of the walls, the next registration searches pick_search_m and
+  // _rad around it: the filter is sure of a place the walls say is wrong.
+  bool search_unexplained = true;
   double max_ambiguity = 0.7;       // results after a pick with RegistrationResult::ambiguity above
                                     // this: refused until later ones confirm the place (as jumps)
   double first_inlier_ratio = 0.9;  // results after a pick with fewer inliers: refused
@@ -197,7 +201,8 @@ class Tracker {
   const TrackerOptions& options() const { return options_; }
   // The registration options for the next run: after a pick or flip, the correlative
   // search with its rotations about the pick's point; later, a search as wide as the
-  // alignment is uncertain at the wearer (search_sigmas), when that is wide enough.
+  // alignment is uncertain at the wearer (search_sigmas), when that is wide enough, or
+  // as after a pick when the walls stopped fitting it (search_unexplained).
   RegistrationOptions NextRegistrationOptions() const;
 
   TrackerState SaveState() const;

@@ -259,6 +259,7 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.jump_score_ratio = k.jump_score_ratio();
   t.jump_clear_ratio = k.jump_clear_ratio();
   t.jump_clear_inliers = k.jump_clear_inliers();
+  t.search_unexplained = k.search_unexplained();
   t.max_ambiguity = k.max_ambiguity();
   t.first_inlier_ratio = k.first_inlier_ratio();
   t.clear_ambiguity = k.clear_ambiguity();
@@ -309,6 +310,7 @@ v1::FloorposedConfig ForOdometry(v1::FloorposedConfig config, v1::HeadsetPose::O
     t.set_refine_window_s(w.refine_window_s());
     t.set_confirm_walk_m(w.confirm_walk_m());
     t.set_jump_clear_ratio(w.jump_clear_ratio());
+    t.set_search_recent(w.search_recent());
   }
   return config;
 }

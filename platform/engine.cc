@@ -130,8 +130,13 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
     done.result.points = static_cast<uint32_t>(job.cloud.size());
   } else if (job.index) {
     const int64_t t0 = now_ns();
-    done.result = Register(job.cloud, job.normals, *job.index, job.initial, job.options);
-    if (!job.recent.empty() && done.result.converged) {
+    if (job.search_recent && job.options.search_window_m > 0 && !job.recent.empty()) {
+      done.result = Register(job.recent, job.recent_normals, *job.index, job.initial, job.options);
+      done.refined = done.result.converged;
+    }
+    if (!done.refined)
+      done.result = Register(job.cloud, job.normals, *job.index, job.initial, job.options);
+    if (!done.refined && !job.recent.empty() && done.result.converged) {
       // From the whole window's answer, the recent walls only (Hough's rotation search has
       // done its work there; its refinement is ICP).
       const RegistrationResult whole = done.result;
@@ -440,9 +445,10 @@ void Engine::UseOdometry(v1::HeadsetPose::Odometry odometry) {
   tracker_.SetOdometryOptions(ToTrackerOptions(config_));
   spdlog::info(
       "device {} moves on {} odometry: drift_window {}, window_s {}, refine_window_s {}, "
-      "confirm_walk_m {}, jump_clear_ratio {}",
+      "confirm_walk_m {}, jump_clear_ratio {}, search_recent {}",
       config_.dds().device_id(), v1::HeadsetPose::Odometry_Name(odometry), t.drift_window(),
-      t.window_s(), t.refine_window_s(), t.confirm_walk_m(), t.jump_clear_ratio());
+      t.window_s(), t.refine_window_s(), t.confirm_walk_m(), t.jump_clear_ratio(),
+      t.search_recent());
 }
 
 v1::PlanPose Engine::ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) const {
@@ -645,10 +651,14 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
   if (job.cloud.size() < options.min_points) return std::nullopt;
   const double refine_s = config_.tracking().refine_window_s();
   if (refine_s > 0) {
-    job.recent = store_.Snapshot(config_.tracking().max_points(), nullptr,
+    job.recent = store_.Snapshot(config_.tracking().max_points(), &job.recent_normals,
                                  options.local_meshes ? last_run_generation_ : 0,
                                  latest_stamp_ns_ - static_cast<int64_t>(refine_s * 1e9));
-    if (job.recent.size() < options.min_points / 2) job.recent.clear();
+    if (job.recent.size() < options.min_points / 2) {
+      job.recent.clear();
+      job.recent_normals.clear();
+    }
+    job.search_recent = config_.tracking().search_recent();
   }
   last_run_generation_ = store_.generation();
   job.index = tracker_.index();

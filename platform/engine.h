@@ -58,7 +58,9 @@ class Engine {
     std::vector<Eigen::Vector2d> cloud, normals;
     // When not empty: the result on `cloud` is refined on these (the recent walls), and
     // offered with them.
-    std::vector<Eigen::Vector2d> recent;
+    std::vector<Eigen::Vector2d> recent, recent_normals;
+    // A search (options.search_window_m) registers `recent` alone (tracking.search_recent).
+    bool search_recent = false;
     std::shared_ptr<const ClosestWallIndex> index;
     RegistrationOptions options;
     Se2 initial;

@@ -84,6 +84,29 @@ class TrackerTest : public ::testing::Test {
     return r;
   }
 
+  // A pick, then several agreeing results (a tight filter), then the wearer at (2, 2).
+  void Settle(Tracker& tracker) const {
+    tracker.SetPlan(index_);
+    ASSERT_EQ(tracker.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
+    const auto cloud = Cloud();
+    for (int i = 0; i < 5; ++i) {
+      const Tracker::Decision d =
+          tracker.Offer(ResultFor(truth_, cloud), cloud, tracker.alignment().version, 2 + i);
+      ASSERT_TRUE(d.accepted) << d.reason;
+    }
+    tracker.Correct({truth_.Inverse() * Eigen::Vector2d(2, 2), 0, 1.6});
+  }
+
+  // The wall points in the slam frame after the odometry slipped: 15 degrees about the
+  // wearer and 0.6 m.
+  Se2 Slipped() const { return truth_ * Se2{Deg(15), {0.6, -0.3}}; }
+  std::vector<Eigen::Vector2d> SlippedCloud() const {
+    std::vector<Eigen::Vector2d> cloud;
+    for (const auto& p : testing::SampleWalls(plan_, 0.02))
+      cloud.push_back(Slipped().Inverse() * p);
+    return cloud;
+  }
+
   FloorPlan plan_;
   std::shared_ptr<const ClosestWallIndex> index_;
   Tracker tracker_;
@@ -238,33 +261,17 @@ TEST_F(TrackerTest, OfferAcceptsBetterRejectsWorseAndStale) {
 // the walls the alignment in use no longer explains is taken at once; one that explains
 // them only a little better still waits for confirmation.
 TEST_F(TrackerTest, ResultThatExplainsTheWallsInsteadIsTakenAtOnce) {
-  // A pick, then several agreeing results (a tight filter), then the wearer at (2, 2).
-  const Eigen::Vector2d wearer_plan(2, 2);
-  auto settle = [&](Tracker& tracker) {
-    tracker.SetPlan(index_);
-    ASSERT_EQ(tracker.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
-    const auto before = Cloud();
-    for (int i = 0; i < 5; ++i) {
-      const Tracker::Decision d =
-          tracker.Offer(ResultFor(truth_, before), before, tracker.alignment().version, 2 + i);
-      ASSERT_TRUE(d.accepted) << d.reason;
-    }
-    tracker.Correct({truth_.Inverse() * wearer_plan, 0, 1.6});
-  };
   TrackerOptions on;
-  on.jump_clear_ratio = 0.5;  // as tracking.wheel_odometry sets it
+  on.jump_clear_ratio = 0.6;  // as tracking.wheel_odometry sets it
   tracker_ = Tracker(on);
-  settle(tracker_);
+  Settle(tracker_);
   ASSERT_FALSE(HasFatalFailure());
-  // The slip: the slam frame turns 15 degrees about the wearer and slides 0.6 m.
-  const Se2 slipped = truth_ * Se2{Deg(15), {0.6, -0.3}};
-  const Se2 T_slam_plan = slipped.Inverse();
-  std::vector<Eigen::Vector2d> cloud;
-  for (const auto& p : testing::SampleWalls(plan_, 0.02)) cloud.push_back(T_slam_plan * p);
+  const Se2 slipped = Slipped();
+  const std::vector<Eigen::Vector2d> cloud = SlippedCloud();
   const uint64_t v = tracker_.alignment().version;
 
   // A result a little better than the alignment in use, with few walls on the plan: waits.
-  const Se2 partway = truth_ * Se2{Deg(12), {0.5, -0.25}};
+  const Se2 partway = truth_ * Se2{Deg(8), {0.3, -0.15}};
   Tracker::Decision d = tracker_.Offer(ResultFor(partway, cloud), cloud, v, 10);
   EXPECT_FALSE(d.accepted);
   EXPECT_THAT(d.reason, HasSubstr("waits for confirmation"));
@@ -278,11 +285,49 @@ TEST_F(TrackerTest, ResultThatExplainsTheWallsInsteadIsTakenAtOnce) {
 
   // Off (jump_clear_ratio 0, a headset's default), the same offer waits.
   Tracker off(TrackerOptions{});
-  settle(off);
+  Settle(off);
   ASSERT_FALSE(HasFatalFailure());
   d = off.Offer(ResultFor(slipped, cloud), cloud, off.alignment().version, 11);
   EXPECT_FALSE(d.accepted);
   EXPECT_THAT(d.reason, HasSubstr("waits for confirmation"));
+}
+
+// After the same slip, with the jump not taken at once (a headset): the filter is sure of
+// a place the walls no longer fit, so the next registration searches around it as after
+// a pick, instead of running ICP into the nearest minimum from there.
+TEST_F(TrackerTest, AlignmentTheWallsStoppedFittingIsSearchedAround) {
+  Settle(tracker_);
+  ASSERT_FALSE(HasFatalFailure());
+  const TrackerOptions& o = tracker_.options();
+  EXPECT_EQ(tracker_.NextRegistrationOptions().search_window_m, 0);  // a tight filter
+
+  // A wrong result while the walls fit the alignment in use: no search.
+  const auto cloud = Cloud();
+  const Se2 wrong = truth_ * Se2{Deg(5), {0.8, 0.4}};
+  Tracker::Decision d =
+      tracker_.Offer(ResultFor(wrong, cloud), cloud, tracker_.alignment().version, 10);
+  ASSERT_FALSE(d.accepted);
+  EXPECT_EQ(tracker_.NextRegistrationOptions().search_window_m, 0);
+
+  // The slip: the right result disagrees, and the alignment in use fits few walls.
+  const auto slipped = SlippedCloud();
+  d = tracker_.Offer(ResultFor(Slipped(), slipped), slipped, tracker_.alignment().version, 11);
+  ASSERT_FALSE(d.accepted);
+  EXPECT_THAT(d.reason, HasSubstr("waits for confirmation"));
+  const RegistrationOptions next = tracker_.NextRegistrationOptions();
+  EXPECT_EQ(next.search_window_m, o.pick_search_m);
+  EXPECT_EQ(next.search_window_rad, o.pick_search_rad);
+  ASSERT_TRUE(next.search_pivot.has_value());
+
+  // Off: ICP from the alignment in use, as before.
+  TrackerOptions no_search;
+  no_search.search_unexplained = false;
+  Tracker off(no_search);
+  Settle(off);
+  ASSERT_FALSE(HasFatalFailure());
+  d = off.Offer(ResultFor(Slipped(), slipped), slipped, off.alignment().version, 11);
+  ASSERT_FALSE(d.accepted);
+  EXPECT_EQ(off.NextRegistrationOptions().search_window_m, 0);
 }
 
 TEST_F(TrackerTest, AmbiguousResultAfterAPickIsRefused) {

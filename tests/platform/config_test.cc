@@ -66,6 +66,7 @@ TEST(ConfigTest, ProtoDefaultsMatchTheCoreDefaults) {
   EXPECT_EQ(t.first_inlier_ratio, core.first_inlier_ratio);
   EXPECT_EQ(t.jump_clear_ratio, core.jump_clear_ratio);
   EXPECT_EQ(t.jump_clear_inliers, core.jump_clear_inliers);
+  EXPECT_EQ(t.search_unexplained, core.search_unexplained);
   EXPECT_EQ(t.clear_ambiguity, core.clear_ambiguity);
   EXPECT_EQ(t.pick_tie_ratio, core.pick_tie_ratio);
   EXPECT_EQ(t.search_sigmas, core.search_sigmas);
@@ -194,7 +195,9 @@ TEST(ConfigTest, WheelOdometryReplacesTheHeadsetsDriftAndWindows) {
   EXPECT_EQ(wheel.tracking().confirm_walk_m(), 3);
   EXPECT_EQ(headset.tracking().confirm_walk_m(), 10);
   EXPECT_EQ(headset.tracking().jump_clear_ratio(), 0);
-  EXPECT_EQ(ToTrackerOptions(wheel).jump_clear_ratio, 0.5);
+  EXPECT_EQ(ToTrackerOptions(wheel).jump_clear_ratio, 0.6);
+  EXPECT_FALSE(headset.tracking().search_recent());
+  EXPECT_TRUE(wheel.tracking().search_recent());
   EXPECT_EQ(ToTrackerOptions(wheel).filter.drift_window, 9);
   EXPECT_EQ(wheel.tracking().drift_heading_deg(), headset.tracking().drift_heading_deg());
 }

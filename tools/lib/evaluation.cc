@@ -122,6 +122,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
   struct Latest {
     Eigen::Vector2d slam, plan;
     int64_t stamp_ns;
+    Se2 T_plan_slam;  // the true alignment at this pose
   };
   std::optional<Latest> latest;  // the newest pose with ground truth
   for (const Input& in : inputs) {
@@ -151,7 +152,11 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
                 .empty()) {
           if (baseline == Baseline::kBestFit) slam_poses[pose.stamp_ns] = pose.pose_slam;
           if (auto it = truth.find(pose.stamp_ns); it != truth.end())
-            latest = {pose.pose_slam.position, {it->second.x(), it->second.y()}, pose.stamp_ns};
+            latest = {pose.pose_slam.position,
+                      {it->second.x(), it->second.y()},
+                      pose.stamp_ns,
+                      Se2{it->second.heading(), {it->second.x(), it->second.y()}} *
+                          Se2{pose.pose_slam.heading, pose.pose_slam.position}.Inverse()};
         }
         break;
       }
@@ -171,12 +176,29 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
           spdlog::debug("at {:.1f} s, truth: place scoring {:.3f} is {:.2f} m off at the wearer",
                         static_cast<double>(latest->stamp_ns - inputs.front().stamp_ns) * 1e-9,
                         place.score, (place.T_plan_slam * latest->slam - latest->plan).norm());
-      } else if (latest && spdlog::should_log(spdlog::level::debug))
+      } else if (latest && done.job.index && spdlog::should_log(spdlog::level::debug)) {
+        // What share of the registered walls lies on the plan under each: low under the
+        // truth too means the plan lacks what the wearer sees, not a wrong result.
+        const std::vector<Eigen::Vector2d>& cloud = done.refined ? done.job.recent : done.job.cloud;
+        const auto on_plan = [&](const Se2& T) {
+          RegistrationResult fit;
+          EvaluateFit(cloud, *done.job.index, T, config.icp().max_correspondence_m(),
+                      config.icp().inlier_threshold_m(), &fit, nullptr);
+          return 100.0 * fit.inliers / std::max<size_t>(1, cloud.size());
+        };
         spdlog::debug(
-            "at {:.1f} s, truth: result {:.2f} m off at the wearer, alignment in use {:.2f} m",
+            "at {:.1f} s, truth: result {:.2f} m off at the wearer, alignment in use {:.2f} m; "
+            "on the plan: {:.0f}% under the result, {:.0f}% in use, {:.0f}% true; the result "
+            "turns {:.1f} deg from the truth, the alignment in use {:.1f}",
             static_cast<double>(latest->stamp_ns - inputs.front().stamp_ns) * 1e-9,
             (done.result.T_plan_slam * latest->slam - latest->plan).norm(),
-            (engine.tracker().alignment().T_plan_slam * latest->slam - latest->plan).norm());
+            (engine.tracker().alignment().T_plan_slam * latest->slam - latest->plan).norm(),
+            on_plan(done.result.T_plan_slam), on_plan(engine.tracker().alignment().T_plan_slam),
+            on_plan(latest->T_plan_slam),
+            WrapAngle(done.result.T_plan_slam.theta - latest->T_plan_slam.theta) * 180 / M_PI,
+            WrapAngle(engine.tracker().alignment().T_plan_slam.theta - latest->T_plan_slam.theta) *
+                180 / M_PI);
+      }
       engine.OnRegistrationDone(std::move(done));
     }
   }
