@@ -99,6 +99,14 @@ void Tracker::Reset() {
   history_.clear();
 }
 
+void Tracker::ChangeFloor(std::shared_ptr<const ClosestWallIndex> index) {
+  index_ = std::move(index);
+  pending_jump_.reset();
+  current_fit_.reset();
+  // A registration running against the floor left is stale when it comes back.
+  if (has_alignment()) alignment_.version = next_version_++;
+}
+
 void Tracker::ForgetRegistrations() {
   walked_since_predict_m_ = walked_since_fused_m_ = turned_since_predict_rad_ = 0;
   fused_ = 0;

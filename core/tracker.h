@@ -193,6 +193,10 @@ class Tracker {
   // A new plan drops the alignment: it belonged to the old plan.
   void SetPlan(std::shared_ptr<const ClosestWallIndex> index);
   void Reset();  // drops the alignment, keeps the plan
+  // Another floor's plan in the same x-y frame (a .floors set): the alignment and what
+  // the filter knows stay (under a new version: a registration running against the
+  // floor left is stale); a result waiting for confirmation and the last fit go.
+  void ChangeFloor(std::shared_ptr<const ClosestWallIndex> index);
 
   bool has_plan() const { return index_ != nullptr; }
   bool has_alignment() const { return alignment_.version > 0; }

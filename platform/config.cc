@@ -86,6 +86,9 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (!ParseHeadsetFrame(c.headset_frame()))
     return "headset_frame must be \"unity\" or \"zup\", not \"" + c.headset_frame() + "\"";
   if (c.dds().domain_id() > 232) return "dds.domain_id must be 0..232";
+  if (!(c.floors().change_margin_m() > 0 && c.floors().change_margin_m() <= 10 &&
+        c.floors().change_hold_s() >= 0 && c.floors().change_hold_s() <= 600))
+    return "floors.change_margin_m must be in (0, 10] and floors.change_hold_s in [0, 600]";
   {
     const v1::DdsSecurityConfig& s = c.dds().security();
     const std::string files[] = {s.identity_ca(),    s.identity_certificate(), s.private_key(),

@@ -162,23 +162,47 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
 }
 
 std::string Engine::LoadPlan(const std::string& path, const std::string& floor) {
-  FloorPlanParse parsed = LoadFloorPlan(path);
+  FloorSet set;
+  std::string file = path;
+  if (IsFloorSet(path)) {
+    set = LoadFloorSet(path);
+    const FloorEntry* entry = set.ok() ? set.Find(floor) : nullptr;
+    if (set.ok() && !entry) set.error = path + ": no floor '" + floor + "' in the set";
+    if (!set.ok()) {
+      counters_.set_plans_refused(counters_.plans_refused() + 1);
+      return set.error;
+    }
+    file = entry->plan_path;
+  }
+  const FloorPlanParse parsed = LoadFloorPlan(file);
   if (!parsed.ok()) {
     counters_.set_plans_refused(counters_.plans_refused() + 1);
     return parsed.error;
   }
+  floor_ = floor;
+  plan_path_ = path;
+  floors_ = std::move(set);
+  floor_reference_.reset();
+  floor_candidate_.reset();
+  InstallPlan(parsed, file, /*another_floor=*/false);
+  return {};
+}
+
+void Engine::InstallPlan(const FloorPlanParse& parsed, const std::string& file,
+                         bool another_floor) {
   ClosestWallIndex::Options index_options;
   index_options.max_distance_m = std::max(3.0, config_.icp().max_correspondence_m());
   auto index = std::make_shared<const ClosestWallIndex>(parsed.plan, index_options);
-  spdlog::info("floor plan {}: {} segments ({} dropped), {:.1f} x {:.1f} m, index {:.1f} MB", path,
+  spdlog::info("floor plan {}: {} segments ({} dropped), {:.1f} x {:.1f} m, index {:.1f} MB", file,
                parsed.plan.segments.size(), parsed.dropped_segments,
                parsed.plan.max.x() - parsed.plan.min.x(), parsed.plan.max.y() - parsed.plan.min.y(),
                static_cast<double>(index->MemoryBytes()) / 1e6);
-  tracker_.SetPlan(std::move(index));
+  if (another_floor)
+    tracker_.ChangeFloor(std::move(index));
+  else
+    tracker_.SetPlan(std::move(index));
   global_ = config_.tracking().global_search() ? std::make_shared<GlobalSearchCache>(parsed.plan)
                                                : nullptr;
-  floor_ = floor;
-  plan_path_ = path;
   plan_id_ = parsed.plan.id;
   plan_digest_ = FloorPlanDigest(parsed.plan);
   const int64_t t0 = now_ns_();
@@ -207,7 +231,53 @@ std::string Engine::LoadPlan(const std::string& path, const std::string& floor) 
                explored_ ? explored_->rooms()->rooms().size() : 0,
                static_cast<double>(now_ns_() - t0) * 1e-6);
   PublishExplored();
-  return {};
+}
+
+void Engine::FollowFloors(const DecodedPose& pose) {
+  const FloorEntry* current = floors_.Find(floor_);
+  if (floors_.floors.size() < 2 || !current) return;
+  const double z = pose.pose_slam.z;
+  if (!floor_reference_) {
+    floor_reference_ = FloorReference{z, current->height_m};
+    return;
+  }
+  const double height = floor_reference_->height_m + (z - floor_reference_->slam_z);
+  const FloorEntry& nearest = floors_.Nearest(height);
+  if (nearest.id == floor_ ||
+      std::abs(height - nearest.height_m) > config_.floors().change_margin_m()) {
+    floor_candidate_.reset();
+    return;
+  }
+  if (!floor_candidate_ || floor_candidate_->id != nearest.id) {
+    floor_candidate_ = FloorCandidate{nearest.id, pose.stamp_ns};
+    return;
+  }
+  if (static_cast<double>(pose.stamp_ns - floor_candidate_->since_ns) * 1e-9 <
+      config_.floors().change_hold_s())
+    return;
+  ChangeFloor(nearest, z, height);
+}
+
+void Engine::ChangeFloor(const FloorEntry& to, double slam_z, double height_m) {
+  floor_candidate_.reset();  // on failure, tried again after another hold
+  const FloorPlanParse parsed = LoadFloorPlan(to.plan_path);
+  if (!parsed.ok()) {
+    counters_.set_plans_refused(counters_.plans_refused() + 1);
+    Warn("floor", "floor " + to.id + " not taken: " + parsed.error);
+    return;
+  }
+  // The walls in the store are the floor's left behind: registered against this floor's
+  // plan they would pull the alignment onto the wrong walls.
+  spdlog::info(
+      "floor {} -> {}: the headset is at {:.2f} m (floor {} at {:.2f} m); {} wall points "
+      "of floor {} dropped",
+      floor_, to.id, height_m, to.id, to.height_m, store_.points(), floor_);
+  store_.Clear();
+  floor_ = to.id;
+  floor_reference_ = FloorReference{slam_z, to.height_m};
+  InstallPlan(parsed, to.plan_path, /*another_floor=*/true);
+  counters_.set_floor_changes(counters_.floor_changes() + 1);
+  PublishAlignment();
 }
 
 std::string Engine::PlanRoute(const v1::Command::Route& request, v1::RouteReply* reply) {
@@ -393,6 +463,7 @@ void Engine::OnHeadsetPose(const Envelope& e) {
     last_pose_stamp_ns_ = pose.stamp_ns;
     latest_stamp_ns_ = std::max(latest_stamp_ns_, pose.stamp_ns);
     eye_z_ = pose.pose_slam.z;
+    FollowFloors(pose);
     est = tracker_.Correct(pose.pose_slam);
   }
   if (!tracker_.has_plan()) {

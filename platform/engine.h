@@ -26,6 +26,7 @@
 #include "floorpose/v1/floorpose.pb.h"
 #include "platform/codec.h"
 #include "platform/dds.h"
+#include "platform/floor_plan_io.h"
 
 namespace floorpose::platform {
 
@@ -124,7 +125,15 @@ class Engine {
   void PublishExplored();
 
  private:
+  // A plan file, or floor `floor` of a .floors set.
   std::string LoadPlan(const std::string& path, const std::string& floor);
+  // Makes `parsed` the plan in use, with its routes and explored map; the alignment goes
+  // with the old plan, or stays when the new one is another floor of the same set.
+  void InstallPlan(const FloorPlanParse& parsed, const std::string& file, bool another_floor);
+  // A .floors set: takes the floor the headset's height says, once it has said so for
+  // floors.change_hold_s.
+  void FollowFloors(const DecodedPose& pose);
+  void ChangeFloor(const FloorEntry& to, double slam_z, double height_m);
   void OnGlobalSearchDone(const Done& done);
   // The recent trajectory under the alignment in use (PlanTrack).
   void PublishTrack();
@@ -155,7 +164,17 @@ class Engine {
   Tracker tracker_;
   WallStore store_;
   std::string floor_;
-  std::string plan_path_;  // as loaded, with its FloorPlanDigest
+  std::string plan_path_;  // as loaded (a plan or a .floors set), with its FloorPlanDigest
+  FloorSet floors_;        // of a .floors set; empty for a single plan
+  struct FloorReference {  // the headset's slam z when the floor in use was taken
+    double slam_z = 0, height_m = 0;
+  };
+  std::optional<FloorReference> floor_reference_;
+  struct FloorCandidate {  // another floor the height has said since
+    std::string id;
+    int64_t since_ns = 0;
+  };
+  std::optional<FloorCandidate> floor_candidate_;
   std::string plan_id_;
   // Made with each plan: routes, its rooms and the explored map on it.
   std::unique_ptr<RoutePlanner> routes_;

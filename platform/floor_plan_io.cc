@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -15,7 +17,8 @@ namespace floorpose::platform {
 namespace {
 
 constexpr size_t kMaxPlanBytes = 256u << 20;  // larger files are not floor plans
-constexpr const char* kPlanExtensions[] = {".geojson", ".json", ".txt", ".yaml"};
+constexpr const char* kPlanExtensions[] = {".geojson", ".json", ".txt", ".yaml", ".floors"};
+constexpr size_t kMaxFloorSetBytes = 1u << 20;
 
 bool ValidPlanId(const std::string& id) {
   if (id.empty() || id.size() > 128 || id[0] == '.') return false;
@@ -168,6 +171,68 @@ FloorPlanParse LoadFloorPlan(const std::string& path) {
     out.error = "unknown floor plan format '" + ext + "' (expected .geojson, .txt or .yaml)";
   }
   if (!out.ok()) out.error = path + ": " + out.error;
+  return out;
+}
+
+const FloorEntry* FloorSet::Find(const std::string& id) const {
+  for (const FloorEntry& f : floors)
+    if (f.id == id) return &f;
+  return nullptr;
+}
+
+const FloorEntry& FloorSet::Nearest(double height_m) const {
+  return *std::min_element(floors.begin(), floors.end(), [&](const auto& a, const auto& b) {
+    return std::abs(a.height_m - height_m) < std::abs(b.height_m - height_m);
+  });
+}
+
+bool IsFloorSet(const std::string& path) {
+  return std::filesystem::path(path).extension() == ".floors";
+}
+
+FloorSet LoadFloorSet(const std::string& path) {
+  FloorSet out;
+  std::string text;
+  if (!ReadFile(path, kMaxFloorSetBytes, &text, &out.error)) return out;
+  return ParseFloorSet(text, std::filesystem::path(path).parent_path().string(), path);
+}
+
+FloorSet ParseFloorSet(std::string_view text, const std::string& dir, const std::string& name) {
+  FloorSet out;
+  std::istringstream in{std::string(text)};
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    line = line.substr(0, line.find('#'));
+    std::istringstream fields(line);
+    FloorEntry f;
+    std::string height, rest;
+    if (!(fields >> f.id)) continue;  // blank or comment
+    const std::string where = name + ":" + std::to_string(number) + ": ";
+    char* end = nullptr;
+    if (fields >> height) f.height_m = std::strtod(height.c_str(), &end);
+    if (!end || *end != '\0' || !(fields >> f.plan_path) || (fields >> rest)) {
+      out.error = where + "expected '<floor id> <height m> <plan file>'";
+      return out;
+    }
+    if (!std::isfinite(f.height_m)) {
+      out.error = where + "height '" + height + "' is not a number";
+      return out;
+    }
+    if (out.Find(f.id)) {
+      out.error = where + "floor '" + f.id + "' twice";
+      return out;
+    }
+    for (const FloorEntry& other : out.floors)
+      if (std::abs(other.height_m - f.height_m) < 1.0) {
+        out.error =
+            where + "floor '" + f.id + "' within 1 m of the height of floor '" + other.id + "'";
+        return out;
+      }
+    if (std::filesystem::path(f.plan_path).is_relative() && !dir.empty())
+      f.plan_path = (std::filesystem::path(dir) / f.plan_path).string();
+    out.floors.push_back(std::move(f));
+  }
+  if (out.floors.empty()) out.error = name + ": no floors";
   return out;
 }
 

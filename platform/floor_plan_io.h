@@ -15,8 +15,31 @@ namespace floorpose::platform {
 FloorPlanParse LoadFloorPlan(const std::string& path);
 FloorPlanParse ParseGeoJsonFloorPlan(std::string_view text, std::string id);
 
+// A building of several floors: a `.floors` text file, one floor per line,
+//   <floor id> <height of its floor above the set's zero, metres> <plan file>
+// with '#' comments; plan files are relative to the set's directory. The plans of one set
+// share one x-y frame (as a building's CAD floors do), so an alignment holds across them.
+struct FloorEntry {
+  std::string id;
+  double height_m = 0;
+  std::string plan_path;
+};
+struct FloorSet {
+  std::vector<FloorEntry> floors;
+  std::string error;  // empty on success; names the file and line
+  bool ok() const { return error.empty(); }
+  const FloorEntry* Find(const std::string& id) const;
+  // The floor whose height is nearest `height_m`.
+  const FloorEntry& Nearest(double height_m) const;
+};
+bool IsFloorSet(const std::string& path);  // by its extension, .floors
+FloorSet LoadFloorSet(const std::string& path);
+// `dir` resolves relative plan paths; `name` prefixes errors.
+FloorSet ParseFloorSet(std::string_view text, const std::string& dir, const std::string& name);
+
 // A plan directory (the daemon's `plan_dir`): plans are addressed by id, the file name
-// without its extension (.geojson, .json, .txt or .yaml). Ids are plain names (letters, digits,
+// without its extension (.geojson, .json, .txt, .yaml or .floors). Ids are plain names (letters,
+// digits,
 // '-', '_', '.', not starting with '.'), so an id never leaves the directory.
 // Sorted ids of the plans in dir; empty when it is missing or unreadable.
 std::vector<std::string> ListPlanIds(const std::string& dir);

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <sstream>
 
@@ -58,11 +59,11 @@ class EngineInputTest : public testing::TempDirTest {
     for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) m.add_triangles(i);
     return m;
   }
-  static v1::HeadsetPose Pose(int64_t stamp_ns, double x = 1.0) {
+  static v1::HeadsetPose Pose(int64_t stamp_ns, double x = 1.0, double z = 1.6) {
     v1::HeadsetPose p;
     p.set_stamp_ns(stamp_ns);
     p.mutable_position()->set_x(x);
-    p.mutable_position()->set_z(1.6);
+    p.mutable_position()->set_z(z);
     p.mutable_orientation()->set_w(1.0);
     return p;
   }
@@ -233,6 +234,85 @@ TEST_F(EngineInputTest, AWheeledDeviceIsTrackedWithTheWheelOdometrysDrift) {
   EXPECT_EQ(engine_->config().tracking().window_s(), 40);
   EXPECT_EQ(engine_->tracker().options().filter.drift_window, 0);
   EXPECT_EQ(poses_.size(), 3u);
+}
+
+// A building of two floors (a .floors set): the daemon follows the wearer up and down the
+// stairs by the headset's height, keeps the alignment (the floors share one frame), drops
+// the walls of the floor left, and is not fooled by a crouch or a short look upwards.
+TEST_F(EngineInputTest, TheFloorFollowsTheHeadsetUpAndDownTheStairs) {
+  Write("ground.txt", "1\n0 0 10 0\n");
+  Write("first.txt", "2\n0 0 10 0\n0 5 10 5\n");
+  config_.set_plan_path(
+      Write("building.floors", "# id height plan\n0 0.0 ground.txt\n1 3.5 first.txt  # up\n"));
+  Start(/*with_plan=*/false);
+  ASSERT_TRUE(engine_->tracker().has_plan());
+  v1::Command pick;
+  pick.set_request_id(1);
+  v1::Command::WallPick* w = pick.mutable_wall_pick();
+  w->mutable_headset_point()->set_x(2);
+  w->mutable_headset_point()->set_y(1);
+  w->mutable_headset_point()->set_z(1.5);
+  w->mutable_headset_normal()->set_y(-1);
+  w->set_plan_x(2);
+  w->set_plan_normal_y(1);
+  engine_->OnCommand(Wrap(pick));
+  ASSERT_TRUE(engine_->tracker().has_alignment());
+  const Se2 aligned = engine_->tracker().alignment().T_plan_slam;
+  engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::ADDED, 1)));
+  ASSERT_GT(engine_->store().points(), 0u);
+
+  int64_t t = 0;
+  auto walk = [&](double seconds, double z_from, double z_to) {
+    const int steps = static_cast<int>(seconds / 0.3);
+    for (int i = 1; i <= steps; ++i) {
+      t += 300'000'000;
+      engine_->OnHeadsetPose(Wrap(Pose(t, 1.0, z_from + (z_to - z_from) * i / steps)));
+    }
+  };
+  walk(3, 1.6, 1.6);
+  walk(5, 0.6, 0.6);  // crouching, a metre down
+  walk(1, 5.1, 5.1);  // a second at the next floor's height is not enough
+  walk(3, 1.6, 1.6);
+  EXPECT_EQ(c().floor_changes(), 0u);
+  EXPECT_EQ(poses_.back().floor(), "0");
+  EXPECT_GT(engine_->store().points(), 0u);
+
+  walk(10, 1.6, 5.1);  // up the stairs
+  walk(3, 5.1, 5.1);
+  EXPECT_EQ(c().floor_changes(), 1u);
+  EXPECT_EQ(poses_.back().floor(), "1");
+  EXPECT_EQ(engine_->store().points(), 0u);  // the ground floor's walls
+  EXPECT_EQ(engine_->tracker().index()->plan().segments.size(), 2u);
+  EXPECT_TRUE(engine_->tracker().has_alignment());
+  EXPECT_EQ(engine_->tracker().alignment().T_plan_slam.t, aligned.t);
+  EXPECT_EQ(engine_->tracker().alignment().T_plan_slam.theta, aligned.theta);
+
+  walk(10, 5.1, 1.7);  // and down again
+  walk(3, 1.7, 1.7);
+  EXPECT_EQ(c().floor_changes(), 2u);
+  EXPECT_EQ(poses_.back().floor(), "0");
+  EXPECT_EQ(engine_->tracker().index()->plan().segments.size(), 1u);
+
+  // A set whose upper floor's plan is gone: the wearer stays on the ground floor's plan.
+  std::filesystem::remove(Path("first.txt"));
+  walk(10, 1.7, 5.2);
+  walk(3, 5.2, 5.2);
+  EXPECT_EQ(c().floor_changes(), 2u);
+  EXPECT_GE(c().plans_refused(), 1u);
+  EXPECT_EQ(poses_.back().floor(), "0");
+
+  // Sets that are not sets, and a floor the set lacks, are refused on load.
+  for (const std::string& set :
+       {std::string("0 0 ground.txt\n0 3 ground.txt\n"), std::string("0 high ground.txt\n"),
+        std::string("# none\n"), std::string("0 0 ground.txt\n1 0.5 ground.txt\n"),
+        std::string("7 0 ground.txt\n")}) {
+    v1::Command load;
+    load.set_request_id(2);
+    load.mutable_load_plan()->set_path(Write("bad.floors", set));
+    const uint64_t refused = c().plans_refused();
+    engine_->OnCommand(Wrap(load));
+    EXPECT_EQ(c().plans_refused(), refused + 1) << set;
+  }
 }
 
 TEST_F(EngineInputTest, AFloodOfBadInputLogsOnceASecond) {

@@ -290,5 +290,40 @@ TEST(RealFloorPlansTest, TextAndGeoJsonLoadTheSameWalls) {
   }
 }
 
+// A .floors set: one floor per line, plans relative to the set, comments; broken sets
+// say which line and why.
+TEST(FloorSetTest, ParsesFloorsAndRefusesBrokenSets) {
+  const FloorSet set = ParseFloorSet(
+      "# a building\n\n-1 -3.2 basement.geojson\n0 0 ground.txt   # lobby\n"
+      "1 3.5 /plans/first.yaml\n",
+      "/site", "b.floors");
+  ASSERT_TRUE(set.ok()) << set.error;
+  ASSERT_EQ(set.floors.size(), 3u);
+  EXPECT_EQ(set.floors[0].id, "-1");
+  EXPECT_DOUBLE_EQ(set.floors[0].height_m, -3.2);
+  EXPECT_EQ(set.floors[0].plan_path, "/site/basement.geojson");
+  EXPECT_EQ(set.floors[2].plan_path, "/plans/first.yaml");
+  ASSERT_NE(set.Find("1"), nullptr);
+  EXPECT_EQ(set.Find("2"), nullptr);
+  EXPECT_EQ(set.Nearest(1.4).id, "0");
+  EXPECT_EQ(set.Nearest(2.0).id, "1");
+  EXPECT_EQ(set.Nearest(-100).id, "-1");
+
+  for (const auto& [text, why] : std::vector<std::pair<std::string, std::string>>{
+           {"", "no floors"},
+           {"0 0\n", "b.floors:1: expected"},
+           {"0 0 a.txt extra\n", "expected"},
+           {"0 zero a.txt\n", "expected"},
+           {"0 nan a.txt\n", "not a number"},
+           {"0 0 a.txt\n0 3 b.txt\n", "b.floors:2: floor '0' twice"},
+           {"0 0 a.txt\n1 0.4 b.txt\n", "within 1 m"}}) {
+    const FloorSet bad = ParseFloorSet(text, "", "b.floors");
+    EXPECT_THAT(bad.error, HasSubstr(why)) << text;
+  }
+  EXPECT_TRUE(IsFloorSet("/x/building.floors"));
+  EXPECT_FALSE(IsFloorSet("/x/plan.geojson"));
+  EXPECT_THAT(LoadFloorSet("/no/such.floors").error, HasSubstr("/no/such.floors"));
+}
+
 }  // namespace
 }  // namespace floorpose::platform
