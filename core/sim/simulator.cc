@@ -930,6 +930,54 @@ Se2 FitSe2(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Ve
   return T;
 }
 
+std::string ClimbStairs(Simulation* simulation, size_t at_step, double floor_height_m,
+                        double climb_s) {
+  std::vector<SimulatedStep>& steps = simulation->steps;
+  if (at_step + 1 >= steps.size() || at_step <= simulation->pick_step)
+    return "the stairs must come after the wall pick and before the last step";
+  if (!(std::isfinite(floor_height_m) && floor_height_m > 0 && climb_s > 0))
+    return "the floor height and the climb must be positive";
+  const int64_t period_ns = steps[at_step + 1].stamp_ns - steps[at_step].stamp_ns;
+  const int n = std::max(1, static_cast<int>(std::lround(climb_s * 1e9 / period_ns)));
+  constexpr uint64_t kUpstairs = uint64_t{1} << 40;  // mesh ids of the upper floor
+  std::set<uint64_t> seen_upstairs;
+  for (size_t i = at_step + 1; i < steps.size(); ++i) {
+    SimulatedStep& step = steps[i];
+    step.stamp_ns += n * period_ns;
+    step.slam.z += floor_height_m;
+    step.floor = 1;
+    std::vector<SimMesh> kept;
+    for (SimMesh& mesh : step.meshes) {
+      mesh.id += kUpstairs;
+      const bool known = seen_upstairs.count(mesh.id) > 0;
+      if (mesh.change == MeshChange::kRemoved) {
+        if (!known) continue;
+        seen_upstairs.erase(mesh.id);
+      } else {
+        if (!known) mesh.change = MeshChange::kAdded;
+        seen_upstairs.insert(mesh.id);
+      }
+      for (Eigen::Vector3f& v : mesh.vertices_slam) v.z() += static_cast<float>(floor_height_m);
+      kept.push_back(std::move(mesh));
+    }
+    step.meshes = std::move(kept);
+  }
+  std::vector<SimulatedStep> climb;
+  for (int j = 1; j <= n; ++j) {
+    SimulatedStep step = steps[at_step];
+    step.stamp_ns += j * period_ns;
+    step.slam.z += floor_height_m * j / n;
+    step.meshes.clear();
+    step.marker = 0;
+    step.floor = j == n ? 1 : 0;
+    climb.push_back(std::move(step));
+  }
+  steps.insert(steps.begin() + static_cast<std::ptrdiff_t>(at_step) + 1, climb.begin(),
+               climb.end());
+  simulation->duration_s += static_cast<double>(n * period_ns) * 1e-9;
+  return {};
+}
+
 DriftStats MeasureDrift(const Simulation& sim) {
   DriftStats stats;
   if (sim.steps.empty()) return stats;

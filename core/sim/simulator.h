@@ -145,6 +145,7 @@ struct SimulatedStep {
   Se2 T_slam_plan;
   uint32_t marker = 0;          // 1..10 at the markers, else 0
   std::vector<SimMesh> meshes;  // published just before this pose
+  int floor = 0;                // 0, or 1 once up the stairs (ClimbStairs)
 };
 
 // What the world holds that the plan does not say: for tests and descriptions.
@@ -185,6 +186,16 @@ struct Simulation {
 // increasing times) when given.
 Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& options,
                     const std::vector<TimedPose>* trajectory = nullptr);
+
+// Two floors of one layout, one above the other: after step `at_step` the wearer stands
+// while the headset rises `floor_height_m` over `climb_s` (a flight of stairs, poses every
+// period as before, no meshes), then walks the rest of the simulation on the upper
+// floor: later poses and meshes floor_height_m higher, meshes under new ids (ADDED when
+// first seen up there; removals of chunks never seen there dropped), steps from the top
+// of the stairs on at floor 1, later stamps shifted by the climb. Returns an error (a
+// step out of range, or at or before the wall pick), else empty.
+std::string ClimbStairs(Simulation* simulation, size_t at_step, double floor_height_m,
+                        double climb_s);
 
 // The least-squares rigid transform taking `from` onto `to` (Umeyama 1991, in 2D, no
 // scale). Identity on fewer than two points.

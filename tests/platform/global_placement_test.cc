@@ -106,5 +106,43 @@ TEST_F(GlobalPlacementTest, AWrongPickIsFlaggedAndUndone) {
               undone.time_to_unreliable_s, undone.time_to_recovered_s, undone.final_error_m);
 }
 
+// Two floors of the office's layout in a .floors set: the walk climbs a flight of stairs
+// halfway (simulate --stairs-at 0.5). The daemon follows it upstairs once, ends on the
+// right floor, and tracks as well as on the same walk without the stairs.
+TEST_F(GlobalPlacementTest, ATwoFloorWalkEndsOnTheRightFloorAsAccurately) {
+  const FloorPlanParse plan = platform::LoadFloorPlan(kPlanPath);
+  ASSERT_TRUE(plan.ok()) << plan.error;
+  sim::SimulatorOptions o;
+  o.seed = 1;
+  o.scenario = sim::Scenario::kOffice;
+  std::string error;
+  SimulateRecordingResult flat, stairs;
+  ASSERT_TRUE(SimulateToRecording(plan.plan, o, nullptr, {}, Path("flat.rec"), &flat, &error))
+      << error;
+  SimulateRecordingOptions climb;
+  climb.stairs_at = 0.5;
+  ASSERT_TRUE(
+      SimulateToRecording(plan.plan, o, nullptr, climb, Path("stairs.rec"), &stairs, &error))
+      << error;
+  ASSERT_EQ(stairs.simulation.steps.size(), flat.simulation.steps.size() + 33);  // 10 s of poses
+  EXPECT_EQ(stairs.simulation.steps.back().floor, 1);
+
+  v1::FloorposedConfig config;
+  config.set_plan_path(kPlanPath);
+  EvalReport one;
+  ASSERT_TRUE(Evaluate(config, Path("flat.rec"), Baseline::kNone, &one, &error)) << error;
+  config.set_plan_path(
+      Write("office.floors", std::string("0 0.0 ") + kPlanPath + "\n1 3.5 " + kPlanPath + "\n"));
+  EvalReport two;
+  ASSERT_TRUE(Evaluate(config, Path("stairs.rec"), Baseline::kNone, &two, &error)) << error;
+  EXPECT_EQ(two.floor_changes, 1u);
+  ASSERT_FALSE(two.plan_poses.empty());
+  EXPECT_EQ(two.plan_poses.back().floor(), "1");
+  EXPECT_LE(two.wrong_floor_poses, 10u) << "at most the 2 s the change waits, and the climb";
+  EXPECT_EQ(two.divergences, 0u);
+  EXPECT_LT(two.mean_error_m, one.mean_error_m + 0.1);
+  EXPECT_LT(two.max_error_m, std::max(1.5, 1.5 * one.max_error_m));
+}
+
 }  // namespace
 }  // namespace floorpose::tools

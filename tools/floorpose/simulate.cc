@@ -101,6 +101,17 @@ Run AddSimulateCommand(CLI::App& app) {
   app.add_option("--frame", o->frame, "headset convention: unity (Y up, left-handed) or zup")
       ->check(CLI::IsMember({"unity", "zup"}))
       ->capture_default_str();
+  app.add_option("--stairs-at", o->recording.stairs_at,
+                 "climb a flight of stairs this far through the walk (0..1; 0: one floor) onto "
+                 "a floor of the same layout, as in a .floors set listing the plan twice")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  app.add_option("--floor-height", o->recording.floor_height_m,
+                 "height of the flight of stairs, metres")
+      ->check(CLI::Range(1.0, 20.0))
+      ->capture_default_str();
+  app.add_option("--upper-floor", o->recording.upper_floor, "floor id at the top of the stairs")
+      ->capture_default_str();
   app.add_flag("--no-mesh", o->no_mesh, "poses and ground truth only");
   app.add_flag(
       "--kidnap",

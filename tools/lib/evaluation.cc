@@ -203,6 +203,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     }
   }
   engine.PublishExplored();  // what was explored since the last one
+  report->floor_changes = engine.counters().floor_changes();
 
   // Score every plan pose that has ground truth.
   std::optional<Se2> best_fit;
@@ -223,6 +224,8 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     if (it == truth.end()) continue;
     // Before the first alignment the daemon has no plan position to give (it says so:
     // version 0, UNRELIABLE); the thesis scores from the initial alignment on.
+    // A building of several floors: on the truth's floor or not (before any alignment too).
+    if (!it->second.floor().empty() && p.floor() != it->second.floor()) ++report->wrong_floor_poses;
     if (p.alignment_version() == 0 && !best_fit) {
       ++report->unaligned_poses;
       continue;
@@ -336,7 +339,9 @@ std::string ToJson(const EvalReport& r) {
     << ", \"false_reliable_poses\": " << r.false_reliable_poses
     << ", \"time_to_unreliable_s\": " << r.time_to_unreliable_s
     << ", \"time_to_recovered_s\": " << r.time_to_recovered_s
-    << ", \"global_searches\": " << r.global_searches << "}";
+    << ", \"global_searches\": " << r.global_searches
+    << ", \"wrong_floor_poses\": " << r.wrong_floor_poses
+    << ", \"floor_changes\": " << r.floor_changes << "}";
   return s.str();
 }
 
@@ -366,6 +371,9 @@ std::string ToText(const EvalReport& r) {
     << "  first unreliable pose after   " << r.time_to_unreliable_s << " s (-1: none)\n"
     << "  first reliable within 1 m     " << r.time_to_recovered_s << " s (-1: none)\n";
   if (r.global_searches) s << "  whole-plan searches           " << r.global_searches << "\n";
+  if (r.floor_changes || r.wrong_floor_poses)
+    s << "  floor changes                 " << r.floor_changes << ", " << r.wrong_floor_poses
+      << " poses on another floor than the truth's\n";
   return s.str();
 }
 

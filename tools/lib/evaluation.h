@@ -65,6 +65,9 @@ struct EvalReport {
   // UNRELIABLE, and to the first RELIABLE within 1 m (-1: never).
   double time_to_unreliable_s = -1, time_to_recovered_s = -1;
   size_t global_searches = 0;  // whole-plan searches run (placements and checks)
+  // A .floors plan set: floors the daemon changed to, and poses published with another
+  // floor than the truth's.
+  size_t floor_changes = 0, wrong_floor_poses = 0;
   std::vector<EvalPose> track;
   std::vector<v1::PlanPose> plan_poses;     // as the Engine published them, in order
   size_t plan_tracks = 0;                   // PlanTrack messages published

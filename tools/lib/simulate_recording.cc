@@ -90,7 +90,7 @@ bool WriteSimulationRecording(const sim::Simulation& simulation, const std::stri
     truth.set_x(step.true_plan.position.x());
     truth.set_y(step.true_plan.position.y());
     truth.set_heading(step.true_plan.heading);
-    truth.set_floor(recording.floor);
+    truth.set_floor(step.floor == 0 ? recording.floor : recording.upper_floor);
     truth.set_marker(step.marker);
     ok = ok && out.Append(kGroundTruthTopic, step.stamp_ns, truth);
     if (i == simulation.pick_step)
@@ -117,6 +117,16 @@ bool SimulateToRecording(const FloorPlan& plan, const sim::SimulatorOptions& opt
     return false;
   }
   result->drift = sim::MeasureDrift(result->simulation);
+  if (recording.stairs_at > 0) {
+    const size_t at = static_cast<size_t>(recording.stairs_at *
+                                          static_cast<double>(result->simulation.steps.size()));
+    if (const std::string e =
+            sim::ClimbStairs(&result->simulation, at, recording.floor_height_m, recording.climb_s);
+        !e.empty()) {
+      *error = plan.id + ": " + e;
+      return false;
+    }
+  }
   if (!WriteSimulationRecording(result->simulation, plan.id, sim::ToString(options.scenario),
                                 options.seed, recording, path, &result->records, error))
     return false;

@@ -21,6 +21,12 @@ inline constexpr char kGroundTruthTopic[] = "floorpose/sim/ground_truth";
 struct SimulateRecordingOptions {
   std::string device_id = "sim-headset";
   std::string floor = "0";  // floor id of the ground truth
+  // Two floors of one layout (sim::ClimbStairs): the walk climbs a flight of stairs this
+  // far through its poses (0: one floor), floor_height_m over climb_s, onto upper_floor.
+  double stairs_at = 0;
+  double floor_height_m = 3.5;
+  double climb_s = 10.0;
+  std::string upper_floor = "1";
   HeadsetFrame frame = HeadsetFrame::kUnityLeftHandedYUp;
   // What the poses say the device moves on (a CARMEN robot: WHEEL).
   v1::HeadsetPose::Odometry odometry = v1::HeadsetPose::VISUAL_INERTIAL;
