@@ -282,6 +282,15 @@ TEST_F(EngineInputTest, TheFloorFollowsTheHeadsetUpAndDownTheStairs) {
   EXPECT_EQ(c().floor_changes(), 1u);
   EXPECT_EQ(poses_.back().floor(), "1");
   EXPECT_EQ(engine_->store().points(), 0u);  // the ground floor's walls
+  {
+    // A restart upstairs resumes upstairs, though the configuration says floor 0.
+    Engine restarted(
+        config_, [](Topic, const google::protobuf::Message&) {}, [] { return 0; });
+    restarted.Start();
+    ASSERT_EQ(restarted.RestoreState(engine_->SaveState()), "");
+    EXPECT_EQ(restarted.tracker().index()->plan().segments.size(), 2u);
+    EXPECT_EQ(restarted.SaveState().floor(), "1");
+  }
   EXPECT_EQ(engine_->tracker().index()->plan().segments.size(), 2u);
   EXPECT_TRUE(engine_->tracker().has_alignment());
   EXPECT_EQ(engine_->tracker().alignment().T_plan_slam.t, aligned.t);
