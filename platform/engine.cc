@@ -162,57 +162,59 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
 }
 
 std::string Engine::LoadPlan(const std::string& path, const std::string& floor) {
+  auto refuse = [this](const std::string& error) {
+    counters_.set_plans_refused(counters_.plans_refused() + 1);
+    return error;
+  };
   FloorSet set;
   std::string file = path;
   if (IsFloorSet(path)) {
     set = LoadFloorSet(path);
     const FloorEntry* entry = set.ok() ? set.Find(floor) : nullptr;
     if (set.ok() && !entry) set.error = path + ": no floor '" + floor + "' in the set";
-    if (!set.ok()) {
-      counters_.set_plans_refused(counters_.plans_refused() + 1);
-      return set.error;
-    }
+    if (!set.ok()) return refuse(set.error);
     file = entry->plan_path;
   }
   const FloorPlanParse parsed = LoadFloorPlan(file);
-  if (!parsed.ok()) {
-    counters_.set_plans_refused(counters_.plans_refused() + 1);
-    return parsed.error;
+  if (!parsed.ok()) return refuse(parsed.error);
+  // Every other floor of a set is built now, so that a floor change on the stairs costs
+  // the poses nothing; one that does not load refuses the set.
+  std::map<std::string, PlanAssets> others;
+  for (const FloorEntry& f : set.floors) {
+    if (f.id == floor) continue;
+    const FloorPlanParse other = LoadFloorPlan(f.plan_path);
+    if (!other.ok()) return refuse(path + ": floor " + f.id + ": " + other.error);
+    others[f.id] = BuildPlan(other, f.plan_path);
   }
   floor_ = floor;
   plan_path_ = path;
   floors_ = std::move(set);
   floor_reference_.reset();
   floor_candidate_.reset();
-  InstallPlan(parsed, file, /*another_floor=*/false);
+  other_floors_ = std::move(others);
+  UsePlan(BuildPlan(parsed, file), /*another_floor=*/false);
   return {};
 }
 
-void Engine::InstallPlan(const FloorPlanParse& parsed, const std::string& file,
-                         bool another_floor) {
+Engine::PlanAssets Engine::BuildPlan(const FloorPlanParse& parsed, const std::string& file) const {
+  PlanAssets a;
   ClosestWallIndex::Options index_options;
   index_options.max_distance_m = std::max(3.0, config_.icp().max_correspondence_m());
-  auto index = std::make_shared<const ClosestWallIndex>(parsed.plan, index_options);
+  a.index = std::make_shared<const ClosestWallIndex>(parsed.plan, index_options);
   spdlog::info("floor plan {}: {} segments ({} dropped), {:.1f} x {:.1f} m, index {:.1f} MB", file,
                parsed.plan.segments.size(), parsed.dropped_segments,
                parsed.plan.max.x() - parsed.plan.min.x(), parsed.plan.max.y() - parsed.plan.min.y(),
-               static_cast<double>(index->MemoryBytes()) / 1e6);
-  if (another_floor)
-    tracker_.ChangeFloor(std::move(index));
-  else
-    tracker_.SetPlan(std::move(index));
-  global_ = config_.tracking().global_search() ? std::make_shared<GlobalSearchCache>(parsed.plan)
-                                               : nullptr;
-  plan_id_ = parsed.plan.id;
-  plan_digest_ = FloorPlanDigest(parsed.plan);
+               static_cast<double>(a.index->MemoryBytes()) / 1e6);
+  if (config_.tracking().global_search())
+    a.global = std::make_shared<GlobalSearchCache>(parsed.plan);
+  a.id = parsed.plan.id;
+  a.digest = FloorPlanDigest(parsed.plan);
   const int64_t t0 = now_ns_();
   RouteOptions route;
   route.body_radius_m = config_.routes().body_radius_m();
   route.cell_m = config_.routes().cell_m();
   route.snap_m = config_.routes().snap_m();
-  routes_ = std::make_unique<RoutePlanner>(parsed.plan, route);
-  explored_.reset();
-  last_plan_pose_.reset();
+  a.routes = std::make_unique<RoutePlanner>(parsed.plan, route);
   const v1::ExploredConfig& e = config_.explored();
   if (e.enabled()) {
     RoomOptions rooms;
@@ -222,14 +224,29 @@ void Engine::InstallPlan(const FloorPlanParse& parsed, const std::string& file,
     explored.max_ray_m = e.max_ray_m();
     explored.min_visit_poses = static_cast<int>(e.min_visit_poses());
     explored.body_radius_m = route.body_radius_m;
-    explored_ = std::make_unique<ExploredMap>(
+    a.explored = std::make_unique<ExploredMap>(
         parsed.plan, std::make_shared<const RoomMap>(parsed.plan, rooms), explored);
-    explored_sent_ = explored_->revision() - 1;  // an empty map at once: the plan's rooms
   }
-  spdlog::info("routes on a {} x {} grid of {:.2f} m, {} rooms, in {:.0f} ms", routes_->grid().nx,
-               routes_->grid().ny, routes_->grid().cell_m,
-               explored_ ? explored_->rooms()->rooms().size() : 0,
+  spdlog::info("routes on a {} x {} grid of {:.2f} m, {} rooms, in {:.0f} ms", a.routes->grid().nx,
+               a.routes->grid().ny, a.routes->grid().cell_m,
+               a.explored ? a.explored->rooms()->rooms().size() : 0,
                static_cast<double>(now_ns_() - t0) * 1e-6);
+  return a;
+}
+
+void Engine::UsePlan(PlanAssets assets, bool another_floor) {
+  if (another_floor)
+    tracker_.ChangeFloor(std::move(assets.index));
+  else
+    tracker_.SetPlan(std::move(assets.index));
+  global_ = std::move(assets.global);
+  routes_ = std::move(assets.routes);
+  explored_ = std::move(assets.explored);
+  plan_id_ = std::move(assets.id);
+  plan_digest_ = assets.digest;
+  last_plan_pose_.reset();
+  // Its explored map at once: the plan's rooms, or the floor as it was left.
+  if (explored_) explored_sent_ = explored_->revision() - 1;
   PublishExplored();
 }
 
@@ -259,13 +276,9 @@ void Engine::FollowFloors(const DecodedPose& pose) {
 }
 
 void Engine::ChangeFloor(const FloorEntry& to, double slam_z, double height_m) {
-  floor_candidate_.reset();  // on failure, tried again after another hold
-  const FloorPlanParse parsed = LoadFloorPlan(to.plan_path);
-  if (!parsed.ok()) {
-    counters_.set_plans_refused(counters_.plans_refused() + 1);
-    Warn("floor", "floor " + to.id + " not taken: " + parsed.error);
-    return;
-  }
+  floor_candidate_.reset();
+  const auto next = other_floors_.find(to.id);
+  if (next == other_floors_.end()) return;  // built with the set: cannot happen
   // The walls in the store are the floor's left behind: registered against this floor's
   // plan they would pull the alignment onto the wrong walls.
   spdlog::info(
@@ -273,9 +286,14 @@ void Engine::ChangeFloor(const FloorEntry& to, double slam_z, double height_m) {
       "of floor {} dropped",
       floor_, to.id, height_m, to.id, to.height_m, store_.points(), floor_);
   store_.Clear();
-  floor_ = to.id;
+  PlanAssets leaving{tracker_.index(),     std::move(global_), std::move(routes_),
+                     std::move(explored_), plan_id_,           plan_digest_};
+  PlanAssets arriving = std::move(next->second);
+  other_floors_.erase(next);
+  other_floors_[floor_] = std::move(leaving);
+  floor_ = to.id;  // what is published from here on carries it
+  UsePlan(std::move(arriving), /*another_floor=*/true);
   floor_reference_ = FloorReference{slam_z, to.height_m};
-  InstallPlan(parsed, to.plan_path, /*another_floor=*/true);
   counters_.set_floor_changes(counters_.floor_changes() + 1);
   PublishAlignment();
 }

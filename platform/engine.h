@@ -7,6 +7,7 @@
 
 #include <deque>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -127,9 +128,12 @@ class Engine {
  private:
   // A plan file, or floor `floor` of a .floors set.
   std::string LoadPlan(const std::string& path, const std::string& floor);
-  // Makes `parsed` the plan in use, with its routes and explored map; the alignment goes
-  // with the old plan, or stays when the new one is another floor of the same set.
-  void InstallPlan(const FloorPlanParse& parsed, const std::string& file, bool another_floor);
+  struct PlanAssets;
+  // A plan's index, routes, rooms and explored map (and global search, when on).
+  PlanAssets BuildPlan(const FloorPlanParse& parsed, const std::string& file) const;
+  // Makes them the plan in use; the alignment goes with the old plan, or stays when the
+  // new one is another floor of the same set.
+  void UsePlan(PlanAssets assets, bool another_floor);
   // A .floors set: takes the floor the headset's height says, once it has said so for
   // floors.change_hold_s.
   void FollowFloors(const DecodedPose& pose);
@@ -175,6 +179,18 @@ class Engine {
     int64_t since_ns = 0;
   };
   std::optional<FloorCandidate> floor_candidate_;
+  // A floor's plan and what is made from it; for a .floors set, every floor not in use,
+  // built at the load: a floor change costs the poses nothing, and a wearer coming back
+  // finds the floor explored as it was.
+  struct PlanAssets {
+    std::shared_ptr<const ClosestWallIndex> index;
+    std::shared_ptr<GlobalSearchCache> global;
+    std::unique_ptr<RoutePlanner> routes;
+    std::unique_ptr<ExploredMap> explored;
+    std::string id;
+    uint64_t digest = 0;
+  };
+  std::map<std::string, PlanAssets> other_floors_;
   std::string plan_id_;
   // Made with each plan: routes, its rooms and the explored map on it.
   std::unique_ptr<RoutePlanner> routes_;

@@ -277,6 +277,9 @@ TEST_F(EngineInputTest, TheFloorFollowsTheHeadsetUpAndDownTheStairs) {
   EXPECT_EQ(poses_.back().floor(), "0");
   EXPECT_GT(engine_->store().points(), 0u);
 
+  const ExploredMap* ground_explored = engine_->explored();
+  const ClosestWallIndex* ground_index = engine_->tracker().index().get();
+  ASSERT_NE(ground_explored, nullptr);
   walk(10, 1.6, 5.1);  // up the stairs
   walk(3, 5.1, 5.1);
   EXPECT_EQ(c().floor_changes(), 1u);
@@ -301,14 +304,15 @@ TEST_F(EngineInputTest, TheFloorFollowsTheHeadsetUpAndDownTheStairs) {
   EXPECT_EQ(c().floor_changes(), 2u);
   EXPECT_EQ(poses_.back().floor(), "0");
   EXPECT_EQ(engine_->tracker().index()->plan().segments.size(), 1u);
+  // The ground floor as it was left: its explored map and index kept, not rebuilt.
+  EXPECT_EQ(engine_->explored(), ground_explored);
+  EXPECT_EQ(engine_->tracker().index().get(), ground_index);
 
-  // A set whose upper floor's plan is gone: the wearer stays on the ground floor's plan.
+  // Every floor is built at the load: a set whose upper floor's plan is gone is refused.
   std::filesystem::remove(Path("first.txt"));
-  walk(10, 1.7, 5.2);
-  walk(3, 5.2, 5.2);
-  EXPECT_EQ(c().floor_changes(), 2u);
-  EXPECT_GE(c().plans_refused(), 1u);
-  EXPECT_EQ(poses_.back().floor(), "0");
+  Start(/*with_plan=*/false);
+  EXPECT_EQ(c().plans_refused(), 1u);
+  EXPECT_FALSE(engine_->tracker().has_plan());
 
   // Sets that are not sets, and a floor the set lacks, are refused on load.
   for (const std::string& set :
