@@ -240,5 +240,44 @@ TEST(CarmenDataTest, TheDataSetsLogsImport) {
   }
 }
 
+// Issue 6's target on the real logs, with the daemon's defaults: mean within 0.3 m, max
+// within 1.5 m, no divergence (docs/evaluation.md, "Real laser logs").
+class CarmenDataEvalTest : public testing::TempDirTest {};
+
+TEST_F(CarmenDataEvalTest, EveryLogWithOdometryStaysOnThePlan) {
+  const auto data = testing::DataDir();
+  if (!data) GTEST_SKIP() << testing::kNoDataMessage;
+  for (const std::string name : {"aces", "csail", "freiburg-101"}) {
+    const auto dir = *data / "carmen";
+    CarmenLog log;
+    std::vector<sim::TimedPose> gt, odom;
+    std::string error;
+    ASSERT_TRUE(ReadCarmenLog((dir / (name + "-corrected.log.gz")).string(), &log, &error))
+        << error;
+    ASSERT_TRUE(ReadTumTrajectory((dir / (name + "_gt.tum")).string(), &gt, &error)) << error;
+    ASSERT_TRUE(ReadTumTrajectory((dir / (name + "_odom.tum")).string(), &odom, &error)) << error;
+    sim::Simulation walk;
+    CarmenImportReport report;
+    ASSERT_TRUE(CarmenToSimulation(log, odom, gt, {}, &walk, &report, &error)) << error;
+    SimulateRecordingOptions wheel;
+    wheel.odometry = v1::HeadsetPose::WHEEL;
+    const std::string recording = Path(name + ".rec");
+    ASSERT_TRUE(WriteSimulationRecording(walk, name + "_plan", "carmen", 0, wheel, recording,
+                                         nullptr, &error))
+        << error;
+    v1::FloorposedConfig config;
+    config.set_plan_path((dir / (name + "_plan.yaml")).string());
+    EvalReport r;
+    ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &r, &error)) << error;
+    std::printf("%s: mean %.3f m, max %.2f m, RELIABLE %.1f%%, %.2f%% of those within 1 m\n",
+                name.c_str(), r.mean_error_m, r.max_error_m, 100 * r.reliable_fraction,
+                100 * r.reliable_precision_1m);
+    EXPECT_LE(r.mean_error_m, 0.3) << name;
+    EXPECT_LE(r.max_error_m, 1.5) << name;
+    EXPECT_EQ(r.divergences, 0u) << name;
+    EXPECT_GE(r.reliable_precision_1m, 0.99) << name;
+  }
+}
+
 }  // namespace
 }  // namespace floorpose::tools
