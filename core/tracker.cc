@@ -88,7 +88,7 @@ void Tracker::Reset() {
   pick_plan_point_.reset();
   last_plan_position_.reset();
   current_fit_.reset();
-  restored_ = false;
+  restored_ = floor_changed_ = false;
   last_start_ns_ = 0;
   last_global_ns_.reset();
   leading_place_.reset();
@@ -103,6 +103,7 @@ void Tracker::ChangeFloor(std::shared_ptr<const ClosestWallIndex> index) {
   index_ = std::move(index);
   pending_jump_.reset();
   current_fit_.reset();
+  floor_changed_ = true;
   // A registration running against the floor left is stale when it comes back.
   if (has_alignment()) alignment_.version = next_version_++;
 }
@@ -117,7 +118,7 @@ void Tracker::ForgetRegistrations() {
 
 void Tracker::SetAlignment(const Se2& T, AlignmentSource source, int64_t stamp_ns) {
   pending_jump_.reset();
-  restored_ = false;
+  restored_ = floor_changed_ = false;
   alignment_.T_plan_slam = T;
   alignment_.version = next_version_++;
   alignment_.source = source;
@@ -644,9 +645,11 @@ Reliability Tracker::CurrentReliability() const {
     r.reason = "placed by searching the plan, not yet confirmed";
   }
   if (!current_fit_) {
-    // Aligned by hand, not yet checked against the walls: DEGRADED, whatever the odds.
+    // Not yet checked against the walls (a pick, a restart, another floor): DEGRADED,
+    // whatever the odds.
     r.flag = ReliabilityFlag::kDegraded;
     r.reason = restored_                                     ? "restored, not yet checked"
+               : floor_changed_                              ? "floor changed, not yet checked"
                : alignment_.source == AlignmentSource::kFlip ? "flipped, not yet checked"
                : alignment_.source == AlignmentSource::kGlobalSearch
                    ? "placed by searching the plan, not yet checked"

@@ -351,7 +351,8 @@ class Tracker {
   std::vector<AlignmentState> history_;
   // Fit of the alignment in use on the latest registration cloud.
   std::optional<RegistrationResult> current_fit_;
-  bool restored_ = false;  // the alignment in use came from a saved state
+  bool restored_ = false;       // the alignment in use came from a saved state
+  bool floor_changed_ = false;  // ...was carried to another floor, not checked there yet
 };
 
 const char* ToString(ReliabilityFlag flag);

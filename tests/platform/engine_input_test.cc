@@ -284,6 +284,7 @@ TEST_F(EngineInputTest, TheFloorFollowsTheHeadsetUpAndDownTheStairs) {
   walk(3, 5.1, 5.1);
   EXPECT_EQ(c().floor_changes(), 1u);
   EXPECT_EQ(poses_.back().floor(), "1");
+  EXPECT_EQ(poses_.back().reliability().reason(), "floor changed, not yet checked");
   EXPECT_EQ(engine_->store().points(), 0u);  // the ground floor's walls
   {
     // A restart upstairs resumes upstairs, though the configuration says floor 0.
