@@ -285,47 +285,6 @@ std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>
   return places;
 }
 
-namespace {
-
-// Whether segments pq and ab properly cross (touching ends do not count).
-bool Crosses(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Segment& s) {
-  auto side = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-    const Eigen::Vector2d u = a - o, v = b - o;
-    return u.x() * v.y() - u.y() * v.x();
-  };
-  const double d1 = side(p, q, s.a), d2 = side(p, q, s.b);
-  const double d3 = side(s.a, s.b, p), d4 = side(s.a, s.b, q);
-  return ((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0));
-}
-
-// Steps of the path (plan frame) that cross a wall.
-uint32_t PathCrossings(const std::vector<Eigen::Vector2d>& path, const FloorPlan& plan) {
-  if (path.size() < 2) return 0;
-  // Only the walls in the path's box can be crossed: a few of a building's thousands.
-  Eigen::Vector2d lo = path.front(), hi = path.front();
-  for (const Eigen::Vector2d& p : path) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  auto outside = [](const Segment& s, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-    const Eigen::Vector2d smin = s.a.cwiseMin(s.b), smax = s.a.cwiseMax(s.b);
-    return smax.x() < a.x() || smin.x() > b.x() || smax.y() < a.y() || smin.y() > b.y();
-  };
-  std::vector<const Segment*> near;
-  for (const Segment& s : plan.segments)
-    if (!outside(s, lo, hi)) near.push_back(&s);
-  uint32_t crossings = 0;
-  for (size_t i = 1; i < path.size(); ++i) {
-    const Eigen::Vector2d &p = path[i - 1], &q = path[i];
-    const Eigen::Vector2d step_lo = p.cwiseMin(q), step_hi = p.cwiseMax(q);
-    for (const Segment* s : near)
-      if (!outside(*s, step_lo, step_hi) && Crosses(p, q, *s)) {
-        ++crossings;
-        break;
-      }
-  }
-  return crossings;
-}
-
-}  // namespace
-
 std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
                                       const std::vector<Eigen::Vector2d>& points_slam,
                                       const std::vector<Eigen::Vector2d>& path_slam,

@@ -89,6 +89,7 @@ void Tracker::Reset() {
   last_plan_position_.reset();
   current_fit_.reset();
   restored_ = floor_changed_ = false;
+  crossings_ = 0;
   last_start_ns_ = 0;
   last_global_ns_.reset();
   leading_place_.reset();
@@ -103,6 +104,7 @@ void Tracker::ChangeFloor(std::shared_ptr<const ClosestWallIndex> index) {
   index_ = std::move(index);
   pending_jump_.reset();
   current_fit_.reset();
+  crossings_ = 0;
   floor_changed_ = true;
   // A registration running against the floor left is stale when it comes back.
   if (has_alignment()) alignment_.version = next_version_++;
@@ -118,6 +120,7 @@ void Tracker::ForgetRegistrations() {
 
 void Tracker::SetAlignment(const Se2& T, AlignmentSource source, int64_t stamp_ns) {
   pending_jump_.reset();
+  crossings_ = 0;
   restored_ = floor_changed_ = false;
   alignment_.T_plan_slam = T;
   alignment_.version = next_version_++;
@@ -331,6 +334,13 @@ PlanPoseEstimate Tracker::Correct(const Pose2& pose_slam) {
         turned_since_predict_rad_ += WrapAngle(pose_slam.heading - last_slam_heading_);
     }
   }
+  if (options_.path_check && last_slam_position_ && has_alignment() &&
+      pose_slam.position.allFinite() && (pose_slam.position - *last_slam_position_).norm() < 5.0) {
+    const Se2& T = alignment_.T_plan_slam;
+    if (PathCrossings({T * *last_slam_position_, T * pose_slam.position}, index_->plan(),
+                      options_.path_check_margin_m) > 0)
+      ++crossings_;
+  }
   last_slam_position_ = pose_slam.position;
   if (std::isfinite(pose_slam.heading)) last_slam_heading_ = pose_slam.heading;
   PlanPoseEstimate out = Project(pose_slam);
@@ -403,9 +413,16 @@ bool Tracker::ExplainsWallsInstead(const RegistrationResult& result,
   return fits.inliers >= need && in_use.inliers < need;
 }
 
+uint32_t Tracker::MinPoints() const {
+  // A pick, flip or place found by searching is checked against the walls as soon as a
+  // few are in: a wrong one is flagged in seconds (and the walls' directions turn it).
+  return alignment_.source == AlignmentSource::kRegistration
+             ? options_.min_points
+             : std::min(options_.min_points, options_.check_min_points);
+}
+
 bool Tracker::RegistrationDue(int64_t now_ns, size_t live_points, size_t new_points) const {
-  if (!index_ || !has_alignment() || live_points < options_.min_points || new_points == 0)
-    return false;
+  if (!index_ || !has_alignment() || live_points < MinPoints() || new_points == 0) return false;
   if (new_points >= options_.min_new_points) return true;
   if (options_.min_walk_m > 0 && walked_since_start_m_ >= options_.min_walk_m) return true;
   return static_cast<double>(now_ns - last_start_ns_) * 1e-9 >= options_.max_interval_s;
@@ -442,6 +459,10 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
     d.reason = "registration failed: " + result.reason;
   } else if (new_score > old_score * options_.worse_fit_ratio) {
     d.reason = "fit worse than the alignment in use";
+  } else if (alignment_.source != AlignmentSource::kRegistration &&
+             cloud.size() < options_.min_points) {
+    // check_min_points: enough to tell a pick that fits no walls near it, not to place.
+    d.reason = "a check on few walls: a place waits for more";
   } else if (const std::string doubt = FirstRegistrationDoubt(result);
              alignment_.source != AlignmentSource::kRegistration &&
              !(doubt.empty() && FirstPlaceClear(result)) &&
@@ -630,6 +651,12 @@ Reliability Tracker::CurrentReliability() const {
     return r;
   }
   r = Assess(CurrentFeatures());
+  if (crossings_ > 0) {
+    // The wearer walked through a wall of the plan under this alignment.
+    r.flag = ReliabilityFlag::kUnreliable;
+    r.reason = "the path crosses a wall of the plan";
+    return r;
+  }
   if (options_.global_search && WallsDoNotFit()) {
     // The alignment in use stops explaining the walls (a wrong pick, a wrong place): the
     // search is checking the plan for a better one.

@@ -81,13 +81,18 @@ struct TrackerOptions {
                                     // within the pick search of the pick at the wearer: taken
                                     // at once (others wait for the next result to agree)
   double score_cap_m = 0.2;         // distances capped here in the "better fit" score
-  double worse_fit_ratio = 1.25;  // results scoring worse than this times the one in use: rejected
-  bool local_meshes = false;      // register only meshes new since the last run (thesis "local")
-  uint32_t min_new_points = 500;  // register after this many new wall points...
-  double min_walk_m = 2.0;        // ...or this many metres walked with new points...
-  double max_interval_s = 3.0;    // ...or after this long with any new points
-  uint32_t min_points = 50;       // no registration on fewer points
-  size_t history = 16;            // accepted alignments kept
+  double worse_fit_ratio = 1.25;   // results scoring worse than this times the one in use: rejected
+  bool local_meshes = false;       // register only meshes new since the last run (thesis "local")
+  uint32_t min_new_points = 500;   // register after this many new wall points...
+  double min_walk_m = 2.0;         // ...or this many metres walked with new points...
+  double max_interval_s = 3.0;     // ...or after this long with any new points
+  uint32_t min_points = 50;        // no registration on fewer points...
+  uint32_t check_min_points = 20;  // ...but this many to check a pick, flip or search's place
+  // A step of the path under the alignment in use (since it was last set) through a plan
+  // wall, path_check_margin_m or more from the wall's ends: UNRELIABLE.
+  bool path_check = true;
+  double path_check_margin_m = 0.4;
+  size_t history = 16;  // accepted alignments kept
   // Without a pick: search the whole plan (GlobalSearch) once this many wall points are
   // in, every global_interval_s, over the walls of the last global_window_s (0: all).
   // The places found are refined (RefinePlaces). A place leads a search when the next
@@ -231,6 +236,9 @@ class Tracker {
   // Scheduling: due when aligned, with enough points, and enough new data, distance
   // walked or time.
   bool RegistrationDue(int64_t now_ns, size_t live_points, size_t new_points) const;
+  // The wall points a registration needs now: check_min_points while the alignment is a
+  // pick, flip or search's place not yet registered, else min_points.
+  uint32_t MinPoints() const;
   void MarkRegistrationStarted(int64_t now_ns) {
     last_start_ns_ = now_ns;
     walked_since_start_m_ = 0;
@@ -353,6 +361,7 @@ class Tracker {
   std::optional<RegistrationResult> current_fit_;
   bool restored_ = false;       // the alignment in use came from a saved state
   bool floor_changed_ = false;  // ...was carried to another floor, not checked there yet
+  uint32_t crossings_ = 0;      // steps of the path through a plan wall under the alignment
 };
 
 const char* ToString(ReliabilityFlag flag);

@@ -176,6 +176,9 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (!(k.clear_ambiguity() >= 0 && k.clear_ambiguity() <= k.max_ambiguity()))
     return "tracking.clear_ambiguity must be in [0, max_ambiguity]";
   if (k.global_min_points() < 10) return "tracking.global_min_points must be at least 10";
+  if (k.check_min_points() < 3) return "tracking.check_min_points must be at least 3";
+  if (!(k.path_check_margin_m() >= 0 && k.path_check_margin_m() <= 5))
+    return "tracking.path_check_margin_m must be in [0, 5]";
   if (!(k.global_interval_s() > 0)) return "tracking.global_interval_s must be positive";
   if (!(k.global_window_s() >= 0)) return "tracking.global_window_s must be 0 or positive";
   if (!(k.global_clear_ratio() > 0 && k.global_clear_ratio() <= 1))
@@ -251,6 +254,9 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.min_new_points = k.min_new_points();
   t.max_interval_s = k.max_interval_s();
   t.min_points = k.min_points();
+  t.check_min_points = k.check_min_points();
+  t.path_check = k.path_check();
+  t.path_check_margin_m = k.path_check_margin_m();
   t.score_cap_m = k.score_cap_m();
   t.worse_fit_ratio = k.worse_fit_ratio();
   t.min_walk_m = k.min_walk_m();

@@ -737,13 +737,13 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
   job.cloud = store_.Snapshot(config_.tracking().max_points(), &job.normals,
                               options.local_meshes ? last_run_generation_ : 0, min_stamp);
   // The live points were enough, but not those in the window: wait for more walls.
-  if (job.cloud.size() < options.min_points) return std::nullopt;
+  if (job.cloud.size() < tracker_.MinPoints()) return std::nullopt;
   const double refine_s = config_.tracking().refine_window_s();
   if (refine_s > 0) {
     job.recent = store_.Snapshot(config_.tracking().max_points(), &job.recent_normals,
                                  options.local_meshes ? last_run_generation_ : 0,
                                  latest_stamp_ns_ - static_cast<int64_t>(refine_s * 1e9));
-    if (job.recent.size() < options.min_points / 2) {
+    if (job.recent.size() < tracker_.MinPoints() / 2) {
       job.recent.clear();
       job.recent_normals.clear();
     }
@@ -756,7 +756,8 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
   job.version = tracker_.alignment().version;
   job.stamp_ns = latest_stamp_ns_;
   job.turn = config_.tracking().turn_to_walls() &&
-             tracker_.alignment().source != AlignmentSource::kRegistration;
+             tracker_.alignment().source != AlignmentSource::kRegistration &&
+             job.cloud.size() >= options.min_points;
   running_ = true;
   return job;
 }

@@ -180,5 +180,21 @@ TEST(SegmentTest, ClosestPointMatchesDenseSampling) {
   EXPECT_EQ(ClosestPointOnSegment(point, {5, 5}), Eigen::Vector2d(1, 2));
 }
 
+TEST(PathCrossingsTest, CountsStepsThroughWallsAndSparesTheirEnds) {
+  const FloorPlan plan = testing::AsymmetricRoom();
+  // Through the inner wall (x = 4, y 0..4.5) at y = 2, and back.
+  EXPECT_EQ(PathCrossings({{3, 2}, {5, 2}, {3, 2}}, plan), 2u);
+  EXPECT_EQ(PathCrossings({{3, 2}, {5, 2}}, plan, 0.4), 1u);
+  // Along it, or touching it, is no crossing.
+  EXPECT_EQ(PathCrossings({{3, 1}, {3, 3}, {4, 3}}, plan), 0u);
+  // Through it 0.2 m from its end at (4, 4.5): a crossing, unless spared by a margin.
+  EXPECT_EQ(PathCrossings({{3.5, 4.3}, {4.5, 4.3}}, plan), 1u);
+  EXPECT_EQ(PathCrossings({{3.5, 4.3}, {4.5, 4.3}}, plan, 0.4), 0u);
+  EXPECT_EQ(PathCrossings({{3.5, 4.3}, {4.5, 4.3}}, plan, 0.1), 1u);
+  // A path of one point, or none, crosses nothing.
+  EXPECT_EQ(PathCrossings({{3, 2}}, plan), 0u);
+  EXPECT_EQ(PathCrossings({}, plan), 0u);
+}
+
 }  // namespace
 }  // namespace floorpose

@@ -179,6 +179,11 @@ TEST_F(TrackerTest, CorrectAppliesTheAlignment) {
   EXPECT_EQ(e.reliability.flag, ReliabilityFlag::kUnreliable);
   EXPECT_EQ(e.pose.position, pose.position);
 
+  // Random poses jump through walls: that check is another test's.
+  TrackerOptions options;
+  options.path_check = false;
+  tracker_ = Tracker(options);
+  tracker_.SetPlan(index_);
   ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
   SplitMix64 rng(53);
   for (int i = 0; i < 50; ++i) {
@@ -542,6 +547,14 @@ TEST_F(TrackerTest, RegistrationDueFollowsPointsAndInjectedTime) {
   tracker_.SetPlan(index_);
   EXPECT_FALSE(tracker_.RegistrationDue(100 * s, 10000, 10000));  // no alignment
   ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
+  // A pick is checked on fewer points than a registered alignment is refined on.
+  ASSERT_LT(o.check_min_points, o.min_points);
+  EXPECT_EQ(tracker_.MinPoints(), o.check_min_points);
+  EXPECT_TRUE(tracker_.RegistrationDue(10 * s, o.check_min_points, o.min_new_points));
+  EXPECT_FALSE(tracker_.RegistrationDue(10 * s, o.check_min_points - 1, o.min_new_points));
+  const std::vector<Eigen::Vector2d> cloud = Cloud();
+  ASSERT_TRUE(tracker_.Offer(ResultFor(truth_, cloud), cloud, 1, 2).accepted);
+  EXPECT_EQ(tracker_.MinPoints(), o.min_points);
   tracker_.MarkRegistrationStarted(10 * s);
   EXPECT_TRUE(tracker_.RegistrationDue(10 * s, o.min_points, o.min_new_points));
   EXPECT_FALSE(tracker_.RegistrationDue(10 * s, o.min_points - 1, o.min_new_points));
@@ -551,6 +564,62 @@ TEST_F(TrackerTest, RegistrationDueFollowsPointsAndInjectedTime) {
   const auto interval = static_cast<int64_t>(o.max_interval_s * 1e9);
   EXPECT_FALSE(tracker_.RegistrationDue(10 * s + interval - 1, o.min_points, 1));
   EXPECT_TRUE(tracker_.RegistrationDue(10 * s + interval, o.min_points, 1));
+}
+
+// A wearer does not walk through walls: a step through the middle of a plan wall under
+// the alignment in use flags UNRELIABLE until the alignment changes; a step that clips a
+// wall's end (a door's jamb) by less than path_check_margin_m does not.
+TEST_F(TrackerTest, APathThroughAWallIsUnreliable) {
+  tracker_.SetPlan(index_);
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
+  const Se2 T_slam_plan = truth_.Inverse();
+  auto walk = [&](const std::vector<Eigen::Vector2d>& plan_points) {
+    PlanPoseEstimate e;
+    for (const Eigen::Vector2d& p : plan_points) e = tracker_.Correct({T_slam_plan * p, 0, 1.6});
+    return e.reliability;
+  };
+  // The inner wall runs from (4, 0) to (4, 4.5): past its end at (4, 4.5), 0.2 m from it.
+  Reliability r = walk({{3.0, 4.3}, {3.8, 4.3}, {4.2, 4.3}, {4.6, 4.3}});
+  EXPECT_EQ(r.flag, ReliabilityFlag::kDegraded) << r.reason;
+  // Back through its middle.
+  r = walk({{4.2, 2.0}, {3.8, 2.0}, {3.4, 2.0}});
+  EXPECT_EQ(r.flag, ReliabilityFlag::kUnreliable);
+  EXPECT_THAT(r.reason, HasSubstr("crosses a wall"));
+  // A new alignment starts clean.
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 2), "");
+  EXPECT_EQ(walk({{3.0, 2.0}}).flag, ReliabilityFlag::kDegraded);
+  // Without the check, the same walk is not flagged for it.
+  TrackerOptions options;
+  options.path_check = false;
+  tracker_ = Tracker(options);
+  tracker_.SetPlan(index_);
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
+  EXPECT_EQ(walk({{4.2, 2.0}, {3.8, 2.0}}).flag, ReliabilityFlag::kDegraded);
+}
+
+// A pick is registered on check_min_points wall points, fewer than a place needs: the
+// result is not taken (too few walls to place the wearer), but the pick is checked, and
+// with the plan search on, a pick whose walls do not fit is UNRELIABLE at once.
+TEST_F(TrackerTest, AWrongPickIsFlaggedOnAFewWalls) {
+  TrackerOptions options;
+  options.global_search = true;
+  tracker_ = Tracker(options);
+  tracker_.SetPlan(index_);
+  const Se2 wrong = Se2{Deg(90), {3.0, -2.0}} * truth_;
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(wrong, {4, 2}, {1, 0}), 1), "");
+  EXPECT_EQ(tracker_.CurrentReliability().flag, ReliabilityFlag::kDegraded);
+  std::vector<Eigen::Vector2d> few;
+  const std::vector<Eigen::Vector2d> cloud = Cloud();
+  for (size_t i = 0; i < cloud.size() && few.size() < options.check_min_points; i += 37)
+    few.push_back(cloud[i]);
+  ASSERT_LT(few.size(), options.min_points);
+  const Tracker::Decision d = tracker_.Offer(ResultFor(truth_, few), few, 1, 2);
+  EXPECT_FALSE(d.accepted);
+  EXPECT_THAT(d.reason, HasSubstr("few walls"));
+  const Reliability r = tracker_.CurrentReliability();
+  EXPECT_EQ(r.flag, ReliabilityFlag::kUnreliable);
+  EXPECT_THAT(r.reason, HasSubstr("do not fit"));
+  EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kWallPick);
 }
 
 // Two identical rooms 6 m apart: a registered alignment that would put the wearer in the
