@@ -235,18 +235,14 @@ Engine::PlanAssets Engine::BuildPlan(const FloorPlanParse& parsed, const std::st
 }
 
 void Engine::UsePlan(PlanAssets assets, bool another_floor) {
+  plan_ = std::move(assets);
   if (another_floor)
-    tracker_.ChangeFloor(std::move(assets.index));
+    tracker_.ChangeFloor(plan_.index);
   else
-    tracker_.SetPlan(std::move(assets.index));
-  global_ = std::move(assets.global);
-  routes_ = std::move(assets.routes);
-  explored_ = std::move(assets.explored);
-  plan_id_ = std::move(assets.id);
-  plan_digest_ = assets.digest;
+    tracker_.SetPlan(plan_.index);
   last_plan_pose_.reset();
   // Its explored map at once: the plan's rooms, or the floor as it was left.
-  if (explored_) explored_sent_ = explored_->revision() - 1;
+  if (plan_.explored) explored_sent_ = plan_.explored->revision() - 1;
   PublishExplored();
 }
 
@@ -286,11 +282,9 @@ void Engine::ChangeFloor(const FloorEntry& to, double slam_z, double height_m) {
       "of floor {} dropped",
       floor_, to.id, height_m, to.id, to.height_m, store_.points(), floor_);
   store_.Clear();
-  PlanAssets leaving{tracker_.index(),     std::move(global_), std::move(routes_),
-                     std::move(explored_), plan_id_,           plan_digest_};
   PlanAssets arriving = std::move(next->second);
   other_floors_.erase(next);
-  other_floors_[floor_] = std::move(leaving);
+  other_floors_[floor_] = std::move(plan_);
   floor_ = to.id;  // what is published from here on carries it
   UsePlan(std::move(arriving), /*another_floor=*/true);
   floor_reference_ = FloorReference{slam_z, to.height_m};
@@ -299,12 +293,12 @@ void Engine::ChangeFloor(const FloorEntry& to, double slam_z, double height_m) {
 }
 
 std::string Engine::PlanRoute(const v1::Command::Route& request, v1::RouteReply* reply) {
-  if (!routes_) return "no floor plan";
+  if (!plan_.routes) return "no floor plan";
   if (!last_plan_pose_ || last_plan_pose_->alignment_version() == 0)
     return "no position on the plan yet";
   const int64_t t0 = now_ns_();
-  const Route route =
-      routes_->Plan({last_plan_pose_->x(), last_plan_pose_->y()}, {request.to_x(), request.to_y()});
+  const Route route = plan_.routes->Plan({last_plan_pose_->x(), last_plan_pose_->y()},
+                                         {request.to_x(), request.to_y()});
   if (!route.ok()) return route.error;
   for (const Eigen::Vector2d& p : route.path) {
     v1::PlanPoint* point = reply->add_path();
@@ -319,20 +313,20 @@ std::string Engine::PlanRoute(const v1::Command::Route& request, v1::RouteReply*
 }
 
 void Engine::ExploreWalls(const std::vector<WallPoint>& points) {
-  if (!explored_ || !last_plan_pose_ || !tracker_.has_alignment() ||
+  if (!plan_.explored || !last_plan_pose_ || !tracker_.has_alignment() ||
       last_plan_pose_->reliability().flag() != v1::Reliability::RELIABLE)
     return;
   const Se2& T = tracker_.alignment().T_plan_slam;
   std::vector<Eigen::Vector2d> plan;
   plan.reserve(points.size());
   for (const WallPoint& w : points) plan.push_back(T * w.p.cast<double>());
-  explored_->AddWalls({last_plan_pose_->x(), last_plan_pose_->y()}, plan);
+  plan_.explored->AddWalls({last_plan_pose_->x(), last_plan_pose_->y()}, plan);
 }
 
 void Engine::PublishExplored() {
-  if (!explored_ || explored_->revision() == explored_sent_) return;
-  explored_sent_ = explored_->revision();
-  publish_(Topic::kExplored, ToProto(*explored_, plan_id_, floor_, latest_stamp_ns_));
+  if (!plan_.explored || plan_.explored->revision() == explored_sent_) return;
+  explored_sent_ = plan_.explored->revision();
+  publish_(Topic::kExplored, ToProto(*plan_.explored, plan_.id, floor_, latest_stamp_ns_));
 }
 
 WallExtractionOptions Engine::BandedWallOptions() const {
@@ -497,7 +491,7 @@ void Engine::OnHeadsetPose(const Envelope& e) {
     est.reliability.reason = "headset tracking lost";
   }
   const v1::PlanPose out = ToPlanPose(est, pose.stamp_ns);
-  if (global_) {
+  if (plan_.global) {
     if (path_.empty() || (pose.pose_slam.position - path_.back().second).norm() >= 0.25)
       path_.emplace_back(pose.stamp_ns, pose.pose_slam.position);
     const double window_s = tracker_.options().global_window_s;
@@ -516,9 +510,9 @@ void Engine::OnHeadsetPose(const Envelope& e) {
   counters_.set_plan_poses_out(counters_.plan_poses_out() + 1);
   if (pose.stamp_ns != *last_pose_stamp_ns_) return;  // a late pose: not where the wearer is
   last_plan_pose_ = out;
-  if (explored_) {
+  if (plan_.explored) {
     if (out.reliability().flag() == v1::Reliability::RELIABLE && out.alignment_version() > 0)
-      explored_->AddVisit({out.x(), out.y()});
+      plan_.explored->AddVisit({out.x(), out.y()});
     if (pose.stamp_ns >= next_explored_ns_) {
       PublishExplored();
       next_explored_ns_ =
@@ -701,7 +695,7 @@ void Engine::OnGlobalSearchDone(const Done& done) {
 
 std::optional<Engine::Job> Engine::TakeDueJob() {
   if (running_) return std::nullopt;
-  if (global_ && tracker_.GlobalSearchDue(latest_stamp_ns_, store_.points())) {
+  if (plan_.global && tracker_.GlobalSearchDue(latest_stamp_ns_, store_.points())) {
     // Where on the whole plan do the recent walls fit: to place the wearer, or to check
     // the place in use (the tracker says which, and how often).
     tracker_.MarkGlobalSearchStarted(latest_stamp_ns_);
@@ -715,7 +709,7 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
         window_s > 0 ? latest_stamp_ns_ - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
     for (const auto& [stamp, position] : path_)
       if (stamp >= since) job.path.push_back(position);
-    job.global = global_;
+    job.global = plan_.global;
     job.index = tracker_.index();
     job.options.icp = tracker_.options().icp;
     job.score_cap_m = tracker_.options().score_cap_m;
@@ -830,7 +824,7 @@ v1::StateSnapshot Engine::SaveState() const {
   v1::StateSnapshot s;
   s.set_device_id(config_.dds().device_id());
   s.set_plan_path(plan_path_);
-  s.set_plan_digest(plan_digest_);
+  s.set_plan_digest(plan_.digest);
   s.set_floor(floor_);
   s.set_latest_stamp_ns(latest_stamp_ns_);
   const TrackerState t = tracker_.SaveState();
@@ -877,8 +871,8 @@ std::string Engine::RestoreState(const v1::StateSnapshot& s) {
     if (switched) {
       if (configured_plan.empty()) {
         tracker_.SetPlan(nullptr);
+        plan_ = {};
         plan_path_.clear();
-        plan_digest_ = 0;
       } else {
         LoadPlan(configured_plan, configured_floor);
       }
@@ -890,7 +884,7 @@ std::string Engine::RestoreState(const v1::StateSnapshot& s) {
       return refuse("of plan " + s.plan_path() + ", which does not load now: " + e);
     switched = true;
   }
-  if (s.plan_digest() != plan_digest_)
+  if (s.plan_digest() != plan_.digest)
     return refuse("of plan " + s.plan_path() + " as it was before it changed");
   // The wall store first, checked whole before anything is kept.
   // Coordinates as the codec bounds the headset's (slam frame), twice that on the plan.

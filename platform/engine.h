@@ -121,7 +121,7 @@ class Engine {
   // The configuration in use: as configured, for the device's odometry (ForOdometry).
   const v1::FloorposedConfig& config() const { return config_; }
   // What the wearer has explored on the loaded plan; null without a plan or when disabled.
-  const ExploredMap* explored() const { return explored_.get(); }
+  const ExploredMap* explored() const { return plan_.explored.get(); }
   // Publishes the explored map now if it changed since the last one.
   void PublishExplored();
 
@@ -179,9 +179,8 @@ class Engine {
     int64_t since_ns = 0;
   };
   std::optional<FloorCandidate> floor_candidate_;
-  // A floor's plan and what is made from it; for a .floors set, every floor not in use,
-  // built at the load: a floor change costs the poses nothing, and a wearer coming back
-  // finds the floor explored as it was.
+  // A floor's plan and what is made from it: the index, the plan search (when
+  // tracking.global_search), routes, rooms and the explored map.
   struct PlanAssets {
     std::shared_ptr<const ClosestWallIndex> index;
     std::shared_ptr<GlobalSearchCache> global;
@@ -190,16 +189,13 @@ class Engine {
     std::string id;
     uint64_t digest = 0;
   };
+  PlanAssets plan_;  // the plan in use (its index is the tracker's)
+  // For a .floors set, every floor not in use, built at the load: a floor change costs
+  // the poses nothing, and a wearer coming back finds the floor explored as it was.
   std::map<std::string, PlanAssets> other_floors_;
-  std::string plan_id_;
-  // Made with each plan: routes, its rooms and the explored map on it.
-  std::unique_ptr<RoutePlanner> routes_;
-  std::unique_ptr<ExploredMap> explored_;
-  std::shared_ptr<GlobalSearchCache> global_;  // when tracking.global_search
-  uint64_t explored_sent_ = 0;                 // revision last published
+  uint64_t explored_sent_ = 0;  // revision last published
   int64_t next_explored_ns_ = 0;
   std::optional<v1::PlanPose> last_plan_pose_;  // as published
-  uint64_t plan_digest_ = 0;
   v1::DaemonStatus::Counters counters_;
   struct LastRegistration {
     RegistrationResult result;
