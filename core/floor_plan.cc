@@ -185,7 +185,10 @@ uint64_t FloorPlanDigest(const FloorPlan& plan) {
   return h;
 }
 
-bool StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Segment& s) {
+namespace {
+
+// Whether segments pq and s properly cross (touching ends do not count).
+bool Crosses(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Segment& s) {
   auto side = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
     const Eigen::Vector2d u = a - o, v = b - o;
     return u.x() * v.y() - u.y() * v.x();
@@ -194,8 +197,6 @@ bool StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const S
   const double d3 = side(s.a, s.b, p), d4 = side(s.a, s.b, q);
   return ((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0));
 }
-
-namespace {
 
 // Whether the step p -> q meets segment s at least margin_m from both of its ends.
 bool CrossingClearOfEnds(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Segment& s,
@@ -209,7 +210,27 @@ bool CrossingClearOfEnds(const Eigen::Vector2d& p, const Eigen::Vector2d& q, con
   return std::min(u, 1 - u) * length >= margin_m;
 }
 
+// Whether segment s lies wholly outside the box [lo, hi].
+bool OutsideBox(const Segment& s, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) {
+  const Eigen::Vector2d smin = s.a.cwiseMin(s.b), smax = s.a.cwiseMax(s.b);
+  return smax.x() < lo.x() || smin.x() > hi.x() || smax.y() < lo.y() || smin.y() > hi.y();
+}
+
+// Whether the step p -> q crosses wall s, end_margin_m or more from its ends.
+bool StepCrosses(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Segment& s,
+                 double end_margin_m) {
+  return !OutsideBox(s, p.cwiseMin(q), p.cwiseMax(q)) && Crosses(p, q, s) &&
+         (end_margin_m <= 0 || CrossingClearOfEnds(p, q, s, end_margin_m));
+}
+
 }  // namespace
+
+bool StepCrossesPlan(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const FloorPlan& plan,
+                     double end_margin_m) {
+  for (const Segment& s : plan.segments)
+    if (StepCrosses(p, q, s, end_margin_m)) return true;
+  return false;
+}
 
 uint32_t PathCrossings(const std::vector<Eigen::Vector2d>& path, const FloorPlan& plan,
                        double end_margin_m) {
@@ -217,24 +238,16 @@ uint32_t PathCrossings(const std::vector<Eigen::Vector2d>& path, const FloorPlan
   // Only the walls in the path's box can be crossed: a few of a building's thousands.
   Eigen::Vector2d lo = path.front(), hi = path.front();
   for (const Eigen::Vector2d& p : path) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  auto outside = [](const Segment& s, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-    const Eigen::Vector2d smin = s.a.cwiseMin(s.b), smax = s.a.cwiseMax(s.b);
-    return smax.x() < a.x() || smin.x() > b.x() || smax.y() < a.y() || smin.y() > b.y();
-  };
   std::vector<const Segment*> near;
   for (const Segment& s : plan.segments)
-    if (!outside(s, lo, hi)) near.push_back(&s);
+    if (!OutsideBox(s, lo, hi)) near.push_back(&s);
   uint32_t crossings = 0;
-  for (size_t i = 1; i < path.size(); ++i) {
-    const Eigen::Vector2d &p = path[i - 1], &q = path[i];
-    const Eigen::Vector2d step_lo = p.cwiseMin(q), step_hi = p.cwiseMax(q);
+  for (size_t i = 1; i < path.size(); ++i)
     for (const Segment* s : near)
-      if (!outside(*s, step_lo, step_hi) && StepCrossesWall(p, q, *s) &&
-          (end_margin_m <= 0 || CrossingClearOfEnds(p, q, *s, end_margin_m))) {
+      if (StepCrosses(path[i - 1], path[i], *s, end_margin_m)) {
         ++crossings;
         break;
       }
-  }
   return crossings;
 }
 

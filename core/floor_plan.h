@@ -52,12 +52,14 @@ uint64_t FloorPlanDigest(const FloorPlan& plan);
 // The thesis' text format: the segment count, then `x1 y1 x2 y2` per line (section 6.4.2).
 FloorPlanParse ParseTextFloorPlan(std::string_view text, std::string id);
 
-// Whether the step p -> q properly crosses segment s (touching ends do not count).
-bool StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Segment& s);
+// Whether the step p -> q (plan frame) properly crosses a wall of the plan (touching
+// does not count): a wearer does not walk through walls. With end_margin_m, only
+// crossings at least that far from both ends of the wall count (a path a few
+// centimetres off clips a door's jamb). Allocates nothing: for every pose.
+bool StepCrossesPlan(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const FloorPlan& plan,
+                     double end_margin_m = 0);
 
-// How many steps of a path (plan frame, in order) cross a wall of the plan: a wearer
-// does not walk through walls. With end_margin_m, only crossings at least that far from
-// both ends of the wall count (a path a few centimetres off clips a door's jamb).
+// How many steps of a path (plan frame, in order) cross a wall, as StepCrossesPlan.
 uint32_t PathCrossings(const std::vector<Eigen::Vector2d>& path, const FloorPlan& plan,
                        double end_margin_m = 0);
 

@@ -337,8 +337,8 @@ PlanPoseEstimate Tracker::Correct(const Pose2& pose_slam) {
   if (options_.path_check && last_slam_position_ && has_alignment() &&
       pose_slam.position.allFinite() && (pose_slam.position - *last_slam_position_).norm() < 5.0) {
     const Se2& T = alignment_.T_plan_slam;
-    if (PathCrossings({T * *last_slam_position_, T * pose_slam.position}, index_->plan(),
-                      options_.path_check_margin_m) > 0)
+    if (StepCrossesPlan(T * *last_slam_position_, T * pose_slam.position, index_->plan(),
+                        options_.path_check_margin_m))
       ++crossings_;
   }
   last_slam_position_ = pose_slam.position;

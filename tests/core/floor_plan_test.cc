@@ -191,6 +191,10 @@ TEST(PathCrossingsTest, CountsStepsThroughWallsAndSparesTheirEnds) {
   EXPECT_EQ(PathCrossings({{3.5, 4.3}, {4.5, 4.3}}, plan), 1u);
   EXPECT_EQ(PathCrossings({{3.5, 4.3}, {4.5, 4.3}}, plan, 0.4), 0u);
   EXPECT_EQ(PathCrossings({{3.5, 4.3}, {4.5, 4.3}}, plan, 0.1), 1u);
+  // One step alone, as the tracker checks every pose.
+  EXPECT_TRUE(StepCrossesPlan({3, 2}, {5, 2}, plan, 0.4));
+  EXPECT_FALSE(StepCrossesPlan({3.5, 4.3}, {4.5, 4.3}, plan, 0.4));
+  EXPECT_TRUE(StepCrossesPlan({3.5, 4.3}, {4.5, 4.3}, plan));
   // A path of one point, or none, crosses nothing.
   EXPECT_EQ(PathCrossings({{3, 2}}, plan), 0u);
   EXPECT_EQ(PathCrossings({}, plan), 0u);
