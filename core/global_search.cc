@@ -289,7 +289,7 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
                                       const std::vector<Eigen::Vector2d>& points_slam,
                                       const std::vector<Eigen::Vector2d>& path_slam,
                                       const ClosestWallIndex& index, const IcpOptions& icp,
-                                      double cap_m, double distinct_m, double distinct_rad) {
+                                      const RefineOptions& options) {
   std::vector<Eigen::Vector2d> cloud;
   cloud.reserve(points_slam.size());
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
@@ -306,12 +306,13 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
         std::isfinite(icp_result.T_plan_slam.theta))
       r.T_plan_slam = icp_result.T_plan_slam;
     RegistrationResult fit;
-    EvaluateFit(cloud, index, r.T_plan_slam, cap_m, icp.inlier_threshold_m, &fit, &r.fit_mse);
+    EvaluateFit(cloud, index, r.T_plan_slam, options.cap_m, icp.inlier_threshold_m, &fit,
+                &r.fit_mse);
     r.inlier_ratio = static_cast<double>(fit.inliers) / static_cast<double>(cloud.size());
     path_plan.clear();
     for (const Eigen::Vector2d& p : path_slam)
       if (p.allFinite()) path_plan.push_back(r.T_plan_slam * p);
-    r.path_crossings = PathCrossings(path_plan, index.plan());
+    r.path_crossings = PathCrossings(path_plan, index.plan(), options.path_margin_m);
     refined.push_back(r);
   }
   std::stable_sort(refined.begin(), refined.end(), [](const GlobalPlace& a, const GlobalPlace& b) {
@@ -320,17 +321,25 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
   std::vector<GlobalPlace> distinct;
   for (const GlobalPlace& r : refined) {
     const bool same = std::any_of(distinct.begin(), distinct.end(), [&](const GlobalPlace& d) {
-      return (r.T_plan_slam * centre - d.T_plan_slam * centre).norm() < distinct_m &&
-             std::abs(WrapAngle(r.T_plan_slam.theta - d.T_plan_slam.theta)) < distinct_rad;
+      return (r.T_plan_slam * centre - d.T_plan_slam * centre).norm() < options.distinct_m &&
+             std::abs(WrapAngle(r.T_plan_slam.theta - d.T_plan_slam.theta)) < options.distinct_rad;
     });
     if (!same) distinct.push_back(r);
   }
-  // A place is only as good as the walk it implies: those that take the wearer through
-  // more walls than the fewest go last, so they can be the next place but not the best.
+  // A place that leaves most of the walls off the plan is no place, however it walks.
+  // Among those that fit, a place is only as good as the walk it implies: those that take
+  // the wearer through more walls than the fewest go last, so they can be the next place
+  // but not the best. (A wrong place often walks the wearer outside the building, through
+  // nothing; fitting comes first so that it cannot win on that.)
+  const auto fits = [&](const GlobalPlace& d) {
+    return d.inlier_ratio >= options.min_inliers && d.path_crossings < options.max_crossings;
+  };
   uint32_t fewest = UINT32_MAX;
-  for (const GlobalPlace& d : distinct) fewest = std::min(fewest, d.path_crossings);
-  std::stable_partition(distinct.begin(), distinct.end(),
-                        [&](const GlobalPlace& d) { return d.path_crossings <= fewest; });
+  for (const GlobalPlace& d : distinct)
+    if (fits(d)) fewest = std::min(fewest, d.path_crossings);
+  for (GlobalPlace& d : distinct) d.rank = !fits(d) ? 2 : d.path_crossings > fewest ? 1 : 0;
+  std::stable_sort(distinct.begin(), distinct.end(),
+                   [](const GlobalPlace& a, const GlobalPlace& b) { return a.rank < b.rank; });
   return distinct;
 }
 

@@ -28,7 +28,7 @@ struct GlobalSearchOptions {
   double max_cells = 4e6;        // cells grow beyond cell_m to stay within this
   double rotation_step_rad = 0;  // 0: one cell at the cloud's farthest point (Hess eq. 7)
   size_t max_points = 400;       // the cloud is thinned (voxels, then a stride) to this many
-  size_t places = 4;             // distinct places returned at most, best first
+  size_t places = 8;             // distinct places returned at most, best first
   double distinct_m = 1.5;       // places closer than this at the cloud's centre...
   double distinct_rad = 10.0 * M_PI / 180;  // ...and turned less than this are one place
   double min_score = 0.25;                  // mean likelihood a place must reach (0..1)...
@@ -48,6 +48,9 @@ struct GlobalPlace {
   // ...and how many steps of the wearer's path there cross a wall of the plan (a place
   // that walks the wearer through walls is not where they are).
   uint32_t path_crossings = 0;
+  // RefinePlaces' order: 0 fits and walks through the fewest walls, 1 fits and walks
+  // through more, 2 does not fit. Only places of one rank compete on their fits.
+  int rank = 0;
 };
 
 struct GlobalSearchStats {
@@ -103,19 +106,29 @@ class GlobalSearch {
   std::vector<std::vector<float>> pyramid_;
 };
 
+// How RefinePlaces scores and orders places.
+struct RefineOptions {
+  double cap_m = 0.2;                       // distances capped here in fit_mse (EvaluateFit)
+  double distinct_m = 1.5;                  // places converging within this at the cloud's
+  double distinct_rad = 10.0 * M_PI / 180;  // centre and turned less than this are merged
+  double path_margin_m = 0;  // a step crossing a wall this close to its ends does not count
+  double min_inliers = 0;    // places fitting a smaller share of the cloud go last...
+  uint32_t max_crossings = UINT32_MAX;  // ...and those whose path crosses this many walls
+};
+
 // The search's places polished: each refined by ICP on the plan's walls from where the
 // search put it (the grid's 10 cm cells and heading steps leave a few centimetres and a
 // fraction of a degree), then scored on the whole cloud with distances capped at cap_m
 // (EvaluateFit), and the wearer's path (slam positions, in order) checked for steps
 // through the plan's walls. The grid's scores blur a near miss and a right place; the
-// refined fits tell them apart. Places that converge onto one another (within
-// distinct_m at the cloud's centre and distinct_rad) are merged. Places whose path
-// crosses no more walls than the fewest come first, best fit first among them; then
-// the others, best fit first.
+// refined fits tell them apart. Places that converge onto one another are merged. The
+// order, best first: places that fit (min_inliers) before those that do not; among them,
+// those whose path crosses no more walls than the fewest of their group first; best fit
+// first within each.
 std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
                                       const std::vector<Eigen::Vector2d>& points_slam,
                                       const std::vector<Eigen::Vector2d>& path_slam,
                                       const ClosestWallIndex& index, const IcpOptions& icp,
-                                      double cap_m, double distinct_m, double distinct_rad);
+                                      const RefineOptions& options = {});
 
 }  // namespace floorpose

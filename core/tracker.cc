@@ -247,9 +247,12 @@ Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
   auto same_place = [&](const Se2& a, const Se2& b) {
     return Within(a, b, 1.0, 10.0 * M_PI / 180, centre_plan);
   };
+  // The best must fit and walk clear (RefinePlaces' rank 0), and beat the next on the
+  // walls, whatever the next's walk: a place that alone walks clear of the walls is too
+  // often a look-alike in a hall whose true place the search did not return.
   const double next =
       usable.size() > 1 ? usable[1].fit_mse : std::numeric_limits<double>::infinity();
-  const bool fits = best.inlier_ratio >= options_.global_min_inliers;
+  const bool fits = best.rank == 0 && best.inlier_ratio >= options_.global_min_inliers;
   const bool leads = fits && best.fit_mse < options_.global_lead_ratio * next;
   const bool clear = fits && best.fit_mse < options_.global_clear_ratio * next;
   const bool same = leading_place_ && same_place(best.T_plan_slam, *leading_place_);

@@ -95,15 +95,17 @@ struct TrackerOptions {
   size_t history = 16;  // accepted alignments kept
   // Without a pick: search the whole plan (GlobalSearch) once this many wall points are
   // in, every global_interval_s, over the walls of the last global_window_s (0: all).
-  // The places found are refined (RefinePlaces). A place leads a search when the next
-  // one's error is at least 1 / global_lead_ratio times its own, and is clear of it at
-  // 1 / global_clear_ratio. The best is taken when it was clear in 2 searches in a row
-  // or led in global_confirm_searches in a row, never when fewer than
-  // global_min_inliers of the walls fit it; it is RELIABLE only once it has led
-  // global_confirm_searches in a row. Once aligned (a pick too) the search goes on as a
-  // check while in doubt (the place not yet confirmed, or the walls fitting the alignment
-  // in use under global_min_inliers): another place that led global_confirm_searches
-  // checks in a row and is clear of the one in use replaces it (recovery).
+  // The places found are refined and ranked (RefinePlaces); only a place of rank 0 (it
+  // fits global_min_inliers of the walls, and the path under it crosses fewer than
+  // global_max_crossings walls and no more than under any other) can lead. It leads a
+  // search when the next one's error is at least 1 / global_lead_ratio times its own,
+  // and is clear of it at 1 / global_clear_ratio. The best is taken when it was clear
+  // in 2 searches in a row or led in global_confirm_searches in a row; it is RELIABLE
+  // only once it has led global_confirm_searches in a row. Once aligned (a pick too)
+  // the search goes on as a check while in doubt (the place not yet confirmed, or the
+  // walls fitting the alignment in use under global_min_inliers): another place that
+  // led global_confirm_searches checks in a row and is clear of the one in use replaces
+  // it (recovery).
   bool global_search = false;
   uint32_t global_min_points = 150;
   double global_interval_s = 3.0;
@@ -112,6 +114,9 @@ struct TrackerOptions {
   double global_lead_ratio = 0.8;
   uint32_t global_confirm_searches = 3;
   double global_min_inliers = 0.6;
+  // A place under which the wearer's path over the window crosses this many plan walls
+  // (path_check_margin_m clear of their ends) does not fit either; 0: any number.
+  uint32_t global_max_crossings = 2;
 };
 
 // Thesis section 6.3.4: one wall point with its normal, seen by the headset (slam

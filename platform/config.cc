@@ -280,6 +280,7 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.global_lead_ratio = k.global_lead_ratio();
   t.global_confirm_searches = k.global_confirm_searches();
   t.global_min_inliers = k.global_min_inliers();
+  t.global_max_crossings = k.global_max_crossings();
   t.turn_sigma_rad = k.turn_sigma_deg() * M_PI / 180.0;
   const double drift_rad = k.drift_heading_deg() * M_PI / 180.0;
   t.filter.heading_var_per_m = drift_rad * drift_rad;

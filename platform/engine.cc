@@ -122,10 +122,13 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
     const GlobalSearch& search = job.global->Get();
     done.places = search.Search(job.cloud, search.WallHeadings(job.cloud));
     if (job.version > 0) done.places.push_back({job.initial});  // the place in use, refined too
-    if (job.index)
+    if (job.index) {
+      RefineOptions refine = job.refine;  // places are one place as the search has them
+      refine.distinct_m = search.options().distinct_m;
+      refine.distinct_rad = search.options().distinct_rad;
       done.places =
-          RefinePlaces(done.places, job.cloud, job.path, *job.index, job.options.icp,
-                       job.score_cap_m, search.options().distinct_m, search.options().distinct_rad);
+          RefinePlaces(done.places, job.cloud, job.path, *job.index, job.options.icp, refine);
+    }
     done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
     done.result.points = static_cast<uint32_t>(job.cloud.size());
   } else if (job.index) {
@@ -712,7 +715,11 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
     job.global = plan_.global;
     job.index = tracker_.index();
     job.options.icp = tracker_.options().icp;
-    job.score_cap_m = tracker_.options().score_cap_m;
+    job.refine.cap_m = tracker_.options().score_cap_m;
+    job.refine.path_margin_m = tracker_.options().path_check_margin_m;
+    job.refine.min_inliers = tracker_.options().global_min_inliers;
+    if (tracker_.options().global_max_crossings > 0)
+      job.refine.max_crossings = tracker_.options().global_max_crossings;
     job.initial = tracker_.alignment().T_plan_slam;
     job.version = tracker_.alignment().version;
     job.stamp_ns = latest_stamp_ns_;

@@ -70,9 +70,9 @@ class Engine {
     int64_t stamp_ns = 0;
     bool turn = false;  // also measure the walls' rotation (before a first place is taken)
     // Set: no alignment yet; search the whole plan for the cloud, then refine the places
-    // on `index` with options.icp and compare their fits capped at score_cap_m.
+    // on `index` with options.icp, as `refine` says.
     std::shared_ptr<GlobalSearchCache> global;
-    double score_cap_m = 0.2;
+    RefineOptions refine;
     std::vector<Eigen::Vector2d> path;  // the wearer's slam positions over the same window
   };
   struct Done {

@@ -199,7 +199,7 @@ TEST(GlobalSearchTest, RefinedPlacesFitToCentimetresAndComeBestFirst) {
     const std::vector<GlobalPlace> places = search.Search(scan.points);
     ASSERT_FALSE(places.empty());
     const std::vector<GlobalPlace> refined =
-        RefinePlaces(places, scan.points, {}, index, IcpOptions{}, 0.2, 1.5, 10.0 * M_PI / 180);
+        RefinePlaces(places, scan.points, {}, index, IcpOptions{});
     ASSERT_FALSE(refined.empty());
     EXPECT_LE(refined.size(), places.size());
     const auto e = ErrorAt(refined[0].T_plan_slam, T_slam_plan.Inverse(), window.Centre());
@@ -217,10 +217,19 @@ TEST(GlobalSearchTest, RefinedPlacesFitToCentimetresAndComeBestFirst) {
     }
   }
   // Nothing in, nothing out; non-finite points are ignored.
-  EXPECT_TRUE(RefinePlaces({}, {}, {}, index, IcpOptions{}, 0.2, 1.5, 0.17).empty());
-  EXPECT_TRUE(RefinePlaces({GlobalPlace{}}, {Eigen::Vector2d(NAN, 0)}, {}, index, IcpOptions{}, 0.2,
-                           1.5, 0.17)
-                  .empty());
+  EXPECT_TRUE(RefinePlaces({}, {}, {}, index, IcpOptions{}).empty());
+  EXPECT_TRUE(
+      RefinePlaces({GlobalPlace{}}, {Eigen::Vector2d(NAN, 0)}, {}, index, IcpOptions{}).empty());
+}
+
+// Room 2 of testing::SyntheticOffice (north of the corridor, x 10-15 m), scanned into
+// the slam frame with 2 cm of noise.
+const Box kOfficeRoom2{{9.9, 1.9}, {15.1, 6.1}};
+testing::Scan ScanOfficeRoom2(const FloorPlan& plan, const Se2& T_slam_plan, uint64_t seed) {
+  SplitMix64 rng(seed);
+  testing::ScanOptions o;
+  o.noise_m = 0.02;
+  return MakeScan(plan, kOfficeRoom2, T_slam_plan, o, rng);
 }
 
 TEST(GlobalSearchTest, PlacesThatWalkTheWearerThroughWallsGoLast) {
@@ -233,19 +242,16 @@ TEST(GlobalSearchTest, PlacesThatWalkTheWearerThroughWallsGoLast) {
   options.places = 12;
   const GlobalSearch search(plan, options);
   const ClosestWallIndex index(plan);
-  SplitMix64 rng(7);
   const Se2 T_slam_plan{0.6, {3.0, -7.0}};
-  const Box window{{9.9, 1.9}, {15.1, 6.1}};
-  testing::ScanOptions o;
-  o.noise_m = 0.02;
-  const testing::Scan scan = MakeScan(plan, window, T_slam_plan, o, rng);
+  const Box window = kOfficeRoom2;
+  const testing::Scan scan = ScanOfficeRoom2(plan, T_slam_plan, 7);
   std::vector<Eigen::Vector2d> path;
   for (double x = 4.5; x <= 12.5; x += 0.25) path.push_back(T_slam_plan * Eigen::Vector2d(x, 1.0));
   for (double y = 1.25; y <= 4.0; y += 0.25) path.push_back(T_slam_plan * Eigen::Vector2d(12.5, y));
   const std::vector<GlobalPlace> places = search.Search(scan.points);
   const IcpOptions icp;
-  const auto everywhere = RefinePlaces(places, scan.points, {}, index, icp, 0.2, 1.5, 0.17);
-  const auto walkable = RefinePlaces(places, scan.points, path, index, icp, 0.2, 1.5, 0.17);
+  const auto everywhere = RefinePlaces(places, scan.points, {}, index, icp);
+  const auto walkable = RefinePlaces(places, scan.points, path, index, icp);
   ASSERT_GE(everywhere.size(), 10u);
   ASSERT_EQ(walkable.size(), everywhere.size());
   // The places whose walk stays clear of walls come first, then the others.
@@ -263,6 +269,53 @@ TEST(GlobalSearchTest, PlacesThatWalkTheWearerThroughWallsGoLast) {
                  ErrorAt(p.T_plan_slam, T_slam_plan.Inverse(), window.Centre()).translation_m < 0.1;
   }
   EXPECT_TRUE(truth_kept);
+}
+
+TEST(GlobalSearchTest, APlaceOffTheWallsGoesLastHoweverClearItsWalk) {
+  // The wearer is in room 2 of the office, and the SLAM's path (drifted) runs through the
+  // wall to room 3 once. A place 40 m north, outside the building, walks them through no
+  // wall at all, but fits none of the walls: it must not come first on its walk.
+  const FloorPlan plan = testing::SyntheticOffice(6);
+  const ClosestWallIndex index(plan);
+  const Se2 T_slam_plan{0.4, {-2.0, 5.0}};
+  const Box window = kOfficeRoom2;
+  const testing::Scan scan = ScanOfficeRoom2(plan, T_slam_plan, 11);
+  std::vector<Eigen::Vector2d> path;
+  for (double x = 12.5; x <= 16.0; x += 0.25) path.push_back(T_slam_plan * Eigen::Vector2d(x, 4.0));
+  const Se2 truth = T_slam_plan.Inverse();
+  const Se2 outside = Se2{0, {0, 40}} * truth;
+  const std::vector<GlobalPlace> places = {{outside}, {truth}};
+  const IcpOptions icp;
+  RefineOptions options;
+  options.path_margin_m = 0.4;
+
+  // On the walk alone (no min_inliers), the place outside comes first: fewer crossings.
+  const auto by_walk = RefinePlaces(places, scan.points, path, index, icp, options);
+  ASSERT_EQ(by_walk.size(), 2u);
+  EXPECT_EQ(by_walk[0].path_crossings, 0u);
+  EXPECT_EQ(by_walk[1].path_crossings, 1u);
+  EXPECT_EQ(by_walk[1].rank, 1);
+
+  // Fitting first: the room, rank 0; the place outside, fitting nothing, rank 2.
+  options.min_inliers = 0.6;
+  const auto by_fit = RefinePlaces(places, scan.points, path, index, icp, options);
+  ASSERT_EQ(by_fit.size(), 2u);
+  EXPECT_LT(ErrorAt(by_fit[0].T_plan_slam, truth, window.Centre()).translation_m, 0.05);
+  EXPECT_GT(by_fit[0].inlier_ratio, 0.9);
+  EXPECT_EQ(by_fit[0].rank, 0);
+  EXPECT_EQ(by_fit[1].inlier_ratio, 0.0);
+  EXPECT_EQ(by_fit[1].rank, 2);
+
+  // A walk through max_crossings walls does not fit either: both rank 2, best fit first.
+  options.max_crossings = 1;
+  const auto capped = RefinePlaces(places, scan.points, path, index, icp, options);
+  ASSERT_EQ(capped.size(), 2u);
+  EXPECT_EQ(capped[0].rank, 2);
+  EXPECT_EQ(capped[1].rank, 2);
+  EXPECT_LT(capped[0].fit_mse, capped[1].fit_mse);
+  // Without the margin, the same walk crossing mid-wall counts alike.
+  options.path_margin_m = 0;
+  EXPECT_EQ(RefinePlaces(places, scan.points, path, index, icp, options)[0].path_crossings, 1u);
 }
 
 }  // namespace

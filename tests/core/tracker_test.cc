@@ -745,6 +745,29 @@ TEST_F(GlobalPlacementDecisionTest, LookAlikePlacesAreNotTaken) {
   EXPECT_TRUE(Offer({truth_place_, runner_up}, 32).accepted);
 }
 
+TEST_F(GlobalPlacementDecisionTest, OnlyAPlaceThatFitsAndWalksClearLeads) {
+  // The best place walks the wearer through walls or fits too few of them (RefinePlaces
+  // ranks it 2, with every other place): however clear its fit, it never leads.
+  GlobalPlace walker = truth_place_, twin = other_place_;
+  walker.rank = twin.rank = 2;
+  for (int i = 0; i < 5; ++i) {
+    const Tracker::Decision d = Offer({walker, twin}, 1 + i);
+    EXPECT_FALSE(d.accepted);
+    EXPECT_THAT(d.reason, HasSubstr("in the lead 0 searches"));
+  }
+  EXPECT_FALSE(tracker_.has_alignment());
+  // A look-alike that walks through walls (rank 1) is still a rival on the walls: a
+  // place that alone walks clear is too often a look-alike whose true twin the search
+  // did not return. Fitting nearly as well, it keeps the truth from leading...
+  twin.rank = 1;
+  twin.fit_mse = truth_place_.fit_mse * 1.1;
+  for (int i = 0; i < 5; ++i) EXPECT_FALSE(Offer({truth_place_, twin}, 10 + i).accepted);
+  // ...and fitting clearly worse, it does not.
+  twin.fit_mse = truth_place_.fit_mse * 3;
+  EXPECT_FALSE(Offer({truth_place_, twin}, 20).accepted);
+  EXPECT_TRUE(Offer({truth_place_, twin}, 21).accepted);
+}
+
 TEST_F(GlobalPlacementDecisionTest, AWrongPickIsReplacedByAPlaceThatKeepsWinning) {
   // The pick put the wearer 6 m off (the other place); the walls fit the truth.
   const Se2 wrong = other_place_.T_plan_slam;

@@ -173,9 +173,12 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
       // truth (the engine logs its decision right after).
       if (latest && spdlog::should_log(spdlog::level::debug) && done.job.global) {
         for (const GlobalPlace& place : done.places)
-          spdlog::debug("at {:.1f} s, truth: place scoring {:.3f} is {:.2f} m off at the wearer",
-                        static_cast<double>(latest->stamp_ns - inputs.front().stamp_ns) * 1e-9,
-                        place.score, (place.T_plan_slam * latest->slam - latest->plan).norm());
+          spdlog::debug(
+              "at {:.1f} s, truth: place scoring {:.3f} (fit {:.4f}, {:.0f}% inliers, {} "
+              "crossings) is {:.2f} m off at the wearer",
+              static_cast<double>(latest->stamp_ns - inputs.front().stamp_ns) * 1e-9, place.score,
+              place.fit_mse, 100 * place.inlier_ratio, place.path_crossings,
+              (place.T_plan_slam * latest->slam - latest->plan).norm());
       } else if (latest && done.job.index && spdlog::should_log(spdlog::level::debug)) {
         // What share of the registered walls lies on the plan under each: low under the
         // truth too means the plan lacks what the wearer sees, not a wrong result.
@@ -258,9 +261,11 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     if (e.marker) marker_errors.push_back(e.error_m);
     reliable += e.reliable;
     reliable_ok += e.reliable && e.error_m <= 1.0;
-    if (e.reliable && report->time_to_first_reliable_s < 0 && !plan_poses.empty())
+    if (e.reliable && report->time_to_first_reliable_s < 0 && !plan_poses.empty()) {
       report->time_to_first_reliable_s =
           static_cast<double>(e.stamp_ns - plan_poses.front().source_stamp_ns()) * 1e-9;
+      report->first_reliable_error_m = e.error_m;
+    }
     report->track.push_back(e);
   }
   report->poses = errors.size();
@@ -336,6 +341,7 @@ std::string ToJson(const EvalReport& r) {
     << ", \"reliable_precision_1m\": " << r.reliable_precision_1m << ", \"poses\": " << r.poses
     << ", \"unaligned_poses\": " << r.unaligned_poses
     << ", \"time_to_first_reliable_s\": " << r.time_to_first_reliable_s
+    << ", \"first_reliable_error_m\": " << r.first_reliable_error_m
     << ", \"false_reliable_poses\": " << r.false_reliable_poses
     << ", \"time_to_unreliable_s\": " << r.time_to_unreliable_s
     << ", \"time_to_recovered_s\": " << r.time_to_recovered_s

@@ -60,6 +60,7 @@ struct EvalReport {
   // From the first plan pose to the first scored pose flagged RELIABLE (-1: never), and
   // the poses flagged RELIABLE while more than 1 m off.
   double time_to_first_reliable_s = -1;
+  double first_reliable_error_m = -1;  // ...and how far off that pose was
   size_t false_reliable_poses = 0;
   // From the first scored pose (a wrong pick: simulate --kidnap) to the first flagged
   // UNRELIABLE, and to the first RELIABLE within 1 m (-1: never).
