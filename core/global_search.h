@@ -28,7 +28,7 @@ struct GlobalSearchOptions {
   double max_cells = 4e6;        // cells grow beyond cell_m to stay within this
   double rotation_step_rad = 0;  // 0: one cell at the cloud's farthest point (Hess eq. 7)
   size_t max_points = 400;       // the cloud is thinned (voxels, then a stride) to this many
-  size_t places = 8;             // distinct places returned at most, best first
+  size_t places = 4;             // distinct places returned at most, best first
   double distinct_m = 1.5;       // places closer than this at the cloud's centre...
   double distinct_rad = 10.0 * M_PI / 180;  // ...and turned less than this are one place
   double min_score = 0.25;                  // mean likelihood a place must reach (0..1)...
