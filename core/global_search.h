@@ -113,7 +113,9 @@ struct RefineOptions {
   double distinct_rad = 10.0 * M_PI / 180;  // centre and turned less than this are merged
   double path_margin_m = 0;  // a step crossing a wall this close to its ends does not count
   double min_inliers = 0;    // places fitting a smaller share of the cloud go last...
-  uint32_t max_crossings = UINT32_MAX;  // ...and those whose path crosses this many walls
+  uint32_t max_crossings = UINT32_MAX;  // ...and those whose path crosses this many walls,
+  double excuse_crossings_ratio = 0;    // ...unless every other place's error is this many
+                                        // times theirs or more (0: never)
 };
 
 // The search's places polished: each refined by ICP on the plan's walls from where the

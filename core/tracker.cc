@@ -94,6 +94,7 @@ void Tracker::Reset() {
   last_global_ns_.reset();
   leading_place_.reset();
   lead_count_ = clear_count_ = 0;
+  lead_product_ = 1;
   placement_confirmed_ = true;
   walked_since_start_m_ = 0;
   ForgetRegistrations();
@@ -239,6 +240,7 @@ Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
       usable.push_back(p);
   if (usable.empty() || !centre_slam.allFinite()) {
     lead_count_ = clear_count_ = 0;
+    lead_product_ = 1;
     d.reason = "no place fits";
     return d;
   }
@@ -249,28 +251,36 @@ Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
   };
   // The best must fit and walk clear (RefinePlaces' rank 0), and beat the next on the
   // walls, whatever the next's walk: a place that alone walks clear of the walls is too
-  // often a look-alike in a hall whose true place the search did not return.
+  // often a look-alike in a hall whose true place the search did not return. Its leads
+  // (the next's error over its own) multiply over the searches in a row it stays the best
+  // by at least global_min_lead; it has led once they reach what global_confirm_searches
+  // leads of 1 / global_lead_ratio would. A place a little ahead search after search
+  // (a hall whose walls all look alike at a glance) gets there too, only later.
   const double next =
       usable.size() > 1 ? usable[1].fit_mse : std::numeric_limits<double>::infinity();
+  const double lead = std::min(next / std::max(best.fit_mse, 1e-12), 1e6);
   const bool fits = best.rank == 0 && best.inlier_ratio >= options_.global_min_inliers;
-  const bool leads = fits && best.fit_mse < options_.global_lead_ratio * next;
+  const bool ahead = fits && lead >= options_.global_min_lead;
   const bool clear = fits && best.fit_mse < options_.global_clear_ratio * next;
   const bool same = leading_place_ && same_place(best.T_plan_slam, *leading_place_);
-  lead_count_ = leads ? (same ? lead_count_ : 0) + 1 : 0;
+  lead_count_ = ahead ? (same ? lead_count_ : 0) + 1 : 0;
+  lead_product_ = ahead ? (same ? lead_product_ : 1) * lead : 1;
   clear_count_ = clear ? (same ? clear_count_ : 0) + 1 : 0;
   leading_place_ = best.T_plan_slam;
-  const bool won = clear_count_ >= 2 || lead_count_ >= options_.global_confirm_searches;
+  const uint32_t confirm = options_.global_confirm_searches;
+  const double need = std::pow(1 / options_.global_lead_ratio, confirm);
+  const bool led = lead_count_ >= confirm && lead_product_ >= need;
+  const bool won = clear_count_ >= 2 || led;
   char text[200];
   std::snprintf(text, sizeof text,
-                "best fits %.0f%% of the walls, the next's error %.1f times its own; in the "
-                "lead %u searches in a row (%u to win)",
-                100 * best.inlier_ratio, next / std::max(best.fit_mse, 1e-12), lead_count_,
-                options_.global_confirm_searches);
+                "best fits %.0f%% of the walls, the next's error %.1f times its own; ahead %u "
+                "searches in a row, leads multiplying to %.1f (%u and %.1f to win)",
+                100 * best.inlier_ratio, lead, lead_count_, lead_product_, confirm, need);
   d.reason = text;
 
   const bool in_use = has_alignment() && same_place(best.T_plan_slam, alignment_.T_plan_slam);
   if (in_use) {
-    if (!placement_confirmed_ && lead_count_ >= options_.global_confirm_searches) {
+    if (!placement_confirmed_ && led) {
       placement_confirmed_ = true;
       d.reason = "place confirmed: " + d.reason;
     }
@@ -284,9 +294,7 @@ Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
     });
     const double current_mse =
         current != usable.end() ? current->fit_mse : std::numeric_limits<double>::infinity();
-    if (lead_count_ < options_.global_confirm_searches ||
-        !(best.fit_mse < options_.global_clear_ratio * current_mse))
-      return d;
+    if (!led || !(best.fit_mse < options_.global_clear_ratio * current_mse)) return d;
     // A confirmed place (or a pick) that the registrations find fitting stays: a place
     // that fits the window a little better is a look-alike, not a recovery.
     if (placement_confirmed_ && !WallsDoNotFit()) {
@@ -306,7 +314,7 @@ Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
   pick_plan_point_ = centre_plan;
   SetAlignment(best.T_plan_slam, AlignmentSource::kGlobalSearch, stamp_ns);
   current_fit_.reset();
-  placement_confirmed_ = lead_count_ >= options_.global_confirm_searches;
+  placement_confirmed_ = led;
   d.accepted = true;
   return d;
 }

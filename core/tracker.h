@@ -97,26 +97,31 @@ struct TrackerOptions {
   // in, every global_interval_s, over the walls of the last global_window_s (0: all).
   // The places found are refined and ranked (RefinePlaces); only a place of rank 0 (it
   // fits global_min_inliers of the walls, and the path under it crosses fewer than
-  // global_max_crossings walls and no more than under any other) can lead. It leads a
-  // search when the next one's error is at least 1 / global_lead_ratio times its own,
-  // and is clear of it at 1 / global_clear_ratio. The best is taken when it was clear
-  // in 2 searches in a row or led in global_confirm_searches in a row; it is RELIABLE
-  // only once it has led global_confirm_searches in a row. Once aligned (a pick too)
-  // the search goes on as a check while in doubt (the place not yet confirmed, or the
-  // walls fitting the alignment in use under global_min_inliers): another place that
-  // led global_confirm_searches checks in a row and is clear of the one in use replaces
-  // it (recovery).
+  // global_max_crossings walls, or it fits global_excuse_crossings times better than any
+  // other, and no more than under any other) can lead. A search counts towards its lead
+  // when the next one's error is at least global_min_lead times its own; it has led once
+  // it was ahead global_confirm_searches or more searches in a row and their leads
+  // multiply to what as many of 1 / global_lead_ratio would. It is clear of the next at
+  // 1 / global_clear_ratio. The best is taken when it was clear in 2 searches in a row
+  // or has led; it is RELIABLE only once it has led. Once aligned (a pick too) the search
+  // goes on as a check while in doubt (the place not yet confirmed, or the walls fitting
+  // the alignment in use under global_min_inliers): another place that has led over the
+  // checks and is clear of the one in use replaces it (recovery).
   bool global_search = false;
   uint32_t global_min_points = 150;
   double global_interval_s = 3.0;
   double global_window_s = 60.0;
   double global_clear_ratio = 0.5;
   double global_lead_ratio = 0.8;
+  double global_min_lead = 1.05;
   uint32_t global_confirm_searches = 3;
   double global_min_inliers = 0.6;
   // A place under which the wearer's path over the window crosses this many plan walls
   // (path_check_margin_m clear of their ends) does not fit either; 0: any number.
   uint32_t global_max_crossings = 2;
+  // ...unless every other place's error is at least this many times its own (0: never):
+  // the SLAM's drift over the window makes the path under the true place clip walls too.
+  double global_excuse_crossings = 3.0;
 };
 
 // Thesis section 6.3.4: one wall point with its normal, seen by the headset (slam
@@ -348,7 +353,8 @@ class Tracker {
   int64_t last_start_ns_ = 0;
   std::optional<int64_t> last_global_ns_;
   std::optional<Se2> leading_place_;  // the best place of the latest searches...
-  uint32_t lead_count_ = 0;           // ...how many in a row it led by global_lead_ratio...
+  uint32_t lead_count_ = 0;           // ...how many in a row it was ahead (global_min_lead)...
+  double lead_product_ = 1;           // ...its leads over them multiplied...
   uint32_t clear_count_ = 0;          // ...and was clear by global_clear_ratio
   bool placement_confirmed_ = true;   // false from a search's place until checks confirm it
   AlignmentFilter filter_;

@@ -708,6 +708,12 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
         config_.tracking().max_points(), nullptr, 0,
         window_s > 0 ? latest_stamp_ns_ - static_cast<int64_t>(window_s * 1e9) : INT64_MIN);
     if (job.cloud.size() < tracker_.options().global_min_points) return std::nullopt;
+    // Nothing scanned or dropped since the last search (the wearer stands, or walks
+    // where the headset has meshed everything): the same places again, no new evidence.
+    SearchedWalls walls{job.cloud.size(), Eigen::Vector2d::Zero(), tracker_.alignment().version};
+    for (const Eigen::Vector2d& p : job.cloud) walls.sum += p;
+    if (last_searched_ == walls) return std::nullopt;
+    last_searched_ = walls;
     const int64_t since =
         window_s > 0 ? latest_stamp_ns_ - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
     for (const auto& [stamp, position] : path_)
@@ -720,6 +726,7 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
     job.refine.min_inliers = tracker_.options().global_min_inliers;
     if (tracker_.options().global_max_crossings > 0)
       job.refine.max_crossings = tracker_.options().global_max_crossings;
+    job.refine.excuse_crossings_ratio = tracker_.options().global_excuse_crossings;
     job.initial = tracker_.alignment().T_plan_slam;
     job.version = tracker_.alignment().version;
     job.stamp_ns = latest_stamp_ns_;

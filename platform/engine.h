@@ -215,6 +215,17 @@ class Engine {
   std::deque<std::pair<Pose2, v1::PlanPose>> recent_;
   // The wearer's path for the global search: slam positions 0.25 m apart, with stamps.
   std::deque<std::pair<int64_t, Eigen::Vector2d>> path_;
+  // The walls the last search ran on (count, sum, the alignment it checked): a search on
+  // the same walls finds the same places, and would count twice towards their lead.
+  struct SearchedWalls {
+    size_t points = 0;
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    uint64_t version = 0;
+    bool operator==(const SearchedWalls& o) const {
+      return points == o.points && sum == o.sum && version == o.version;
+    }
+  };
+  std::optional<SearchedWalls> last_searched_;
   bool running_ = false;
   uint64_t last_run_generation_ = 0;
 };

@@ -236,6 +236,28 @@ TEST_F(EngineInputTest, AWheeledDeviceIsTrackedWithTheWheelOdometrysDrift) {
   EXPECT_EQ(poses_.size(), 3u);
 }
 
+// The whole-plan search runs on new walls only: a search on the walls of the last one
+// finds the same places, and would count twice towards their lead (issue 7).
+TEST_F(EngineInputTest, TheSearchWaitsForNewWalls) {
+  config_.mutable_tracking()->set_global_search(true);
+  config_.mutable_tracking()->set_global_min_points(50);
+  Start(/*with_plan=*/true);
+  const int64_t s = 1'000'000'000;
+  engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::ADDED, 1 * s)));
+  engine_->OnHeadsetPose(Wrap(Pose(1 * s)));
+  auto first = engine_->TakeDueJob();
+  ASSERT_TRUE(first && first->global);
+  engine_->OnRegistrationDone(Engine::Run(std::move(*first), [] { return int64_t{0}; }));
+  // The wearer stands; the interval passes with nothing new scanned: no search.
+  engine_->OnHeadsetPose(Wrap(Pose(5 * s)));
+  EXPECT_FALSE(engine_->TakeDueJob());
+  // The wall is scanned again (its points sampled anew): searched again.
+  engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::UPDATED, 6 * s)));
+  engine_->OnHeadsetPose(Wrap(Pose(9 * s)));
+  auto second = engine_->TakeDueJob();
+  ASSERT_TRUE(second && second->global);
+}
+
 // A building of two floors (a .floors set): the daemon follows the wearer up and down the
 // stairs by the headset's height, keeps the alignment (the floors share one frame), drops
 // the walls of the floor left, and is not fooled by a crouch or a short look upwards.
