@@ -287,27 +287,28 @@ Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
     return d;
   }
   if (has_alignment()) {
-    // Another place: it replaces the one in use only when it kept the lead over
-    // global_confirm_searches checks and fits clearly better.
+    // Another place: it replaces the one in use only when it has led over the checks and
+    // fits clearly better (global_clear_ratio); better by a lead (global_lead_ratio) when
+    // the walls do not fit the one in use either, as if there were none (a wrong pick).
     const auto current = std::find_if(usable.begin(), usable.end(), [&](const GlobalPlace& p) {
       return same_place(p.T_plan_slam, alignment_.T_plan_slam);
     });
     const double current_mse =
         current != usable.end() ? current->fit_mse : std::numeric_limits<double>::infinity();
-    if (!led || !(best.fit_mse < options_.global_clear_ratio * current_mse)) return d;
+    const double better =
+        WallsDoNotFit() ? options_.global_lead_ratio : options_.global_clear_ratio;
+    if (!led || !(best.fit_mse < better * current_mse)) return d;
     // A confirmed place (or a pick) that the registrations find fitting stays: a place
     // that fits the window a little better is a look-alike, not a recovery.
     if (placement_confirmed_ && !WallsDoNotFit()) {
       d.reason = "the place in use still fits the walls; " + d.reason;
       return d;
     }
-    d.reason =
-        "relocated (the place in use fits " +
-        (std::isfinite(current_mse)
-             ? std::to_string(static_cast<int>(current_mse / std::max(best.fit_mse, 1e-12))) +
-                   " times worse"
-             : std::string("nothing")) +
-        "): " + d.reason;
+    char worse[48] = "nothing";
+    if (std::isfinite(current_mse))
+      std::snprintf(worse, sizeof worse, "%.1f times worse",
+                    current_mse / std::max(best.fit_mse, 1e-12));
+    d.reason = std::string("relocated (the place in use fits ") + worse + "): " + d.reason;
   } else if (!won) {
     return d;
   }

@@ -106,7 +106,8 @@ struct TrackerOptions {
   // or has led; it is RELIABLE only once it has led. Once aligned (a pick too) the search
   // goes on as a check while in doubt (the place not yet confirmed, or the walls fitting
   // the alignment in use under global_min_inliers): another place that has led over the
-  // checks and is clear of the one in use replaces it (recovery).
+  // checks and is clear of the one in use replaces it (recovery); when the walls do not
+  // fit the one in use, a place that fits better by a lead does.
   bool global_search = false;
   uint32_t global_min_points = 150;
   double global_interval_s = 3.0;

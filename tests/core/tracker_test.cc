@@ -811,6 +811,25 @@ TEST_F(GlobalPlacementDecisionTest, AWrongPickIsReplacedByAPlaceThatKeepsWinning
   EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kGlobalSearch);
 }
 
+TEST_F(GlobalPlacementDecisionTest, APickWhoseWallsDoNotFitGivesWayToAPlaceThatLeadsIt) {
+  // A wrong pick whose walls do not fit (UNRELIABLE) is no better than no place: a place
+  // that has led and fits better by a lead replaces it, clear or not.
+  const Se2 wrong = other_place_.T_plan_slam;
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(wrong, {4, 2}, {1, 0}), 1), "");
+  const std::vector<Eigen::Vector2d> cloud = Cloud();
+  tracker_.Correct({{2.0, 1.5}, 0, 1.6});
+  tracker_.Offer(ResultFor(wrong, cloud), cloud, tracker_.alignment().version, 2);
+  ASSERT_TRUE(tracker_.WallsDoNotFit());
+  GlobalPlace in_use = other_place_;
+  in_use.fit_mse = truth_place_.fit_mse * 1.5;  // the pick refined: a lead behind, not 2
+  EXPECT_FALSE(Offer({truth_place_, in_use}, 3).accepted);
+  EXPECT_FALSE(Offer({truth_place_, in_use}, 4).accepted);
+  const Tracker::Decision d = Offer({truth_place_, in_use}, 5);
+  ASSERT_TRUE(d.accepted) << d.reason;
+  EXPECT_THAT(d.reason, HasSubstr("relocated (the place in use fits 1.5 times worse)"));
+  EXPECT_THAT(tracker_.alignment().T_plan_slam, IsNearlySe2(truth_, 1e-12, 1e-12));
+}
+
 TEST_F(GlobalPlacementDecisionTest, ThePlaceInUseStaysAgainstATieAndStaleSearches) {
   ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
   GlobalPlace twin = other_place_;
