@@ -704,9 +704,9 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
     tracker_.MarkGlobalSearchStarted(latest_stamp_ns_);
     Job job;
     const double window_s = tracker_.options().global_window_s;
-    job.cloud = store_.Snapshot(
-        config_.tracking().max_points(), nullptr, 0,
-        window_s > 0 ? latest_stamp_ns_ - static_cast<int64_t>(window_s * 1e9) : INT64_MIN);
+    const int64_t since =
+        window_s > 0 ? latest_stamp_ns_ - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
+    job.cloud = store_.Snapshot(config_.tracking().max_points(), nullptr, 0, since);
     if (job.cloud.size() < tracker_.options().global_min_points) return std::nullopt;
     // Nothing scanned or dropped since the last search (the wearer stands, or walks
     // where the headset has meshed everything): the same places again, no new evidence.
@@ -714,8 +714,6 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
     for (const Eigen::Vector2d& p : job.cloud) walls.sum += p;
     if (last_searched_ == walls) return std::nullopt;
     last_searched_ = walls;
-    const int64_t since =
-        window_s > 0 ? latest_stamp_ns_ - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
     for (const auto& [stamp, position] : path_)
       if (stamp >= since) job.path.push_back(position);
     job.global = plan_.global;

@@ -683,6 +683,15 @@ class GlobalPlacementDecisionTest : public TrackerTest {
   Tracker::Decision Offer(std::vector<GlobalPlace> places, int64_t stamp) {
     return tracker_.OfferPlaces(places, centre_, tracker_.alignment().version, stamp);
   }
+  // A wall pick at the other place (6 m off) and the first registration on the walls,
+  // which fit the truth: its decision in *registered.
+  void PickWronglyAndRegister(Tracker::Decision* registered) {
+    const Se2 wrong = other_place_.T_plan_slam;
+    ASSERT_EQ(tracker_.ApplyWallPick(PickFor(wrong, {4, 2}, {1, 0}), 1), "");
+    const std::vector<Eigen::Vector2d> cloud = Cloud();
+    tracker_.Correct({{2.0, 1.5}, 0, 1.6});
+    *registered = tracker_.Offer(ResultFor(wrong, cloud), cloud, tracker_.alignment().version, 2);
+  }
   GlobalPlace truth_place_, other_place_;
   const Eigen::Vector2d centre_{1.0, 2.0};  // slam frame
 };
@@ -788,14 +797,11 @@ TEST_F(GlobalPlacementDecisionTest, OnlyAPlaceThatFitsAndWalksClearLeads) {
 }
 
 TEST_F(GlobalPlacementDecisionTest, AWrongPickIsReplacedByAPlaceThatKeepsWinning) {
-  // The pick put the wearer 6 m off (the other place); the walls fit the truth.
-  const Se2 wrong = other_place_.T_plan_slam;
-  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(wrong, {4, 2}, {1, 0}), 1), "");
-  // The first registration finds the walls do not fit the pick: UNRELIABLE at once.
-  const std::vector<Eigen::Vector2d> cloud = Cloud();
-  tracker_.Correct({{2.0, 1.5}, 0, 1.6});
-  EXPECT_FALSE(
-      tracker_.Offer(ResultFor(wrong, cloud), cloud, tracker_.alignment().version, 2).accepted);
+  // The pick put the wearer 6 m off (the other place); the walls fit the truth. The
+  // first registration finds the walls do not fit the pick: UNRELIABLE at once.
+  Tracker::Decision registered;
+  ASSERT_NO_FATAL_FAILURE(PickWronglyAndRegister(&registered));
+  EXPECT_FALSE(registered.accepted);
   EXPECT_TRUE(tracker_.WallsDoNotFit());
   EXPECT_EQ(tracker_.CurrentReliability().flag, ReliabilityFlag::kUnreliable);
   EXPECT_THAT(tracker_.CurrentReliability().reason, HasSubstr("walls do not fit"));
@@ -814,11 +820,8 @@ TEST_F(GlobalPlacementDecisionTest, AWrongPickIsReplacedByAPlaceThatKeepsWinning
 TEST_F(GlobalPlacementDecisionTest, APickWhoseWallsDoNotFitGivesWayToAPlaceThatLeadsIt) {
   // A wrong pick whose walls do not fit (UNRELIABLE) is no better than no place: a place
   // that has led and fits better by a lead replaces it, clear or not.
-  const Se2 wrong = other_place_.T_plan_slam;
-  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(wrong, {4, 2}, {1, 0}), 1), "");
-  const std::vector<Eigen::Vector2d> cloud = Cloud();
-  tracker_.Correct({{2.0, 1.5}, 0, 1.6});
-  tracker_.Offer(ResultFor(wrong, cloud), cloud, tracker_.alignment().version, 2);
+  Tracker::Decision registered;
+  ASSERT_NO_FATAL_FAILURE(PickWronglyAndRegister(&registered));
   ASSERT_TRUE(tracker_.WallsDoNotFit());
   GlobalPlace in_use = other_place_;
   in_use.fit_mse = truth_place_.fit_mse * 1.5;  // the pick refined: a lead behind, not 2
