@@ -251,4 +251,40 @@ uint32_t PathCrossings(const std::vector<Eigen::Vector2d>& path, const FloorPlan
   return crossings;
 }
 
+uint32_t HiddenPoints(const std::vector<Eigen::Vector2d>& points,
+                      const std::vector<Eigen::Vector2d>& path, const FloorPlan& plan,
+                      double reach_m, double standoff_m, double end_margin_m) {
+  if (points.empty() || path.empty()) return 0;
+  Eigen::Vector2d lo = path.front(), hi = path.front();
+  for (const Eigen::Vector2d& p : path) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  const Eigen::Vector2d pad = Eigen::Vector2d::Constant(reach_m);
+  std::vector<const Segment*> near;
+  for (const Segment& s : plan.segments)
+    if (!OutsideBox(s, lo - pad, hi + pad)) near.push_back(&s);
+  const double reach2 = reach_m * reach_m;
+  uint32_t hidden = 0;
+  for (const Eigen::Vector2d& q : points) {
+    bool in_reach = false, seen = false;
+    for (const Eigen::Vector2d& v : path) {
+      const Eigen::Vector2d d = q - v;
+      const double n2 = d.squaredNorm();
+      if (n2 > reach2) continue;
+      in_reach = true;
+      const double n = std::sqrt(n2);
+      if (n <= standoff_m) {
+        seen = true;
+        break;
+      }
+      const Eigen::Vector2d end = v + d * ((n - standoff_m) / n);
+      if (std::none_of(near.begin(), near.end(),
+                       [&](const Segment* s) { return StepCrosses(v, end, *s, end_margin_m); })) {
+        seen = true;
+        break;
+      }
+    }
+    hidden += in_reach && !seen;
+  }
+  return hidden;
+}
+
 }  // namespace floorpose

@@ -63,4 +63,14 @@ bool StepCrossesPlan(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const F
 uint32_t PathCrossings(const std::vector<Eigen::Vector2d>& path, const FloorPlan& plan,
                        double end_margin_m = 0);
 
+// How many of the wall points (plan frame) the wearer could not have seen from where they
+// were: points with a position of the path within reach_m of them, but a plan wall
+// (end_margin_m clear of its ends, as StepCrossesPlan) across the line of sight from
+// every such position. The sight line stops standoff_m short of the point, so that the
+// wall it lies on does not block it. Points out of reach of the path tell nothing and do
+// not count.
+uint32_t HiddenPoints(const std::vector<Eigen::Vector2d>& points,
+                      const std::vector<Eigen::Vector2d>& path, const FloorPlan& plan,
+                      double reach_m, double standoff_m, double end_margin_m = 0);
+
 }  // namespace floorpose

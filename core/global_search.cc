@@ -298,7 +298,7 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
   if (cloud.empty()) return {};
   centre /= static_cast<double>(cloud.size());
   std::vector<GlobalPlace> refined;
-  std::vector<Eigen::Vector2d> path_plan;
+  std::vector<Eigen::Vector2d> path_plan, cloud_plan;
   for (const GlobalPlace& place : places) {
     GlobalPlace r = place;
     const RegistrationResult icp_result = RegisterIcp(cloud, index, place.T_plan_slam, icp);
@@ -313,6 +313,18 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
     for (const Eigen::Vector2d& p : path_slam)
       if (p.allFinite()) path_plan.push_back(r.T_plan_slam * p);
     r.path_crossings = PathCrossings(path_plan, index.plan(), options.path_margin_m);
+    if (options.sight_reach_m > 0) {
+      // The walls seen must have been in sight: one the plan hides from the whole walk
+      // is a miss, however well it lies on a wall (a look-alike room behind a wall).
+      cloud_plan.clear();
+      for (const Eigen::Vector2d& p : cloud) cloud_plan.push_back(r.T_plan_slam * p);
+      const uint32_t hidden =
+          HiddenPoints(cloud_plan, path_plan, index.plan(), options.sight_reach_m,
+                       options.sight_standoff_m, options.path_margin_m);
+      r.hidden_ratio = static_cast<double>(hidden) / static_cast<double>(cloud.size());
+      r.fit_mse +=
+          std::max(0.0, r.hidden_ratio - options.sight_allowance) * options.cap_m * options.cap_m;
+    }
     refined.push_back(r);
   }
   std::stable_sort(refined.begin(), refined.end(), [](const GlobalPlace& a, const GlobalPlace& b) {

@@ -48,6 +48,9 @@ struct GlobalPlace {
   // ...and how many steps of the wearer's path there cross a wall of the plan (a place
   // that walks the wearer through walls is not where they are).
   uint32_t path_crossings = 0;
+  // ...and what share of the cloud's points the wearer could not have seen from the path
+  // there, a plan wall in the way (HiddenPoints).
+  double hidden_ratio = 0;
   // RefinePlaces' order: 0 fits and walks through the fewest walls, 1 fits and walks
   // through more, 2 does not fit. Only places of one rank compete on their fits.
   int rank = 0;
@@ -112,7 +115,13 @@ struct RefineOptions {
   double distinct_m = 1.5;                  // places converging within this at the cloud's
   double distinct_rad = 10.0 * M_PI / 180;  // centre and turned less than this are merged
   double path_margin_m = 0;  // a step crossing a wall this close to its ends does not count
-  double min_inliers = 0;    // places fitting a smaller share of the cloud go last...
+  // A point the wearer could not have seen from the path under a place (HiddenPoints
+  // within this reach: the headset's range and some drift) adds a miss, cap_m squared, to
+  // the place's fit_mse. 0: no sight check.
+  double sight_reach_m = 0;
+  double sight_standoff_m = 0.3;        // the line of sight stops this short of the point
+  double sight_allowance = 0.1;         // the share of hidden points that costs nothing
+  double min_inliers = 0;               // places fitting a smaller share of the cloud go last...
   uint32_t max_crossings = UINT32_MAX;  // ...and those whose path crosses this many walls,
   double excuse_crossings_ratio = 0;    // ...unless every other place's error is this many
                                         // times theirs or more (0: never)

@@ -123,6 +123,9 @@ struct TrackerOptions {
   // ...unless every other place's error is at least this many times its own (0: never):
   // the SLAM's drift over the window makes the path under the true place clip walls too.
   double global_excuse_crossings = 3.0;
+  // A wall point hidden from the path under a place (HiddenPoints within this reach)
+  // counts as a miss in its fit (RefineOptions::sight_reach_m); 0: no sight check.
+  double global_sight_reach_m = 4.5;
 };
 
 // Thesis section 6.3.4: one wall point with its normal, seen by the headset (slam

@@ -180,6 +180,24 @@ TEST(SegmentTest, ClosestPointMatchesDenseSampling) {
   EXPECT_EQ(ClosestPointOnSegment(point, {5, 5}), Eigen::Vector2d(1, 2));
 }
 
+TEST(HiddenPointsTest, CountsPointsBehindAWallFromEveryPositionInReach) {
+  const FloorPlan plan = testing::AsymmetricRoom();
+  // The wearer walked west of the inner wall (x = 4, y 0..4.5).
+  const std::vector<Eigen::Vector2d> west = {{2, 2}, {2, 3}};
+  // The west wall in sight; a point behind the inner wall; one on the inner wall, 5 cm
+  // past its line (noise: the sight line stops short of it); one out of reach, which
+  // tells nothing.
+  const std::vector<Eigen::Vector2d> points = {{0, 2}, {6, 2}, {4.05, 2}, {9, 1}};
+  EXPECT_EQ(HiddenPoints(points, west, plan, 4.5, 0.3), 1u);
+  // Seen once from the other side: not hidden.
+  EXPECT_EQ(HiddenPoints(points, {{2, 2}, {2, 3}, {5, 2}}, plan, 4.5, 0.3), 0u);
+  // Without the standoff the wall the point lies on hides it too.
+  EXPECT_EQ(HiddenPoints(points, west, plan, 4.5, 0.0), 2u);
+  // Without a path nothing can be hidden.
+  EXPECT_EQ(HiddenPoints(points, {}, plan, 4.5, 0.3), 0u);
+  EXPECT_EQ(HiddenPoints({}, west, plan, 4.5, 0.3), 0u);
+}
+
 TEST(PathCrossingsTest, CountsStepsThroughWallsAndSparesTheirEnds) {
   const FloorPlan plan = testing::AsymmetricRoom();
   // Through the inner wall (x = 4, y 0..4.5) at y = 2, and back.

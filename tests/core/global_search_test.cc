@@ -328,5 +328,40 @@ TEST(GlobalSearchTest, APlaceOffTheWallsGoesLastHoweverClearItsWalk) {
   EXPECT_EQ(RefinePlaces(places, scan.points, path, index, icp, options)[0].path_crossings, 1u);
 }
 
+TEST(GlobalSearchTest, APlaceWhoseWallsTheWearerCouldNotHaveSeenFitsWorse) {
+  // Rooms 4 m and 2 m wide (walls at x = 4 and 6). The wearer walked 3 m west of the wall
+  // at x = 4 and saw it. The same wall 2 m east fits the plan's wall at x = 6 as well,
+  // and the walk there (x = 3) crosses nothing; but from there the wall at x = 4 stands
+  // between the wearer and every point seen.
+  auto parse = MakeFloorPlan("rooms", {{{0, 0}, {12, 0}},
+                                       {{12, 0}, {12, 7}},
+                                       {{12, 7}, {0, 7}},
+                                       {{0, 7}, {0, 0}},
+                                       {{4, 0}, {4, 7}},
+                                       {{6, 0}, {6, 7}}});
+  ASSERT_TRUE(parse.ok()) << parse.error;
+  const ClosestWallIndex index(parse.plan);
+  std::vector<Eigen::Vector2d> seen, path;
+  for (double y = 1; y <= 6; y += 0.1) seen.emplace_back(4, y);
+  for (double y = 1; y <= 6; y += 0.25) path.emplace_back(1, y);
+  const Se2 truth{0, {0, 0}}, behind{0, {2, 0}};
+  const std::vector<GlobalPlace> places = {{behind}, {truth}};
+  RefineOptions options;
+  const auto blind = RefinePlaces(places, seen, path, index, IcpOptions{}, options);
+  ASSERT_EQ(blind.size(), 2u);
+  EXPECT_NEAR(blind[0].fit_mse, blind[1].fit_mse, 1e-6);  // both fit, both walk clear
+  options.sight_reach_m = 4.5;
+  const auto sighted = RefinePlaces(places, seen, path, index, IcpOptions{}, options);
+  ASSERT_EQ(sighted.size(), 2u);
+  EXPECT_LT((sighted[0].T_plan_slam.t - truth.t).norm(), 0.05);
+  EXPECT_EQ(sighted[0].hidden_ratio, 0.0);
+  EXPECT_EQ(sighted[1].hidden_ratio, 1.0);
+  // Every point a miss, less the share allowed for drift.
+  EXPECT_NEAR(sighted[1].fit_mse - sighted[0].fit_mse,
+              (1 - options.sight_allowance) * options.cap_m * options.cap_m, 1e-6);
+  EXPECT_EQ(sighted[0].rank, 0);
+  EXPECT_EQ(sighted[1].rank, 0);
+}
+
 }  // namespace
 }  // namespace floorpose

@@ -175,10 +175,12 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
         for (const GlobalPlace& place : done.places)
           spdlog::debug(
               "at {:.1f} s, truth: place scoring {:.3f} (fit {:.4f}, {:.0f}% inliers, {} "
-              "crossings, rank {}) is {:.2f} m off at the wearer; T {:.3f} {:.3f} {:.4f}, wearer "
+              "crossings, {:.0f}% hidden, rank {}) is {:.2f} m off at the wearer; T {:.3f} {:.3f} "
+              "{:.4f}, wearer "
               "{:.2f} {:.2f} (slam)",
               static_cast<double>(latest->stamp_ns - inputs.front().stamp_ns) * 1e-9, place.score,
-              place.fit_mse, 100 * place.inlier_ratio, place.path_crossings, place.rank,
+              place.fit_mse, 100 * place.inlier_ratio, place.path_crossings,
+              100 * place.hidden_ratio, place.rank,
               (place.T_plan_slam * latest->slam - latest->plan).norm(), place.T_plan_slam.t.x(),
               place.T_plan_slam.t.y(), place.T_plan_slam.theta, latest->slam.x(), latest->slam.y());
       } else if (latest && done.job.index && spdlog::should_log(spdlog::level::debug)) {
