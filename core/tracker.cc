@@ -263,8 +263,11 @@ Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
   const bool ahead = fits && lead >= options_.global_min_lead;
   const bool clear = fits && best.fit_mse < options_.global_clear_ratio * next;
   const bool same = leading_place_ && same_place(best.T_plan_slam, *leading_place_);
-  lead_count_ = ahead ? (same ? lead_count_ : 0) + 1 : 0;
-  lead_product_ = ahead ? (same ? lead_product_ : 1) * lead : 1;
+  // Still first, but by less than global_min_lead: the streak holds, the search does
+  // not count towards it.
+  const bool holds = fits && same && lead >= 1.0;
+  lead_count_ = ahead ? (same ? lead_count_ : 0) + 1 : holds ? lead_count_ : 0;
+  lead_product_ = ahead ? (same ? lead_product_ : 1) * lead : holds ? lead_product_ : 1;
   clear_count_ = clear ? (same ? clear_count_ : 0) + 1 : 0;
   leading_place_ = best.T_plan_slam;
   const uint32_t confirm = options_.global_confirm_searches;

@@ -99,7 +99,8 @@ struct TrackerOptions {
   // fits global_min_inliers of the walls, and the path under it crosses fewer than
   // global_max_crossings walls, or it fits global_excuse_crossings times better than any
   // other, and no more than under any other) can lead. A search counts towards its lead
-  // when the next one's error is at least global_min_lead times its own; it has led once
+  // when the next one's error is at least global_min_lead times its own (a search where
+  // it stays first by less neither counts nor breaks the row); it has led once
   // it was ahead global_confirm_searches or more searches in a row and their leads
   // multiply to what as many of 1 / global_lead_ratio would. It is clear of the next at
   // 1 / global_clear_ratio. The best is taken when it was clear in 2 searches in a row

@@ -771,6 +771,17 @@ TEST_F(GlobalPlacementDecisionTest, APlaceALittleAheadSearchAfterSearchLeadsInTh
   EXPECT_FALSE(Offer({twin, truth_place_}, 14).accepted);
   for (int i = 0; i < 4; ++i) EXPECT_FALSE(Offer({truth_place_, twin}, 15 + i).accepted);
   EXPECT_TRUE(Offer({truth_place_, twin}, 19).accepted);
+  // A search where it stays first by less than global_min_lead neither counts nor
+  // starts the count over.
+  tracker_.Reset();
+  GlobalPlace close = other_place_;
+  close.fit_mse = truth_place_.fit_mse * 1.02;
+  for (int i = 0; i < 2; ++i) EXPECT_FALSE(Offer({truth_place_, twin}, 30 + i).accepted);
+  const Tracker::Decision tie = Offer({truth_place_, close}, 32);
+  EXPECT_FALSE(tie.accepted);
+  EXPECT_THAT(tie.reason, HasSubstr("ahead 2 searches in a row"));
+  for (int i = 0; i < 2; ++i) EXPECT_FALSE(Offer({truth_place_, twin}, 33 + i).accepted);
+  EXPECT_TRUE(Offer({truth_place_, twin}, 35).accepted);
 }
 
 TEST_F(GlobalPlacementDecisionTest, OnlyAPlaceThatFitsAndWalksClearLeads) {
