@@ -216,6 +216,18 @@ bool OutsideBox(const Segment& s, const Eigen::Vector2d& lo, const Eigen::Vector
   return smax.x() < lo.x() || smin.x() > hi.x() || smax.y() < lo.y() || smin.y() > hi.y();
 }
 
+// The walls within pad_m of the box of a (non-empty) path.
+std::vector<const Segment*> WallsNearPath(const std::vector<Eigen::Vector2d>& path,
+                                          const FloorPlan& plan, double pad_m) {
+  Eigen::Vector2d lo = path.front(), hi = path.front();
+  for (const Eigen::Vector2d& p : path) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  const Eigen::Vector2d pad = Eigen::Vector2d::Constant(pad_m);
+  std::vector<const Segment*> near;
+  for (const Segment& s : plan.segments)
+    if (!OutsideBox(s, lo - pad, hi + pad)) near.push_back(&s);
+  return near;
+}
+
 // Whether the step p -> q crosses wall s, end_margin_m or more from its ends.
 bool StepCrosses(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Segment& s,
                  double end_margin_m) {
@@ -236,11 +248,7 @@ uint32_t PathCrossings(const std::vector<Eigen::Vector2d>& path, const FloorPlan
                        double end_margin_m) {
   if (path.size() < 2) return 0;
   // Only the walls in the path's box can be crossed: a few of a building's thousands.
-  Eigen::Vector2d lo = path.front(), hi = path.front();
-  for (const Eigen::Vector2d& p : path) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  std::vector<const Segment*> near;
-  for (const Segment& s : plan.segments)
-    if (!OutsideBox(s, lo, hi)) near.push_back(&s);
+  const std::vector<const Segment*> near = WallsNearPath(path, plan, 0);
   uint32_t crossings = 0;
   for (size_t i = 1; i < path.size(); ++i)
     for (const Segment* s : near)
@@ -255,12 +263,7 @@ uint32_t HiddenPoints(const std::vector<Eigen::Vector2d>& points,
                       const std::vector<Eigen::Vector2d>& path, const FloorPlan& plan,
                       double reach_m, double standoff_m, double end_margin_m) {
   if (points.empty() || path.empty()) return 0;
-  Eigen::Vector2d lo = path.front(), hi = path.front();
-  for (const Eigen::Vector2d& p : path) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  const Eigen::Vector2d pad = Eigen::Vector2d::Constant(reach_m);
-  std::vector<const Segment*> near;
-  for (const Segment& s : plan.segments)
-    if (!OutsideBox(s, lo - pad, hi + pad)) near.push_back(&s);
+  const std::vector<const Segment*> near = WallsNearPath(path, plan, reach_m);
   const double reach2 = reach_m * reach_m;
   uint32_t hidden = 0;
   for (const Eigen::Vector2d& q : points) {
