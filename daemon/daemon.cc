@@ -120,13 +120,22 @@ void Daemon::IoLoop() {
     io_heartbeat_ns_ = platform::MonotonicNs();
     // One batch from all inputs, in stamp order (platform::InputBefore), the order
     // `floorpose eval` takes a recording in: a pose is corrected with the walls and the
-    // pick that came before it. Poses are taken first: the walls and commands sent before
-    // a pose have arrived by the time it is taken, almost always, and a wall that arrives
-    // between the takes still joins the batch of the pose it precedes (taking poses last
-    // left such a wall to the next batch, after its pose, under load).
+    // pick that came before it. The readers are taken in turn, and again until a turn
+    // takes nothing: a message that arrives during a turn, after its reader was taken,
+    // may come after messages sent later on another topic that the same turn did take
+    // (a pose missed while a wall pick sent after it was taken, under load); Cyclone
+    // delivers one peer's messages in the order they were sent, so once a whole turn
+    // finds nothing new, nothing sent before a message of the batch is still missing.
+    // A peer that never pauses ends the turns after kMaxTurns; its batch is then one
+    // turn short of exact, as it would be with a single turn.
+    constexpr int kMaxTurns = 8;
     batch.clear();
-    for (auto* reader : {pose_reader_.get(), mesh_reader_.get(), command_reader_.get()})
-      for (auto& e : reader->Take(256)) batch.push_back({reader->topic(), std::move(e)});
+    for (int turn = 0; turn < kMaxTurns; ++turn) {
+      const size_t before = batch.size();
+      for (auto* reader : {pose_reader_.get(), mesh_reader_.get(), command_reader_.get()})
+        for (auto& e : reader->Take(256)) batch.push_back({reader->topic(), std::move(e)});
+      if (batch.size() == before) break;
+    }
     std::stable_sort(batch.begin(), batch.end(), [](const Input& a, const Input& b) {
       return platform::InputBefore(a.topic, a.envelope.stamp_ns, b.topic, b.envelope.stamp_ns);
     });
