@@ -385,6 +385,19 @@ std::string Tracker::FirstRegistrationDoubt(const RegistrationResult& result) co
   return {};
 }
 
+uint32_t Tracker::FirstPlaceCrossings(const Se2& T_plan_slam,
+                                      const std::vector<Eigen::Vector2d>& path_slam) const {
+  if (!options_.path_check || path_slam.size() < 2 ||
+      (alignment_.source != AlignmentSource::kWallPick &&
+       alignment_.source != AlignmentSource::kFlip))
+    return 0;
+  std::vector<Eigen::Vector2d> path_plan;
+  path_plan.reserve(path_slam.size());
+  for (const Eigen::Vector2d& p : path_slam)
+    if (p.allFinite()) path_plan.push_back(T_plan_slam * p);
+  return PathCrossings(path_plan, index_->plan(), options_.path_check_margin_m);
+}
+
 bool Tracker::FirstPlaceClear(const RegistrationResult& result) const {
   // Refinement may carry the best place a little beyond the search window.
   constexpr double kMargin = 1.25;
@@ -445,7 +458,8 @@ bool Tracker::RegistrationDue(int64_t now_ns, size_t live_points, size_t new_poi
 
 Tracker::Decision Tracker::Offer(const RegistrationResult& result,
                                  const std::vector<Eigen::Vector2d>& cloud,
-                                 uint64_t based_on_version, int64_t stamp_ns) {
+                                 uint64_t based_on_version, int64_t stamp_ns,
+                                 const std::vector<Eigen::Vector2d>& path_slam) {
   Decision d;
   if (!index_ || !has_alignment()) {
     d.reason = "no alignment any more";
@@ -478,6 +492,12 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
              cloud.size() < options_.min_points) {
     // check_min_points: enough to tell a pick that fits no walls near it, not to place.
     d.reason = "a check on few walls: a place waits for more";
+  } else if (const uint32_t crossings = FirstPlaceCrossings(result.T_plan_slam, path_slam);
+             crossings > 0) {
+    // A wrong pick's walls often fit a corner or a wall nearby as well as the true one
+    // (a hall's few walls fit anywhere); the walk so far tells them apart.
+    d.reason = "first place: the walk so far would cross " + std::to_string(crossings) + " wall" +
+               (crossings == 1 ? "" : "s") + " of the plan there";
   } else if (const std::string doubt = FirstRegistrationDoubt(result);
              alignment_.source != AlignmentSource::kRegistration &&
              !(doubt.empty() && FirstPlaceClear(result)) &&

@@ -277,9 +277,12 @@ class Tracker {
   // `cloud`. Fused into the alignment when it still applies, fits the cloud about as
   // well as the alignment in use or better (section 6.4.3), and agrees with it within
   // the filter's gate; a result beyond the gate is taken only when the next one
-  // confirms it (the navigation app's rule for jumps).
+  // confirms it (the navigation app's rule for jumps). `path_slam` is the wearer's walk
+  // over the cloud's window (slam frame, in order): a first place after a pick or flip
+  // that walks it through a wall of the plan (path_check) is not taken.
   Decision Offer(const RegistrationResult& result, const std::vector<Eigen::Vector2d>& cloud,
-                 uint64_t based_on_version, int64_t stamp_ns);
+                 uint64_t based_on_version, int64_t stamp_ns,
+                 const std::vector<Eigen::Vector2d>& path_slam = {});
 
   // Until a first place after a pick or flip is taken, the pick's heading error swings
   // its error at the wearer into metres as they walk away from the pick. The walls' own
@@ -320,6 +323,10 @@ class Tracker {
   // Whether a first result after a pick or flip that raises no doubt is clear enough to
   // take at once: unambiguous, and within the pick search of the pick at the pick's point.
   bool FirstPlaceClear(const RegistrationResult& result) const;
+  // How many steps of the walk (slam frame) cross a plan wall under a first place after a
+  // pick or flip (path_check); 0 otherwise.
+  uint32_t FirstPlaceCrossings(const Se2& T_plan_slam,
+                               const std::vector<Eigen::Vector2d>& path_slam) const;
   // Whether T lands within m metres at `at` (default: the wearer) and rad radians of other.
   bool Within(const Se2& T, const Se2& other, double m, double rad,
               const std::optional<Eigen::Vector2d>& at = {}) const;

@@ -494,10 +494,13 @@ void Engine::OnHeadsetPose(const Envelope& e) {
     est.reliability.reason = "headset tracking lost";
   }
   const v1::PlanPose out = ToPlanPose(est, pose.stamp_ns);
-  if (plan_.global) {
+  if (pose.pose_slam.position.allFinite()) {
     if (path_.empty() || (pose.pose_slam.position - path_.back().second).norm() >= 0.25)
       path_.emplace_back(pose.stamp_ns, pose.pose_slam.position);
-    const double window_s = tracker_.options().global_window_s;
+    // The longer of the registrations' and the search's windows (0: everything).
+    double window_s = config_.tracking().window_s();
+    if (const double global_s = tracker_.options().global_window_s; plan_.global)
+      window_s = window_s > 0 && global_s > 0 ? std::max(window_s, global_s) : 0.0;
     while (window_s > 0 && !path_.empty() &&
            path_.front().first < pose.stamp_ns - static_cast<int64_t>(window_s * 1e9))
       path_.pop_front();
@@ -745,6 +748,11 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
                               options.local_meshes ? last_run_generation_ : 0, min_stamp);
   // The live points were enough, but not those in the window: wait for more walls.
   if (job.cloud.size() < tracker_.MinPoints()) return std::nullopt;
+  // A first place after a pick must not walk the wearer through walls (Tracker::Offer).
+  if (tracker_.alignment().source == AlignmentSource::kWallPick ||
+      tracker_.alignment().source == AlignmentSource::kFlip)
+    for (const auto& [stamp, position] : path_)
+      if (stamp >= min_stamp) job.path.push_back(position);
   const double refine_s = config_.tracking().refine_window_s();
   if (refine_s > 0) {
     job.recent = store_.Snapshot(config_.tracking().max_points(), &job.recent_normals,
@@ -778,7 +786,7 @@ void Engine::OnRegistrationDone(Done done) {
   const RegistrationResult& r = done.result;
   counters_.set_registrations(counters_.registrations() + 1);
   const Tracker::Decision d = tracker_.Offer(r, done.refined ? done.job.recent : done.job.cloud,
-                                             done.job.version, done.job.stamp_ns);
+                                             done.job.version, done.job.stamp_ns, done.job.path);
   last_registration_ = {r, d.accepted, d.reason};
   spdlog::info(
       "registration: {} points, {} inliers, inlier RMSE {:.3f} m, {} iterations, {:.1f} ms, "

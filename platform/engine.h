@@ -73,7 +73,9 @@ class Engine {
     // on `index` with options.icp, as `refine` says.
     std::shared_ptr<GlobalSearchCache> global;
     RefineOptions refine;
-    std::vector<Eigen::Vector2d> path;  // the wearer's slam positions over the same window
+    // The wearer's slam positions over the same window (a search's, or a first place's
+    // after a pick: Tracker::Offer).
+    std::vector<Eigen::Vector2d> path;
   };
   struct Done {
     Job job;
@@ -213,7 +215,8 @@ class Engine {
   std::optional<double> eye_z_;  // slam height of the latest pose
   // Recent poses: slam, and as published (for PlanTrack).
   std::deque<std::pair<Pose2, v1::PlanPose>> recent_;
-  // The wearer's path for the global search: slam positions 0.25 m apart, with stamps.
+  // The wearer's path for the global search and a first place's check: slam positions
+  // 0.25 m apart, with stamps, over the longer of the two windows.
   std::deque<std::pair<int64_t, Eigen::Vector2d>> path_;
   // The walls the last search ran on (count, sum, the alignment it checked): a search on
   // the same walls finds the same places, and would count twice towards their lead.

@@ -198,6 +198,48 @@ TEST_F(TrackerTest, CorrectAppliesTheAlignment) {
   }
 }
 
+// A wrong pick's few walls often fit some corner near it as well as they fit the truth;
+// the walk so far tells such a first place apart: the wearer walked through no wall.
+TEST_F(TrackerTest, AFirstPlaceThatWalksTheWearerThroughAWallIsNotTaken) {
+  const auto cloud = Cloud();
+  // The walk in slam, 0.25 m steps along y = 2 of the plan (under truth_).
+  auto walk = [&](double from_x, double to_x) {
+    std::vector<Eigen::Vector2d> path;
+    for (double x = from_x; x <= to_x + 1e-9; x += 0.25)
+      path.push_back(truth_.Inverse() * Eigen::Vector2d(x, 2));
+    return path;
+  };
+  const std::vector<Eigen::Vector2d> through = walk(2.1, 6.1);  // across the inner wall x = 4
+  const std::vector<Eigen::Vector2d> clear = walk(5, 9);
+  const Se2 picked = Se2{Deg(2), {0.1, -0.1}} * truth_;
+
+  tracker_.SetPlan(index_);
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(picked, {4, 2}, {1, 0}), 1), "");
+  const uint64_t v1 = tracker_.alignment().version;
+  Tracker::Decision d = tracker_.Offer(ResultFor(truth_, cloud), cloud, v1, 2, through);
+  EXPECT_FALSE(d.accepted);
+  EXPECT_EQ(d.reason, "first place: the walk so far would cross 1 wall of the plan there");
+  EXPECT_EQ(tracker_.alignment().version, v1);
+  EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kWallPick);
+
+  // The same place with a walk that stays in the room is taken at once (clear, within
+  // the pick search); from then on the path check of every pose is the tracker's.
+  d = tracker_.Offer(ResultFor(truth_, cloud), cloud, v1, 3, clear);
+  ASSERT_TRUE(d.accepted) << d.reason;
+  EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kRegistration);
+  d = tracker_.Offer(ResultFor(truth_, cloud), cloud, tracker_.alignment().version, 4, through);
+  EXPECT_TRUE(d.accepted) << d.reason;
+
+  // With path_check off, nothing is checked.
+  TrackerOptions options;
+  options.path_check = false;
+  Tracker unchecked(options);
+  unchecked.SetPlan(index_);
+  ASSERT_EQ(unchecked.ApplyWallPick(PickFor(picked, {4, 2}, {1, 0}), 1), "");
+  d = unchecked.Offer(ResultFor(truth_, cloud), cloud, unchecked.alignment().version, 2, through);
+  EXPECT_TRUE(d.accepted) << d.reason;
+}
+
 TEST_F(TrackerTest, OfferAcceptsBetterRejectsWorseAndStale) {
   tracker_.SetPlan(index_);
   // The pick is 2 degrees and 15 cm off the truth.
