@@ -209,10 +209,14 @@ std::string Tracker::ApplyWallPick(const WallPick& pick, int64_t stamp_ns) {
 }
 
 bool Tracker::GlobalSearchDue(int64_t now_ns, size_t live_points) const {
-  if (!options_.global_search || !index_ || live_points < options_.global_min_points) return false;
+  if (!options_.global_search || !index_ || live_points < GlobalMinPoints()) return false;
   if (has_alignment() && placement_confirmed_ && !WallsDoNotFit()) return false;
   return !last_global_ns_ ||
          static_cast<double>(now_ns - *last_global_ns_) * 1e-9 >= options_.global_interval_s;
+}
+
+uint32_t Tracker::GlobalMinPoints() const {
+  return has_alignment() ? options_.global_check_min_points : options_.global_min_points;
 }
 
 bool Tracker::WallsDoNotFit() const {

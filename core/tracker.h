@@ -111,6 +111,8 @@ struct TrackerOptions {
   // fit the one in use, a place that fits better by a lead does.
   bool global_search = false;
   uint32_t global_min_points = 150;
+  // ...and to check an alignment in use (it has that place to beat).
+  uint32_t global_check_min_points = 60;
   double global_interval_s = 3.0;
   double global_window_s = 60.0;
   double global_clear_ratio = 0.5;
@@ -266,6 +268,9 @@ class Tracker {
   // use, or replaces it, as a pick would be taken (the cloud's centre on the plan is the
   // pivot of the correlative search after it).
   bool GlobalSearchDue(int64_t now_ns, size_t live_points) const;
+  // The wall points of the window a search needs: global_min_points to place,
+  // global_check_min_points to check an alignment in use.
+  uint32_t GlobalMinPoints() const;
   void MarkGlobalSearchStarted(int64_t now_ns) { last_global_ns_ = now_ns; }
   Decision OfferPlaces(const std::vector<GlobalPlace>& places, const Eigen::Vector2d& centre_slam,
                        uint64_t based_on_version, int64_t stamp_ns);

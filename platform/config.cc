@@ -176,6 +176,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (!(k.clear_ambiguity() >= 0 && k.clear_ambiguity() <= k.max_ambiguity()))
     return "tracking.clear_ambiguity must be in [0, max_ambiguity]";
   if (k.global_min_points() < 10) return "tracking.global_min_points must be at least 10";
+  if (k.global_check_min_points() < 10)
+    return "tracking.global_check_min_points must be at least 10";
   if (k.check_min_points() < 3) return "tracking.check_min_points must be at least 3";
   if (!(k.path_check_margin_m() >= 0 && k.path_check_margin_m() <= 5))
     return "tracking.path_check_margin_m must be in [0, 5]";
@@ -280,6 +282,7 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.clear_ambiguity = k.clear_ambiguity();
   t.global_search = k.global_search();
   t.global_min_points = k.global_min_points();
+  t.global_check_min_points = k.global_check_min_points();
   t.global_interval_s = k.global_interval_s();
   t.global_window_s = k.global_window_s();
   t.global_clear_ratio = k.global_clear_ratio();

@@ -710,7 +710,7 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
     const int64_t since =
         window_s > 0 ? latest_stamp_ns_ - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
     job.cloud = store_.Snapshot(config_.tracking().max_points(), nullptr, 0, since);
-    if (job.cloud.size() < tracker_.options().global_min_points) return std::nullopt;
+    if (job.cloud.size() < tracker_.GlobalMinPoints()) return std::nullopt;
     // Nothing scanned or dropped since the last search (the wearer stands, or walks
     // where the headset has meshed everything): the same places again, no new evidence.
     SearchedWalls walls{job.cloud.size(), Eigen::Vector2d::Zero(), tracker_.alignment().version};

@@ -664,6 +664,33 @@ TEST_F(TrackerTest, AWrongPickIsFlaggedOnAFewWalls) {
   EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kWallPick);
 }
 
+// The search places a wearer from global_min_points wall points of its window, but
+// checks an alignment in use (here a pick whose walls do not fit) from
+// global_check_min_points: a wrong pick in a hall whose few walls are far away is searched
+// for too.
+TEST_F(TrackerTest, ASearchChecksAPickOnFewerWallsThanItPlacesOn) {
+  TrackerOptions options;
+  options.global_search = true;
+  options.global_min_points = 150;
+  options.global_check_min_points = 60;
+  tracker_ = Tracker(options);
+  EXPECT_FALSE(tracker_.GlobalSearchDue(1, 1000)) << "no plan";
+  tracker_.SetPlan(index_);
+  EXPECT_EQ(tracker_.GlobalMinPoints(), 150u);
+  EXPECT_FALSE(tracker_.GlobalSearchDue(1, 149));
+  EXPECT_TRUE(tracker_.GlobalSearchDue(1, 150));
+  // A pick is the wearer's word: checked only once its walls do not fit it.
+  const Se2 wrong = Se2{Deg(90), {3.0, -2.0}} * truth_;
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(wrong, {4, 2}, {1, 0}), 1), "");
+  EXPECT_EQ(tracker_.GlobalMinPoints(), 60u);
+  EXPECT_FALSE(tracker_.GlobalSearchDue(2, 1000));
+  const std::vector<Eigen::Vector2d> cloud = Cloud();
+  EXPECT_FALSE(tracker_.Offer(ResultFor(truth_, cloud), cloud, 1, 2).accepted);
+  ASSERT_TRUE(tracker_.WallsDoNotFit());
+  EXPECT_FALSE(tracker_.GlobalSearchDue(3, 59));
+  EXPECT_TRUE(tracker_.GlobalSearchDue(3, 60));
+}
+
 // Two identical rooms 6 m apart: a registered alignment that would put the wearer in the
 // other room (a better fit than a slightly-off one) is beyond the filter's gate; it is
 // held until later results, over metres walked, keep landing on it (the navigation
