@@ -156,6 +156,7 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"tracking { drift_turn: -0.01 }", "drift_"},
            Case{"tracking { refine_window_s: inf }", "refine_window_s"},
            Case{"tracking { window_s: -5 }", "tracking.window_s"},
+           Case{"tracking { global_check_min_points: 5 }", "global_check_min_points"},
            Case{"tracking { wheel_odometry { window_s: nan } }", "wheel_odometry.window_s"},
            Case{"tracking { wheel_odometry { drift_window: 5000 } }", "drift_window"},
            Case{"routes { body_radius_m: 0 }", "routes.body_radius_m"},
