@@ -244,6 +244,15 @@ bool StepCrossesPlan(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const F
   return false;
 }
 
+std::vector<Eigen::Vector2d> PathOnPlan(const Se2& T_plan_slam,
+                                        const std::vector<Eigen::Vector2d>& path_slam) {
+  std::vector<Eigen::Vector2d> path_plan;
+  path_plan.reserve(path_slam.size());
+  for (const Eigen::Vector2d& p : path_slam)
+    if (p.allFinite()) path_plan.push_back(T_plan_slam * p);
+  return path_plan;
+}
+
 uint32_t PathCrossings(const std::vector<Eigen::Vector2d>& path, const FloorPlan& plan,
                        double end_margin_m) {
   if (path.size() < 2) return 0;

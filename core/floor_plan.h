@@ -7,6 +7,8 @@
 #include <string_view>
 #include <vector>
 
+#include "core/se2.h"
+
 namespace floorpose {
 
 struct Segment {
@@ -58,6 +60,10 @@ FloorPlanParse ParseTextFloorPlan(std::string_view text, std::string id);
 // centimetres off clips a door's jamb). Allocates nothing: for every pose.
 bool StepCrossesPlan(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const FloorPlan& plan,
                      double end_margin_m = 0);
+
+// A path's finite positions (slam frame, in order) moved onto the plan by T_plan_slam.
+std::vector<Eigen::Vector2d> PathOnPlan(const Se2& T_plan_slam,
+                                        const std::vector<Eigen::Vector2d>& path_slam);
 
 // How many steps of a path (plan frame, in order) cross a wall, as StepCrossesPlan.
 uint32_t PathCrossings(const std::vector<Eigen::Vector2d>& path, const FloorPlan& plan,

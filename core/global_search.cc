@@ -298,7 +298,7 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
   if (cloud.empty()) return {};
   centre /= static_cast<double>(cloud.size());
   std::vector<GlobalPlace> refined;
-  std::vector<Eigen::Vector2d> path_plan, cloud_plan;
+  std::vector<Eigen::Vector2d> cloud_plan;
   for (const GlobalPlace& place : places) {
     GlobalPlace r = place;
     const RegistrationResult icp_result = RegisterIcp(cloud, index, place.T_plan_slam, icp);
@@ -309,9 +309,7 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
     EvaluateFit(cloud, index, r.T_plan_slam, options.cap_m, icp.inlier_threshold_m, &fit,
                 &r.fit_mse);
     r.inlier_ratio = static_cast<double>(fit.inliers) / static_cast<double>(cloud.size());
-    path_plan.clear();
-    for (const Eigen::Vector2d& p : path_slam)
-      if (p.allFinite()) path_plan.push_back(r.T_plan_slam * p);
+    const std::vector<Eigen::Vector2d> path_plan = PathOnPlan(r.T_plan_slam, path_slam);
     r.path_crossings = PathCrossings(path_plan, index.plan(), options.path_margin_m);
     if (options.sight_reach_m > 0) {
       // The walls seen must have been in sight: one the plan hides from the whole walk

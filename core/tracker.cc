@@ -395,11 +395,8 @@ uint32_t Tracker::FirstPlaceCrossings(const Se2& T_plan_slam,
       (alignment_.source != AlignmentSource::kWallPick &&
        alignment_.source != AlignmentSource::kFlip))
     return 0;
-  std::vector<Eigen::Vector2d> path_plan;
-  path_plan.reserve(path_slam.size());
-  for (const Eigen::Vector2d& p : path_slam)
-    if (p.allFinite()) path_plan.push_back(T_plan_slam * p);
-  return PathCrossings(path_plan, index_->plan(), options_.path_check_margin_m);
+  return PathCrossings(PathOnPlan(T_plan_slam, path_slam), index_->plan(),
+                       options_.path_check_margin_m);
 }
 
 bool Tracker::FirstPlaceClear(const RegistrationResult& result) const {

@@ -717,8 +717,7 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
     for (const Eigen::Vector2d& p : job.cloud) walls.sum += p;
     if (last_searched_ == walls) return std::nullopt;
     last_searched_ = walls;
-    for (const auto& [stamp, position] : path_)
-      if (stamp >= since) job.path.push_back(position);
+    job.path = PathSince(since);
     job.global = plan_.global;
     job.index = tracker_.index();
     job.options.icp = tracker_.options().icp;
@@ -751,8 +750,7 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
   // A first place after a pick must not walk the wearer through walls (Tracker::Offer).
   if (tracker_.alignment().source == AlignmentSource::kWallPick ||
       tracker_.alignment().source == AlignmentSource::kFlip)
-    for (const auto& [stamp, position] : path_)
-      if (stamp >= min_stamp) job.path.push_back(position);
+    job.path = PathSince(min_stamp);
   const double refine_s = config_.tracking().refine_window_s();
   if (refine_s > 0) {
     job.recent = store_.Snapshot(config_.tracking().max_points(), &job.recent_normals,
@@ -775,6 +773,13 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
              job.cloud.size() >= options.min_points;
   running_ = true;
   return job;
+}
+
+std::vector<Eigen::Vector2d> Engine::PathSince(int64_t since_ns) const {
+  std::vector<Eigen::Vector2d> path;
+  for (const auto& [stamp, position] : path_)
+    if (stamp >= since_ns) path.push_back(position);
+  return path;
 }
 
 void Engine::OnRegistrationDone(Done done) {

@@ -141,6 +141,8 @@ class Engine {
   void FollowFloors(const DecodedPose& pose);
   void ChangeFloor(const FloorEntry& to, double slam_z, double height_m);
   void OnGlobalSearchDone(const Done& done);
+  // The wearer's slam positions (path_) stamped since_ns or later, in order.
+  std::vector<Eigen::Vector2d> PathSince(int64_t since_ns) const;
   // The recent trajectory under the alignment in use (PlanTrack).
   void PublishTrack();
   v1::PlanPose ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) const;
