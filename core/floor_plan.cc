@@ -268,35 +268,78 @@ uint32_t PathCrossings(const std::vector<Eigen::Vector2d>& path, const FloorPlan
   return crossings;
 }
 
+namespace {
+
+// Whether q is within reach of a position of the path (first), and whether one such
+// position has a clear line of sight to it (second): no wall of `near` across the line,
+// which stops standoff_m short of q so that q's own wall does not block it.
+std::pair<bool, bool> InSight(const Eigen::Vector2d& q, const std::vector<Eigen::Vector2d>& path,
+                              const std::vector<const Segment*>& near, double reach_m,
+                              double standoff_m, double end_margin_m) {
+  bool in_reach = false;
+  for (const Eigen::Vector2d& v : path) {
+    const Eigen::Vector2d d = q - v;
+    const double n2 = d.squaredNorm();
+    if (n2 > reach_m * reach_m) continue;
+    in_reach = true;
+    const double n = std::sqrt(n2);
+    if (n <= standoff_m) return {true, true};
+    const Eigen::Vector2d end = v + d * ((n - standoff_m) / n);
+    if (std::none_of(near.begin(), near.end(),
+                     [&](const Segment* s) { return StepCrosses(v, end, *s, end_margin_m); }))
+      return {true, true};
+  }
+  return {in_reach, false};
+}
+
+}  // namespace
+
 uint32_t HiddenPoints(const std::vector<Eigen::Vector2d>& points,
                       const std::vector<Eigen::Vector2d>& path, const FloorPlan& plan,
                       double reach_m, double standoff_m, double end_margin_m) {
   if (points.empty() || path.empty()) return 0;
   const std::vector<const Segment*> near = WallsNearPath(path, plan, reach_m);
-  const double reach2 = reach_m * reach_m;
   uint32_t hidden = 0;
   for (const Eigen::Vector2d& q : points) {
-    bool in_reach = false, seen = false;
-    for (const Eigen::Vector2d& v : path) {
-      const Eigen::Vector2d d = q - v;
-      const double n2 = d.squaredNorm();
-      if (n2 > reach2) continue;
-      in_reach = true;
-      const double n = std::sqrt(n2);
-      if (n <= standoff_m) {
-        seen = true;
-        break;
-      }
-      const Eigen::Vector2d end = v + d * ((n - standoff_m) / n);
-      if (std::none_of(near.begin(), near.end(),
-                       [&](const Segment* s) { return StepCrosses(v, end, *s, end_margin_m); })) {
-        seen = true;
-        break;
-      }
-    }
+    const auto [in_reach, seen] = InSight(q, path, near, reach_m, standoff_m, end_margin_m);
     hidden += in_reach && !seen;
   }
   return hidden;
+}
+
+UnseenWalls CountUnseenWalls(const std::vector<Eigen::Vector2d>& points,
+                             const std::vector<Eigen::Vector2d>& path, const FloorPlan& plan,
+                             const UnseenWallsOptions& options) {
+  UnseenWalls out;
+  if (path.empty() || !(options.reach_m > 0) || !(options.step_m > 0)) return out;
+  // The wall points in cells of match_m: a sample is explained by a point in its cell or
+  // the eight around it (then within match_m, give or take the cell's diagonal).
+  const double cell = std::max(options.match_m, 0.01);
+  const auto key = [&](const Eigen::Vector2d& p) {
+    return std::make_pair(static_cast<int64_t>(std::floor(p.x() / cell)),
+                          static_cast<int64_t>(std::floor(p.y() / cell)));
+  };
+  std::set<std::pair<int64_t, int64_t>> occupied;
+  for (const Eigen::Vector2d& p : points)
+    if (p.allFinite() && p.cwiseAbs().maxCoeff() < 1e6) occupied.insert(key(p));
+  const std::vector<const Segment*> near = WallsNearPath(path, plan, options.reach_m);
+  for (const Segment* s : near) {
+    const double length = s->Length();
+    if (length < options.min_length_m) continue;
+    const int n = static_cast<int>(std::ceil(length / options.step_m));
+    for (int i = 0; i <= n; ++i) {
+      const Eigen::Vector2d q = s->a + (s->b - s->a) * (n ? static_cast<double>(i) / n : 0.0);
+      if (!InSight(q, path, near, options.reach_m, options.standoff_m, options.end_margin_m).second)
+        continue;
+      ++out.expected;
+      const auto [kx, ky] = key(q);
+      bool seen = false;
+      for (int64_t dy = -1; dy <= 1 && !seen; ++dy)
+        for (int64_t dx = -1; dx <= 1 && !seen; ++dx) seen = occupied.count({kx + dx, ky + dy});
+      out.missed += !seen;
+    }
+  }
+  return out;
 }
 
 }  // namespace floorpose

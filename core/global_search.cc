@@ -323,6 +323,21 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
       r.fit_mse +=
           std::max(0.0, r.hidden_ratio - options.sight_allowance) * options.cap_m * options.cap_m;
     }
+    if (options.unseen_reach_m > 0) {
+      cloud_plan.clear();
+      for (const Eigen::Vector2d& p : cloud) cloud_plan.push_back(r.T_plan_slam * p);
+      UnseenWallsOptions unseen;
+      unseen.reach_m = options.unseen_reach_m;
+      unseen.standoff_m = options.sight_standoff_m;
+      unseen.end_margin_m = options.path_margin_m;
+      const UnseenWalls u = CountUnseenWalls(cloud_plan, path_plan, index.plan(), unseen);
+      r.unseen_expected = u.expected;
+      r.unseen_ratio = u.expected ? static_cast<double>(u.missed) / u.expected : 0.0;
+      // Few samples tell little: the excess counts over at least unseen_min_samples.
+      const double excess = std::max(0.0, u.missed - options.unseen_allowance * u.expected) /
+                            std::max<double>(u.expected, options.unseen_min_samples);
+      r.fit_mse += options.unseen_weight * excess * options.cap_m * options.cap_m;
+    }
     refined.push_back(r);
   }
   std::stable_sort(refined.begin(), refined.end(), [](const GlobalPlace& a, const GlobalPlace& b) {

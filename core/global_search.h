@@ -51,6 +51,10 @@ struct GlobalPlace {
   // ...and what share of the cloud's points the wearer could not have seen from the path
   // there, a plan wall in the way (HiddenPoints).
   double hidden_ratio = 0;
+  // ...and what share of the plan's walls in clear sight of the path there (within
+  // RefineOptions::unseen_reach_m) has no wall point near it (CountUnseenWalls).
+  double unseen_ratio = 0;
+  uint32_t unseen_expected = 0;  // wall samples in sight (the ratio's denominator)
   // RefinePlaces' order: 0 fits and walks through the fewest walls, 1 fits and walks
   // through more, 2 does not fit. Only places of one rank compete on their fits.
   int rank = 0;
@@ -119,8 +123,18 @@ struct RefineOptions {
   // within this reach: the headset's range and some drift) adds a miss, cap_m squared, to
   // the place's fit_mse. 0: no sight check.
   double sight_reach_m = 0;
-  double sight_standoff_m = 0.3;        // the line of sight stops this short of the point
-  double sight_allowance = 0.1;         // the share of hidden points that costs nothing
+  double sight_standoff_m = 0.3;  // the line of sight stops this short of the point
+  double sight_allowance = 0.1;   // the share of hidden points that costs nothing
+  // The plan's walls in clear sight within this reach of the path, but with no wall point
+  // near them (CountUnseenWalls): the samples missed beyond unseen_allowance of those in
+  // sight, as a share of those in sight (at least unseen_min_samples: a few samples tell
+  // little), add unseen_weight misses (cap_m squared) per whole share to fit_mse. A
+  // look-alike puts the walls seen on some of its walls, but walks the wearer past others
+  // nobody saw. 0: no such check.
+  double unseen_reach_m = 0;
+  double unseen_allowance = 0.5;
+  double unseen_weight = 0.5;
+  uint32_t unseen_min_samples = 20;
   double min_inliers = 0;               // places fitting a smaller share of the cloud go last...
   uint32_t max_crossings = UINT32_MAX;  // ...and those whose path crosses this many walls,
   double excuse_crossings_ratio = 0;    // ...unless every other place's error is this many

@@ -129,6 +129,11 @@ struct TrackerOptions {
   // A wall point hidden from the path under a place (HiddenPoints within this reach)
   // counts as a miss in its fit (RefineOptions::sight_reach_m); 0: no sight check.
   double global_sight_reach_m = 4.5;
+  // The plan's walls in clear sight within this reach of the path under a place, that
+  // no wall point lies near (CountUnseenWalls), beyond global_unseen_allowance of them,
+  // count against its fit (RefineOptions::unseen_reach_m); 0: no such check.
+  double global_unseen_reach_m = 2.0;
+  double global_unseen_allowance = 0.5;
 };
 
 // Thesis section 6.3.4: one wall point with its normal, seen by the headset (slam

@@ -728,6 +728,8 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
       job.refine.max_crossings = tracker_.options().global_max_crossings;
     job.refine.excuse_crossings_ratio = tracker_.options().global_excuse_crossings;
     job.refine.sight_reach_m = tracker_.options().global_sight_reach_m;
+    job.refine.unseen_reach_m = tracker_.options().global_unseen_reach_m;
+    job.refine.unseen_allowance = tracker_.options().global_unseen_allowance;
     job.initial = tracker_.alignment().T_plan_slam;
     job.version = tracker_.alignment().version;
     job.stamp_ns = latest_stamp_ns_;

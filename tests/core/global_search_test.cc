@@ -363,5 +363,44 @@ TEST(GlobalSearchTest, APlaceWhoseWallsTheWearerCouldNotHaveSeenFitsWorse) {
   EXPECT_EQ(sighted[1].rank, 0);
 }
 
+TEST(GlobalSearchTest, APlaceThatWalksTheWearerPastWallsNobodySawFitsWorse) {
+  // Two rooms with the same west wall: x = 0 (a room 5 m wide) and x = 10 (a corridor
+  // 1.5 m wide, its east wall at x = 11.5). The wearer walked 1 m east of the west wall
+  // and saw it, nothing else: in the room the east wall is out of reach, in the
+  // corridor it is 0.5 m away and nobody saw it (the whole of it in sight: 2 m or
+  // less from the walk).
+  auto parse = MakeFloorPlan(
+      "look-alikes",
+      {{{0, 0}, {0, 8}}, {{5, 0}, {5, 8}}, {{10, 0}, {10, 8}}, {{11.5, 0}, {11.5, 8}}});
+  ASSERT_TRUE(parse.ok()) << parse.error;
+  const ClosestWallIndex index(parse.plan);
+  std::vector<Eigen::Vector2d> seen, path;
+  for (double y = 0; y <= 8; y += 0.1) seen.emplace_back(0, y);
+  for (double y = 1; y <= 7; y += 0.25) path.emplace_back(1, y);
+  const Se2 truth{0, {0, 0}}, corridor{0, {10, 0}};
+  const std::vector<GlobalPlace> places = {{corridor}, {truth}};
+  RefineOptions options;
+  const auto blind = RefinePlaces(places, seen, path, index, IcpOptions{}, options);
+  ASSERT_EQ(blind.size(), 2u);
+  EXPECT_NEAR(blind[0].fit_mse, blind[1].fit_mse, 1e-6);  // both fit, both walk clear
+  options.unseen_reach_m = 2.0;
+  const auto checked = RefinePlaces(places, seen, path, index, IcpOptions{}, options);
+  ASSERT_EQ(checked.size(), 2u);
+  const auto at = [&](const std::vector<GlobalPlace>& p, const Se2& T) {
+    return (p[0].T_plan_slam.t - T.t).norm() < 0.05 ? p[0] : p[1];
+  };
+  EXPECT_EQ(at(checked, truth).unseen_ratio, 0.0);
+  EXPECT_NEAR(at(checked, corridor).unseen_ratio, 0.5, 0.05);  // the east wall of two
+  EXPECT_GT(at(checked, corridor).unseen_expected, options.unseen_min_samples);
+  // Half missed is within the allowance: no cost. With none allowed, half a miss a point.
+  EXPECT_NEAR(checked[0].fit_mse, checked[1].fit_mse, 1e-6);
+  options.unseen_allowance = 0;
+  const auto strict = RefinePlaces(places, seen, path, index, IcpOptions{}, options);
+  ASSERT_EQ(strict.size(), 2u);
+  EXPECT_LT((strict[0].T_plan_slam.t - truth.t).norm(), 0.05);
+  EXPECT_NEAR(strict[1].fit_mse - strict[0].fit_mse,
+              options.unseen_weight * strict[1].unseen_ratio * options.cap_m * options.cap_m, 1e-6);
+}
+
 }  // namespace
 }  // namespace floorpose

@@ -157,6 +157,8 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"tracking { refine_window_s: inf }", "refine_window_s"},
            Case{"tracking { window_s: -5 }", "tracking.window_s"},
            Case{"tracking { global_check_min_points: 5 }", "global_check_min_points"},
+           Case{"tracking { global_unseen_reach_m: -1 }", "global_unseen_reach_m"},
+           Case{"tracking { global_unseen_allowance: 1.5 }", "global_unseen_allowance"},
            Case{"tracking { wheel_odometry { window_s: nan } }", "wheel_odometry.window_s"},
            Case{"tracking { wheel_odometry { drift_window: 5000 } }", "drift_window"},
            Case{"routes { body_radius_m: 0 }", "routes.body_radius_m"},

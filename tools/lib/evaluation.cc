@@ -171,15 +171,33 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
         reg_times.push_back(done.result.time_ms);
       // For tuning: how far the result and the alignment in use put the wearer from the
       // truth (the engine logs its decision right after).
+      if (latest && spdlog::should_log(spdlog::level::debug) && done.job.global && done.job.index) {
+        // The true place as a search would have it: is it missed, or beaten?
+        const GlobalSearch& search = done.job.global->Get();
+        RefineOptions refine = done.job.refine;
+        refine.distinct_m = search.options().distinct_m;
+        refine.distinct_rad = search.options().distinct_rad;
+        const std::vector<GlobalPlace> true_place = RefinePlaces(
+            {{latest->T_plan_slam, search.Score(done.job.cloud, latest->T_plan_slam)}},
+            done.job.cloud, done.job.path, *done.job.index, done.job.options.icp, refine);
+        for (const GlobalPlace& place : true_place)
+          spdlog::debug(
+              "truth itself: scoring {:.3f}, refined fit {:.4f}, {:.0f}% inliers, {} crossings, "
+              "{:.0f}% hidden, {:.0f}% unseen of {}, {:.2f} m from the truth",
+              place.score, place.fit_mse, 100 * place.inlier_ratio, place.path_crossings,
+              100 * place.hidden_ratio, 100 * place.unseen_ratio, place.unseen_expected,
+              (place.T_plan_slam * latest->slam - latest->plan).norm());
+      }
       if (latest && spdlog::should_log(spdlog::level::debug) && done.job.global) {
         for (const GlobalPlace& place : done.places)
           spdlog::debug(
               "at {:.1f} s, truth: place scoring {:.3f} (fit {:.4f}, {:.0f}% inliers, {} "
-              "crossings, {:.0f}% hidden, rank {}) is {:.2f} m off at the wearer; T {:.3f} {:.3f} "
-              "{:.4f}, wearer {:.2f} {:.2f} (slam)",
+              "crossings, {:.0f}% hidden, {:.0f}% unseen of {}, rank {}) is {:.2f} m off at the "
+              "wearer; T "
+              "{:.3f} {:.3f} {:.4f}, wearer {:.2f} {:.2f} (slam)",
               static_cast<double>(latest->stamp_ns - inputs.front().stamp_ns) * 1e-9, place.score,
               place.fit_mse, 100 * place.inlier_ratio, place.path_crossings,
-              100 * place.hidden_ratio, place.rank,
+              100 * place.hidden_ratio, 100 * place.unseen_ratio, place.unseen_expected, place.rank,
               (place.T_plan_slam * latest->slam - latest->plan).norm(), place.T_plan_slam.t.x(),
               place.T_plan_slam.t.y(), place.T_plan_slam.theta, latest->slam.x(), latest->slam.y());
       } else if (latest && done.job.index && spdlog::should_log(spdlog::level::debug)) {
