@@ -325,8 +325,9 @@ UnseenWalls CountUnseenWalls(const std::vector<Eigen::Vector2d>& points,
   const std::vector<const Segment*> near = WallsNearPath(path, plan, options.reach_m);
   for (const Segment* s : near) {
     const double length = s->Length();
-    if (length < options.min_length_m) continue;
-    const int n = static_cast<int>(std::ceil(length / options.step_m));
+    const double steps = std::ceil(length / options.step_m);
+    if (length < options.min_length_m || !(steps < 1e6)) continue;  // not a wall to walk past
+    const int n = static_cast<int>(steps);
     for (int i = 0; i <= n; ++i) {
       const Eigen::Vector2d q = s->a + (s->b - s->a) * (n ? static_cast<double>(i) / n : 0.0);
       if (!InSight(q, path, near, options.reach_m, options.standoff_m, options.end_margin_m).second)
