@@ -131,8 +131,9 @@ struct TrackerOptions {
   double global_sight_reach_m = 4.5;
   // The plan's walls in clear sight within this reach of the path under a place, that
   // no wall point lies near (CountUnseenWalls), beyond global_unseen_allowance of them,
-  // count against its fit (RefineOptions::unseen_reach_m); 0: no such check.
-  double global_unseen_reach_m = 2.0;
+  // count against its fit (RefineOptions::unseen_reach_m); 0: no such check (the default:
+  // docs/evaluation.md, "The unseen walls", has why).
+  double global_unseen_reach_m = 0;
   double global_unseen_allowance = 0.5;
 };
 
