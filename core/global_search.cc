@@ -311,11 +311,13 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
     r.inlier_ratio = static_cast<double>(fit.inliers) / static_cast<double>(cloud.size());
     const std::vector<Eigen::Vector2d> path_plan = PathOnPlan(r.T_plan_slam, path_slam);
     r.path_crossings = PathCrossings(path_plan, index.plan(), options.path_margin_m);
+    if (options.sight_reach_m > 0 || options.unseen_reach_m > 0) {
+      cloud_plan.clear();
+      for (const Eigen::Vector2d& p : cloud) cloud_plan.push_back(r.T_plan_slam * p);
+    }
     if (options.sight_reach_m > 0) {
       // The walls seen must have been in sight: one the plan hides from the whole walk
       // is a miss, however well it lies on a wall (a look-alike room behind a wall).
-      cloud_plan.clear();
-      for (const Eigen::Vector2d& p : cloud) cloud_plan.push_back(r.T_plan_slam * p);
       const uint32_t hidden =
           HiddenPoints(cloud_plan, path_plan, index.plan(), options.sight_reach_m,
                        options.sight_standoff_m, options.path_margin_m);
@@ -324,8 +326,6 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
           std::max(0.0, r.hidden_ratio - options.sight_allowance) * options.cap_m * options.cap_m;
     }
     if (options.unseen_reach_m > 0) {
-      cloud_plan.clear();
-      for (const Eigen::Vector2d& p : cloud) cloud_plan.push_back(r.T_plan_slam * p);
       UnseenWallsOptions unseen;
       unseen.reach_m = options.unseen_reach_m;
       unseen.standoff_m = options.sight_standoff_m;

@@ -115,6 +115,16 @@ const GlobalSearch& Engine::GlobalSearchCache::Get() {
   return *search_;
 }
 
+std::vector<GlobalPlace> Engine::RefineAsSearch(const Job& job,
+                                                const std::vector<GlobalPlace>& places) {
+  if (!job.global || !job.index) return {};
+  const GlobalSearch& search = job.global->Get();
+  RefineOptions refine = job.refine;  // places are one place as the search has them
+  refine.distinct_m = search.options().distinct_m;
+  refine.distinct_rad = search.options().distinct_rad;
+  return RefinePlaces(places, job.cloud, job.path, *job.index, job.options.icp, refine);
+}
+
 Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
   Done done;
   if (job.global) {
@@ -122,13 +132,7 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
     const GlobalSearch& search = job.global->Get();
     done.places = search.Search(job.cloud, search.WallHeadings(job.cloud));
     if (job.version > 0) done.places.push_back({job.initial});  // the place in use, refined too
-    if (job.index) {
-      RefineOptions refine = job.refine;  // places are one place as the search has them
-      refine.distinct_m = search.options().distinct_m;
-      refine.distinct_rad = search.options().distinct_rad;
-      done.places =
-          RefinePlaces(done.places, job.cloud, job.path, *job.index, job.options.icp, refine);
-    }
+    if (job.index) done.places = RefineAsSearch(job, done.places);
     done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
     done.result.points = static_cast<uint32_t>(job.cloud.size());
   } else if (job.index) {

@@ -173,13 +173,9 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
       // truth (the engine logs its decision right after).
       if (latest && spdlog::should_log(spdlog::level::debug) && done.job.global && done.job.index) {
         // The true place as a search would have it: is it missed, or beaten?
-        const GlobalSearch& search = done.job.global->Get();
-        RefineOptions refine = done.job.refine;
-        refine.distinct_m = search.options().distinct_m;
-        refine.distinct_rad = search.options().distinct_rad;
-        const std::vector<GlobalPlace> true_place = RefinePlaces(
-            {{latest->T_plan_slam, search.Score(done.job.cloud, latest->T_plan_slam)}},
-            done.job.cloud, done.job.path, *done.job.index, done.job.options.icp, refine);
+        const double score = done.job.global->Get().Score(done.job.cloud, latest->T_plan_slam);
+        const std::vector<GlobalPlace> true_place =
+            platform::Engine::RefineAsSearch(done.job, {{latest->T_plan_slam, score}});
         for (const GlobalPlace& place : true_place)
           spdlog::debug(
               "truth itself: scoring {:.3f}, refined fit {:.4f}, {:.0f}% inliers, {} crossings, "
@@ -193,8 +189,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
           spdlog::debug(
               "at {:.1f} s, truth: place scoring {:.3f} (fit {:.4f}, {:.0f}% inliers, {} "
               "crossings, {:.0f}% hidden, {:.0f}% unseen of {}, rank {}) is {:.2f} m off at the "
-              "wearer; T "
-              "{:.3f} {:.3f} {:.4f}, wearer {:.2f} {:.2f} (slam)",
+              "wearer; T {:.3f} {:.3f} {:.4f}, wearer {:.2f} {:.2f} (slam)",
               static_cast<double>(latest->stamp_ns - inputs.front().stamp_ns) * 1e-9, place.score,
               place.fit_mse, 100 * place.inlier_ratio, place.path_crossings,
               100 * place.hidden_ratio, 100 * place.unseen_ratio, place.unseen_expected, place.rank,
