@@ -307,11 +307,30 @@ uint32_t HiddenPoints(const std::vector<Eigen::Vector2d>& points,
   return hidden;
 }
 
+std::vector<Eigen::Vector2d> WallSamplesInSight(const std::vector<Eigen::Vector2d>& path,
+                                                const FloorPlan& plan,
+                                                const WallSampleOptions& options) {
+  std::vector<Eigen::Vector2d> samples;
+  if (path.empty() || !(options.reach_m > 0) || !(options.step_m > 0)) return samples;
+  const std::vector<const Segment*> near = WallsNearPath(path, plan, options.reach_m);
+  for (const Segment* s : near) {
+    const double length = s->Length();
+    const double steps = std::ceil(length / options.step_m);
+    if (length < options.min_length_m || !(steps < 1e6)) continue;  // not a wall to walk past
+    const int n = static_cast<int>(steps);
+    for (int i = 0; i <= n; ++i) {
+      const Eigen::Vector2d q = s->a + (s->b - s->a) * (n ? static_cast<double>(i) / n : 0.0);
+      if (InSight(q, path, near, options.reach_m, options.standoff_m, options.end_margin_m).second)
+        samples.push_back(q);
+    }
+  }
+  return samples;
+}
+
 UnseenWalls CountUnseenWalls(const std::vector<Eigen::Vector2d>& points,
                              const std::vector<Eigen::Vector2d>& path, const FloorPlan& plan,
                              const UnseenWallsOptions& options) {
   UnseenWalls out;
-  if (path.empty() || !(options.reach_m > 0) || !(options.step_m > 0)) return out;
   // The wall points in cells of match_m: a sample is explained by a point in its cell or
   // the eight around it (then within match_m, give or take the cell's diagonal).
   const double cell = std::max(options.match_m, 0.01);
@@ -322,23 +341,13 @@ UnseenWalls CountUnseenWalls(const std::vector<Eigen::Vector2d>& points,
   std::set<std::pair<int64_t, int64_t>> occupied;
   for (const Eigen::Vector2d& p : points)
     if (p.allFinite() && p.cwiseAbs().maxCoeff() < 1e6) occupied.insert(key(p));
-  const std::vector<const Segment*> near = WallsNearPath(path, plan, options.reach_m);
-  for (const Segment* s : near) {
-    const double length = s->Length();
-    const double steps = std::ceil(length / options.step_m);
-    if (length < options.min_length_m || !(steps < 1e6)) continue;  // not a wall to walk past
-    const int n = static_cast<int>(steps);
-    for (int i = 0; i <= n; ++i) {
-      const Eigen::Vector2d q = s->a + (s->b - s->a) * (n ? static_cast<double>(i) / n : 0.0);
-      if (!InSight(q, path, near, options.reach_m, options.standoff_m, options.end_margin_m).second)
-        continue;
-      ++out.expected;
-      const auto [kx, ky] = key(q);
-      bool seen = false;
-      for (int64_t dy = -1; dy <= 1 && !seen; ++dy)
-        for (int64_t dx = -1; dx <= 1 && !seen; ++dx) seen = occupied.count({kx + dx, ky + dy});
-      out.missed += !seen;
-    }
+  for (const Eigen::Vector2d& q : WallSamplesInSight(path, plan, options.walls)) {
+    ++out.expected;
+    const auto [kx, ky] = key(q);
+    bool seen = false;
+    for (int64_t dy = -1; dy <= 1 && !seen; ++dy)
+      for (int64_t dx = -1; dx <= 1 && !seen; ++dx) seen = occupied.count({kx + dx, ky + dy});
+    out.missed += !seen;
   }
   return out;
 }

@@ -79,21 +79,31 @@ uint32_t HiddenPoints(const std::vector<Eigen::Vector2d>& points,
                       const std::vector<Eigen::Vector2d>& path, const FloorPlan& plan,
                       double reach_m, double standoff_m, double end_margin_m = 0);
 
-// The plan's walls the wearer should have seen from the path (plan frame) and did not:
-// wall samples every step_m within reach_m of a position of the path with a clear line
-// of sight (as HiddenPoints), and of those, how many have no wall point (plan frame)
-// within about match_m. Under the true place a headset misses few walls it walked past
-// (glass, clutter and a plan that lacks changes aside); under a look-alike the walls seen
-// lie on some of its walls, but the plan has others there that nobody saw.
-struct UnseenWallsOptions {
-  double reach_m = 2.0;  // walls surely scanned when passed this close
+// The plan's walls in clear sight of a path (plan frame): samples every step_m along the
+// walls min_length_m or longer, kept where a position of the path within reach_m has a
+// clear line of sight to them (as HiddenPoints). What a headset walking that path scans.
+struct WallSampleOptions {
+  double reach_m = 2.0;
   double step_m = 0.25;
-  double match_m = 0.3;
   double standoff_m = 0.3;
   double end_margin_m = 0;
-  // Shorter walls (a column, a jamb, a thin partition drawn as a box) do not count: the
-  // headset meshes them poorly and plans draw them loosely.
-  double min_length_m = 1.5;
+  double min_length_m = 0;
+};
+std::vector<Eigen::Vector2d> WallSamplesInSight(const std::vector<Eigen::Vector2d>& path,
+                                                const FloorPlan& plan,
+                                                const WallSampleOptions& options);
+
+// The plan's walls the wearer should have seen from the path (plan frame) and did not:
+// WallSamplesInSight, and of those, how many have no wall point (plan frame) within about
+// match_m. Under the true place a headset misses few walls it walked past (glass, clutter
+// and a plan that lacks changes aside); under a look-alike the walls seen lie on some of
+// its walls, but the plan has others there that nobody saw.
+struct UnseenWallsOptions {
+  // Walls surely scanned when passed within 2 m. Shorter walls than 1.5 m (a column, a
+  // jamb, a thin partition drawn as a box) do not count: the headset meshes them poorly
+  // and plans draw them loosely.
+  WallSampleOptions walls{2.0, 0.25, 0.3, 0, 1.5};
+  double match_m = 0.3;
 };
 struct UnseenWalls {
   uint32_t expected = 0, missed = 0;

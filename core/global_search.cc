@@ -260,10 +260,12 @@ std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>
     }
     return false;
   };
-  while (!open.empty() && places.size() < options_.places) {
+  while (!open.empty() && places.size() < max_places()) {
     const Node n = open.top();
     open.pop();
     if (!places.empty() && n.bound < options_.min_ratio * places.front().score) break;
+    if (places.size() >= options_.places && n.bound < options_.crowd_ratio * places.front().score)
+      break;
     if (covered(n)) continue;
     if (n.h == 0) {
       const double angle = angles[static_cast<size_t>(n.rotation)];
@@ -327,9 +329,9 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
     }
     if (options.unseen_reach_m > 0) {
       UnseenWallsOptions unseen;
-      unseen.reach_m = options.unseen_reach_m;
-      unseen.standoff_m = options.sight_standoff_m;
-      unseen.end_margin_m = options.path_margin_m;
+      unseen.walls.reach_m = options.unseen_reach_m;
+      unseen.walls.standoff_m = options.sight_standoff_m;
+      unseen.walls.end_margin_m = options.path_margin_m;
       const UnseenWalls u = CountUnseenWalls(cloud_plan, path_plan, index.plan(), unseen);
       r.unseen_expected = u.expected;
       r.unseen_ratio = u.expected ? static_cast<double>(u.missed) / u.expected : 0.0;
@@ -364,7 +366,10 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
     });
   };
   const auto fits = [&](const GlobalPlace& d) {
-    return d.inlier_ratio >= options.min_inliers &&
+    const bool blind = options.unseen_reach_m > 0 &&
+                       d.unseen_expected >= options.unseen_min_samples &&
+                       d.unseen_ratio > options.unseen_max_ratio;
+    return d.inlier_ratio >= options.min_inliers && !blind &&
            (d.path_crossings < options.max_crossings ||
             (options.excuse_crossings_ratio > 0 && clear_of_all(d)));
   };
@@ -374,7 +379,57 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
   for (GlobalPlace& d : distinct) d.rank = !fits(d) ? 2 : d.path_crossings > fewest ? 1 : 0;
   std::stable_sort(distinct.begin(), distinct.end(),
                    [](const GlobalPlace& a, const GlobalPlace& b) { return a.rank < b.rank; });
+  if (options.alike_reach_m > 0 && !distinct.empty() && distinct.front().rank == 0)
+    for (size_t i = 1; i < distinct.size() && distinct[i].rank == 0; ++i)
+      distinct[i].alike =
+          PlanAlike(path_slam, distinct.front().T_plan_slam, distinct[i].T_plan_slam, index,
+                    options.alike_reach_m, 0.3, options.path_margin_m)
+              .share;
   return distinct;
+}
+
+std::vector<GlobalPlace> HalfTurnTwins(const GlobalSearch& search, const FloorPlan& plan,
+                                       const Se2& place,
+                                       const std::vector<Eigen::Vector2d>& path_slam,
+                                       const std::vector<double>& headings,
+                                       const WallSampleOptions& in_sight) {
+  std::vector<Eigen::Vector2d> walls =
+      WallSamplesInSight(PathOnPlan(place, path_slam), plan, in_sight);
+  if (walls.empty()) return {};
+  const Se2 to_slam = place.Inverse();
+  for (Eigen::Vector2d& q : walls) q = to_slam * q;
+  const double turned = place.theta + M_PI;
+  std::vector<double> twin_headings;
+  for (double h : headings)
+    if (std::abs(WrapAngle(h - turned)) <= search.options().distinct_rad)
+      twin_headings.push_back(h);
+  if (twin_headings.empty()) twin_headings.push_back(WrapAngle(turned));
+  return search.Search(walls, twin_headings);
+}
+
+PlanAlikeness PlanAlike(const std::vector<Eigen::Vector2d>& path_slam, const Se2& a, const Se2& b,
+                        const ClosestWallIndex& index, double reach_m, double match_m,
+                        double end_margin_m) {
+  WallSampleOptions walls;
+  walls.reach_m = reach_m;
+  walls.end_margin_m = end_margin_m;
+  // The share of `from`'s walls in sight that lie on the plan's walls again under `to`.
+  const auto share = [&](const Se2& from, const Se2& to, uint32_t* samples) {
+    const std::vector<Eigen::Vector2d> seen =
+        WallSamplesInSight(PathOnPlan(from, path_slam), index.plan(), walls);
+    const Se2 move = to * from.Inverse();
+    uint32_t on_wall = 0;
+    for (const Eigen::Vector2d& q : seen) {
+      const std::optional<ClosestWall> c = index.Query(move * q);
+      on_wall += c && c->distance <= match_m;
+    }
+    *samples = static_cast<uint32_t>(seen.size());
+    return seen.empty() ? 0.0 : static_cast<double>(on_wall) / static_cast<double>(seen.size());
+  };
+  uint32_t n_ab = 0, n_ba = 0;
+  const double ab = share(a, b, &n_ab);
+  const double ba = share(b, a, &n_ba);
+  return {std::min(ab, ba), std::min(n_ab, n_ba)};
 }
 
 }  // namespace floorpose

@@ -28,8 +28,12 @@ struct GlobalSearchOptions {
   double max_cells = 4e6;        // cells grow beyond cell_m to stay within this
   double rotation_step_rad = 0;  // 0: one cell at the cloud's farthest point (Hess eq. 7)
   size_t max_points = 400;       // the cloud is thinned (voxels, then a stride) to this many
-  size_t places = 4;             // distinct places returned at most, best first
-  double distinct_m = 1.5;       // places closer than this at the cloud's centre...
+  size_t places = 4;             // distinct places returned at most, best first...
+  // ...but more, up to crowd_places, while they score at least crowd_ratio of the best: in
+  // a hall of repeated bays the first few of many as good are a lottery. 0: no more.
+  double crowd_ratio = 0;
+  size_t crowd_places = 12;
+  double distinct_m = 1.5;                  // places closer than this at the cloud's centre...
   double distinct_rad = 10.0 * M_PI / 180;  // ...and turned less than this are one place
   double min_score = 0.25;                  // mean likelihood a place must reach (0..1)...
   double min_ratio = 0.5;  // ...and this share of the best place's (worse ones tell nothing)
@@ -55,6 +59,10 @@ struct GlobalPlace {
   // RefineOptions::unseen_reach_m) has no wall point near it (CountUnseenWalls).
   double unseen_ratio = 0;
   uint32_t unseen_expected = 0;  // wall samples in sight (the ratio's denominator)
+  // ...and, for a place of rank 0 after the first, how alike the plan around the walk
+  // looks under it and under the first (PlanAlike's share; -1: not compared). Walls
+  // cannot tell two places apart where the plan looks the same from both walks.
+  double alike = -1;
   // RefinePlaces' order: 0 fits and walks through the fewest walls, 1 fits and walks
   // through more, 2 does not fit. Only places of one rank compete on their fits.
   int rank = 0;
@@ -91,6 +99,11 @@ class GlobalSearch {
 
   const GridGeometry& grid() const { return grid_; }
   const GlobalSearchOptions& options() const { return options_; }
+  // The most places Search returns (places, or crowd_places with a crowd_ratio).
+  size_t max_places() const {
+    return options_.crowd_ratio > 0 ? std::max(options_.places, options_.crowd_places)
+                                    : options_.places;
+  }
   size_t MemoryBytes() const;
 
  private:
@@ -135,6 +148,13 @@ struct RefineOptions {
   double unseen_allowance = 0.5;
   double unseen_weight = 0.5;
   uint32_t unseen_min_samples = 20;
+  // A place under which more than this share of those samples (unseen_min_samples or
+  // more) went unseen does not fit, however its points lie: true places rarely miss more
+  // than three quarters of the walls they walk past (docs/evaluation.md).
+  double unseen_max_ratio = 0.8;
+  // Places of rank 0 after the first are compared with it (PlanAlike) over the plan's
+  // walls in sight within this reach of the path. 0: not compared.
+  double alike_reach_m = 0;
   double min_inliers = 0;               // places fitting a smaller share of the cloud go last...
   uint32_t max_crossings = UINT32_MAX;  // ...and those whose path crosses this many walls,
   double excuse_crossings_ratio = 0;    // ...unless every other place's error is this many
@@ -155,5 +175,32 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
                                       const std::vector<Eigen::Vector2d>& path_slam,
                                       const ClosestWallIndex& index, const IcpOptions& icp,
                                       const RefineOptions& options = {});
+
+// The half-turn twins of a place: where the plan's own walls in sight of the walk there
+// (WallSamplesInSight of the path, slam frame, under `place`) fit again at the headings
+// half a turn from it (those of `headings` within distinct_rad of it, or that heading
+// alone), best first. Grid places, to be refined on the wearer's walls. A hall that looks
+// the same both ways round has one, which the grid's few best places on the wearer's
+// drifting walls often leave out; the plan's walls have no drift and no clutter.
+std::vector<GlobalPlace> HalfTurnTwins(const GlobalSearch& search, const FloorPlan& plan,
+                                       const Se2& place,
+                                       const std::vector<Eigen::Vector2d>& path_slam,
+                                       const std::vector<double>& headings,
+                                       const WallSampleOptions& in_sight);
+
+// How alike the plan looks from the wearer's walk under two places: the plan's walls in
+// sight of the path (slam frame) under `a` (WallSamplesInSight within reach_m, every
+// 0.25 m), moved to where `b` puts them (b a^-1), and the share of them within match_m of
+// a wall of the plan; the same from b to a; the lower of the two shares. 1 for a room's
+// half-turn twin about its centre or a copy of a room, lower the more of what the walk
+// passes differs (a door, a corridor on one side only). `samples` is the smaller count;
+// with none in sight the share is 0.
+struct PlanAlikeness {
+  double share = 0;
+  uint32_t samples = 0;
+};
+PlanAlikeness PlanAlike(const std::vector<Eigen::Vector2d>& path_slam, const Se2& a, const Se2& b,
+                        const ClosestWallIndex& index, double reach_m, double match_m = 0.3,
+                        double end_margin_m = 0);
 
 }  // namespace floorpose

@@ -227,7 +227,8 @@ bool Tracker::WallsDoNotFit() const {
 
 Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
                                        const Eigen::Vector2d& centre_slam,
-                                       uint64_t based_on_version, int64_t stamp_ns) {
+                                       uint64_t based_on_version, int64_t stamp_ns,
+                                       const std::vector<double>& full_grid_scores) {
   Decision d;
   if (!index_) {
     d.reason = "no floor plan loaded";
@@ -263,9 +264,20 @@ Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
   const double next =
       usable.size() > 1 ? usable[1].fit_mse : std::numeric_limits<double>::infinity();
   const double lead = std::min(next / std::max(best.fit_mse, 1e-12), 1e6);
-  const bool fits = best.rank == 0 && best.inlier_ratio >= options_.global_min_inliers;
-  const bool ahead = fits && lead >= options_.global_min_lead;
-  const bool clear = fits && best.fit_mse < options_.global_clear_ratio * next;
+  // A twin the walls cannot tell from the best: whatever the fits say, it is noise.
+  const auto twin = std::find_if(usable.begin() + 1, usable.end(), [&](const GlobalPlace& p) {
+    return options_.global_alike_share > 0 && p.rank == 0 &&
+           p.alike >= options_.global_alike_share &&
+           !(best.fit_mse < options_.global_clear_ratio * p.fit_mse);
+  });
+  const bool fits =
+      best.rank == 0 && best.inlier_ratio >= options_.global_min_inliers && twin == usable.end();
+  // The grid may have left out places as good as those it returned.
+  const std::vector<double>& grid = full_grid_scores;
+  const bool crowded = options_.global_crowded_ratio > 0 && grid.size() >= 2 &&
+                       grid.back() >= options_.global_crowded_ratio * grid.front();
+  const bool ahead = fits && !crowded && lead >= options_.global_min_lead;
+  const bool clear = fits && !crowded && best.fit_mse < options_.global_clear_ratio * next;
   const bool same = leading_place_ && same_place(best.T_plan_slam, *leading_place_);
   // Still first, but by less than global_min_lead: the streak holds, the search does
   // not count towards it.
@@ -284,6 +296,18 @@ Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
                 "searches in a row, leads multiplying to %.1f (%u and %.1f to win)",
                 100 * best.inlier_ratio, lead, lead_count_, lead_product_, confirm, need);
   d.reason = text;
+  if (crowded) {
+    std::snprintf(text, sizeof text, "; the grid's %zu places all score within %.0f%% of the best",
+                  grid.size(), 100 * (1 - grid.back() / grid.front()));
+    d.reason += text;
+  }
+  if (twin != usable.end()) {
+    std::snprintf(text, sizeof text,
+                  "; a place %.1f m away looks the same from the walk (%.0f%% of the walls in "
+                  "sight)",
+                  (twin->T_plan_slam * centre_slam - centre_plan).norm(), 100 * twin->alike);
+    d.reason += text;
+  }
 
   const bool in_use = has_alignment() && same_place(best.T_plan_slam, alignment_.T_plan_slam);
   if (in_use) {

@@ -131,10 +131,23 @@ struct TrackerOptions {
   double global_sight_reach_m = 4.5;
   // The plan's walls in clear sight within this reach of the path under a place, that
   // no wall point lies near (CountUnseenWalls), beyond global_unseen_allowance of them,
-  // count against its fit (RefineOptions::unseen_reach_m); 0: no such check (the default:
-  // docs/evaluation.md, "The unseen walls", has why).
-  double global_unseen_reach_m = 0;
+  // count against its fit, and beyond RefineOptions::unseen_max_ratio it does not fit
+  // (RefineOptions::unseen_reach_m); 0: no such check.
+  double global_unseen_reach_m = 2.0;
   double global_unseen_allowance = 0.5;
+  // A place of rank 0 that the best is not clear of (global_clear_ratio), under which the
+  // plan looks the same from the walk as under the best (PlanAlike over the walls within
+  // global_sight_reach_m: at least this share of them lie on walls under both), is one
+  // the walls cannot tell from it: a hall's half-turn twin, a copy of a room. The best
+  // does not lead while there is one (its row starts over). The engine's search also
+  // looks for the best's half-turn twin. 0: neither.
+  double global_alike_share = 0.9;
+  // A search whose grid returned as many places as it may, the last scoring at least this
+  // share of the first's grid score, is crowded: more places as good may be left out (a
+  // hall of repeated bays), the true one or a twin among them, so its lead does not count
+  // (the row holds). The engine's grid returns up to 12 places while they score this
+  // share of the best (GlobalSearchOptions::crowd_ratio). 0: no such rule.
+  double global_crowded_ratio = 0.98;
 };
 
 // Thesis section 6.3.4: one wall point with its normal, seen by the headset (slam
@@ -278,8 +291,11 @@ class Tracker {
   // global_check_min_points to check an alignment in use.
   uint32_t GlobalMinPoints() const;
   void MarkGlobalSearchStarted(int64_t now_ns) { last_global_ns_ = now_ns; }
+  // `full_grid_scores`: when the grid returned as many places as it may, their grid
+  // scores, best first (for global_crowded_ratio); else empty.
   Decision OfferPlaces(const std::vector<GlobalPlace>& places, const Eigen::Vector2d& centre_slam,
-                       uint64_t based_on_version, int64_t stamp_ns);
+                       uint64_t based_on_version, int64_t stamp_ns,
+                       const std::vector<double>& full_grid_scores = {});
   // Whether the walls of the latest registration fit the alignment in use under
   // global_min_inliers (the latest fit says so; nothing before the first).
   bool WallsDoNotFit() const;

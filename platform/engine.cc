@@ -111,7 +111,7 @@ std::string Engine::Start() {
 }
 
 const GlobalSearch& Engine::GlobalSearchCache::Get() {
-  std::call_once(once_, [this] { search_ = std::make_unique<GlobalSearch>(plan_); });
+  std::call_once(once_, [this] { search_ = std::make_unique<GlobalSearch>(plan_, options_); });
   return *search_;
 }
 
@@ -130,9 +130,25 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
   if (job.global) {
     const int64_t t0 = now_ns();
     const GlobalSearch& search = job.global->Get();
-    done.places = search.Search(job.cloud, search.WallHeadings(job.cloud));
+    const std::vector<double> headings = search.WallHeadings(job.cloud);
+    done.places = search.Search(job.cloud, headings);
+    if (done.places.size() >= search.max_places())
+      for (const GlobalPlace& p : done.places) done.full_grid_scores.push_back(p.score);
     if (job.version > 0) done.places.push_back({job.initial});  // the place in use, refined too
     if (job.index) done.places = RefineAsSearch(job, done.places);
+    if (job.refine.alike_reach_m > 0 && !done.places.empty() && done.places.front().rank == 0) {
+      // The best's half-turn twin, refined and ranked with the others, so that the
+      // tracker sees the twin the best must beat (the grid's few places often lack it).
+      WallSampleOptions in_sight;
+      in_sight.reach_m = job.refine.alike_reach_m;
+      in_sight.end_margin_m = job.refine.path_margin_m;
+      const std::vector<GlobalPlace> twins = HalfTurnTwins(
+          search, job.index->plan(), done.places.front().T_plan_slam, job.path, headings, in_sight);
+      if (!twins.empty()) {
+        done.places.insert(done.places.end(), twins.begin(), twins.end());
+        done.places = RefineAsSearch(job, done.places);
+      }
+    }
     done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
     done.result.points = static_cast<uint32_t>(job.cloud.size());
   } else if (job.index) {
@@ -212,8 +228,11 @@ Engine::PlanAssets Engine::BuildPlan(const FloorPlanParse& parsed, const std::st
                parsed.plan.segments.size(), parsed.dropped_segments,
                parsed.plan.max.x() - parsed.plan.min.x(), parsed.plan.max.y() - parsed.plan.min.y(),
                static_cast<double>(a.index->MemoryBytes()) / 1e6);
-  if (config_.tracking().global_search())
-    a.global = std::make_shared<GlobalSearchCache>(parsed.plan);
+  if (config_.tracking().global_search()) {
+    GlobalSearchOptions search;
+    search.crowd_ratio = config_.tracking().global_crowded_ratio();
+    a.global = std::make_shared<GlobalSearchCache>(parsed.plan, search);
+  }
   a.id = parsed.plan.id;
   a.digest = FloorPlanDigest(parsed.plan);
   const int64_t t0 = now_ns_();
@@ -689,8 +708,8 @@ void Engine::OnGlobalSearchDone(const Done& done) {
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
   for (const Eigen::Vector2d& p : done.job.cloud) centre += p;
   centre /= static_cast<double>(std::max<size_t>(1, done.job.cloud.size()));
-  const Tracker::Decision d =
-      tracker_.OfferPlaces(places, centre, done.job.version, done.job.stamp_ns);
+  const Tracker::Decision d = tracker_.OfferPlaces(places, centre, done.job.version,
+                                                   done.job.stamp_ns, done.full_grid_scores);
   spdlog::info(
       "global search: {} points, {} place(s), best fit {:.4f} ({:.0f}% inliers), next {:.4f}, "
       "{:.1f} ms: {}{}",
@@ -734,6 +753,8 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
     job.refine.sight_reach_m = tracker_.options().global_sight_reach_m;
     job.refine.unseen_reach_m = tracker_.options().global_unseen_reach_m;
     job.refine.unseen_allowance = tracker_.options().global_unseen_allowance;
+    if (tracker_.options().global_alike_share > 0)
+      job.refine.alike_reach_m = tracker_.options().global_sight_reach_m;
     job.initial = tracker_.alignment().T_plan_slam;
     job.version = tracker_.alignment().version;
     job.stamp_ns = latest_stamp_ns_;

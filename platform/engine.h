@@ -47,11 +47,13 @@ class Engine {
   // The plan's GlobalSearch grids, built on first use by the thread that runs the job.
   class GlobalSearchCache {
    public:
-    explicit GlobalSearchCache(FloorPlan plan) : plan_(std::move(plan)) {}
+    GlobalSearchCache(FloorPlan plan, GlobalSearchOptions options)
+        : plan_(std::move(plan)), options_(options) {}
     const GlobalSearch& Get();
 
    private:
     FloorPlan plan_;
+    GlobalSearchOptions options_;
     std::once_flag once_;
     std::unique_ptr<GlobalSearch> search_;
   };
@@ -83,6 +85,9 @@ class Engine {
     bool refined = false;             // the result is job.recent's
     std::optional<double> turn;       // HoughRotation of job.cloud, when job.turn
     std::vector<GlobalPlace> places;  // of a global job, best first
+    // ...and the grid's scores of its places when it returned as many as it may (more
+    // may score as well), best first; else empty.
+    std::vector<double> full_grid_scores;
   };
   // Runs a job; now_ns() is read before and after to fill result.time_ms.
   static Done Run(Job job, const std::function<int64_t()>& now_ns);

@@ -208,7 +208,7 @@ TEST(UnseenWallsTest, CountsWallsInSightOfThePathThatNoPointLiesOn) {
   for (double x = 2; x <= 8; x += 0.25) path.emplace_back(x, 1);
   for (double x = 0; x <= 10; x += 0.1) south.emplace_back(x, 0.02);
   UnseenWallsOptions options;
-  options.reach_m = 2.0;
+  options.walls.reach_m = 2.0;
   const UnseenWalls u = CountUnseenWalls(south, path, parse.plan, options);
   // Within 2 m of the path: x from 0.27 to 9.73 on both corridor walls, samples every
   // 0.25 m, 0.5 to 9.5 (37 a wall); the room's far wall is behind the north wall.
@@ -220,16 +220,16 @@ TEST(UnseenWallsTest, CountsWallsInSightOfThePathThatNoPointLiesOn) {
   EXPECT_EQ(CountUnseenWalls(both, path, parse.plan, options).missed, 0u);
   // Walls shorter than min_length_m are not expected; a shorter reach expects fewer; no
   // path or no reach, nothing.
-  options.min_length_m = 20;
+  options.walls.min_length_m = 20;
   EXPECT_EQ(CountUnseenWalls(south, path, parse.plan, options).expected, 0u);
-  options.min_length_m = 1.5;
-  options.reach_m = 1.2;
+  options.walls.min_length_m = 1.5;
+  options.walls.reach_m = 1.2;
   EXPECT_LT(CountUnseenWalls(south, path, parse.plan, options).expected, 74u);
   EXPECT_EQ(CountUnseenWalls(south, {}, parse.plan, options).expected, 0u);
-  options.reach_m = 0;
+  options.walls.reach_m = 0;
   EXPECT_EQ(CountUnseenWalls(south, path, parse.plan, options).expected, 0u);
   // Non-finite points are ignored, not matched.
-  options.reach_m = 2.0;
+  options.walls.reach_m = 2.0;
   std::vector<Eigen::Vector2d> bad = south;
   bad.emplace_back(std::numeric_limits<double>::quiet_NaN(), 2.0);
   EXPECT_EQ(CountUnseenWalls(bad, path, parse.plan, options).missed, 37u);

@@ -400,6 +400,106 @@ TEST(GlobalSearchTest, APlaceThatWalksTheWearerPastWallsNobodySawFitsWorse) {
   EXPECT_LT((strict[0].T_plan_slam.t - truth.t).norm(), 0.05);
   EXPECT_NEAR(strict[1].fit_mse - strict[0].fit_mse,
               options.unseen_weight * strict[1].unseen_ratio * options.cap_m * options.cap_m, 1e-6);
+  // A place that misses more than unseen_max_ratio of the walls it walks past does not
+  // fit at all, however its points lie: last, with rank 2.
+  EXPECT_EQ(strict[1].rank, 0);
+  options.unseen_max_ratio = 0.4;
+  const auto gated = RefinePlaces(places, seen, path, index, IcpOptions{}, options);
+  ASSERT_EQ(gated.size(), 2u);
+  EXPECT_LT((gated[0].T_plan_slam.t - truth.t).norm(), 0.05);
+  EXPECT_EQ(gated[0].rank, 0);
+  EXPECT_EQ(gated[1].rank, 2);
+}
+
+TEST(GlobalSearchTest, ARoomAndItsHalfTurnLookAlikeFromTheWalkUnlessAPartitionTellsThemApart) {
+  // A room 10 x 6 m, walked along its middle (x 3..7, y 3; slam = plan under `a`). Half
+  // a turn about its centre, `b`, the walk passes the same walls: alike.
+  const std::vector<Segment> room = {
+      {{0, 0}, {10, 0}}, {{10, 0}, {10, 6}}, {{10, 6}, {0, 6}}, {{0, 6}, {0, 0}}};
+  auto parse = MakeFloorPlan("room", room);
+  ASSERT_TRUE(parse.ok()) << parse.error;
+  const ClosestWallIndex index(parse.plan);
+  std::vector<Eigen::Vector2d> path;
+  for (double x = 3; x <= 7; x += 0.25) path.emplace_back(x, 3);
+  const Se2 a{0, {0, 0}}, b{M_PI, {10, 6}};
+  const PlanAlikeness same = PlanAlike(path, a, b, index, 4.5);
+  EXPECT_GT(same.samples, 80u);
+  EXPECT_GT(same.share, 0.99);
+  // HalfTurnTwins finds b from a, with the plan's walls in sight of the walk.
+  WallSampleOptions in_sight;
+  in_sight.reach_m = 4.5;
+  const GlobalSearch search(parse.plan);
+  const std::vector<GlobalPlace> twins = HalfTurnTwins(search, parse.plan, a, path, {}, in_sight);
+  ASSERT_FALSE(twins.empty());
+  EXPECT_LT((twins[0].T_plan_slam * Eigen::Vector2d(5, 3) - Eigen::Vector2d(5, 3)).norm(), 0.2);
+  EXPECT_LT(std::abs(WrapAngle(twins[0].T_plan_slam.theta - M_PI)), 0.05);
+  EXPECT_TRUE(HalfTurnTwins(search, parse.plan, a, {}, {}, in_sight).empty());  // no walk
+  // RefinePlaces compares the places after the first with it (on the room's walls, both
+  // fit and walk clear).
+  std::vector<Eigen::Vector2d> seen;
+  for (double x = 0; x <= 10; x += 0.1) seen.emplace_back(x, 0), seen.emplace_back(x, 6);
+  RefineOptions options;
+  options.alike_reach_m = 4.5;
+  const auto refined = RefinePlaces({{a}, {b}}, seen, path, index, IcpOptions{}, options);
+  ASSERT_EQ(refined.size(), 2u);
+  EXPECT_EQ(refined[0].alike, -1);
+  EXPECT_GT(refined[1].alike, 0.99);
+  // A partition 1 m east of the walk's end (x = 8, y 1..5) is not there half a turn
+  // away, and it hides part of the east wall: the walk tells the two apart.
+  auto walled = room;
+  walled.push_back({{8, 1}, {8, 5}});
+  parse = MakeFloorPlan("room with a partition", walled);
+  ASSERT_TRUE(parse.ok()) << parse.error;
+  const ClosestWallIndex walled_index(parse.plan);
+  const PlanAlikeness different = PlanAlike(path, a, b, walled_index, 4.5);
+  EXPECT_GT(different.samples, 60u);
+  EXPECT_LT(different.share, 0.9);
+  EXPECT_GT(different.share, 0.5);
+  // No walk, nothing in sight: nothing alike.
+  const PlanAlikeness none = PlanAlike({}, a, b, index, 4.5);
+  EXPECT_EQ(none.samples, 0u);
+  EXPECT_EQ(none.share, 0.0);
+}
+
+TEST(GlobalSearchTest, InAHallOfRepeatedBaysThePlacesAsGoodKeepComing) {
+  // Eight square rooms in a row, 4 m each: the walls of one fit every room at four
+  // headings. Four places come back, or, with a crowd ratio, up to crowd_places, all
+  // scoring as well as the best.
+  std::vector<Segment> walls = {{{0, 0}, {32, 0}}, {{0, 4}, {32, 4}}};
+  for (double x = 0; x <= 32; x += 4) walls.push_back({{x, 0}, {x, 4}});
+  auto parse = MakeFloorPlan("bays", walls);
+  ASSERT_TRUE(parse.ok()) << parse.error;
+  std::vector<Eigen::Vector2d> room;
+  for (double t = 0.1; t < 4; t += 0.1) {
+    room.emplace_back(8 + t, 0), room.emplace_back(8 + t, 4);
+    room.emplace_back(8, t), room.emplace_back(12, t);
+  }
+  GlobalSearchOptions options;
+  const GlobalSearch few(parse.plan, options);
+  EXPECT_EQ(few.max_places(), options.places);
+  EXPECT_EQ(few.Search(room).size(), options.places);
+  options.crowd_ratio = 0.98;
+  const GlobalSearch crowd(parse.plan, options);
+  EXPECT_EQ(crowd.max_places(), options.crowd_places);
+  const std::vector<GlobalPlace> places = crowd.Search(room);
+  ASSERT_EQ(places.size(), options.crowd_places);
+  for (const GlobalPlace& p : places) EXPECT_GE(p.score, 0.98 * places.front().score);
+  // A room unlike the others (a partition across its middle, which the walls seen show)
+  // fits only itself, both ways round: the places after those two score less, and no
+  // more than `places` come back.
+  walls.push_back({{10, 1}, {10, 3}});
+  parse = MakeFloorPlan("bays and a partition", walls);
+  ASSERT_TRUE(parse.ok()) << parse.error;
+  for (double y = 1.1; y < 3; y += 0.1) room.emplace_back(10, y);
+  const GlobalSearch one(parse.plan, options);
+  const std::vector<GlobalPlace> unique = one.Search(room);
+  ASSERT_EQ(unique.size(), options.places);
+  EXPECT_LT(unique.back().score, 0.98 * unique.front().score);
+  for (int i = 0; i < 2; ++i) {  // the room itself, and its half-turn about (10, 2)
+    EXPECT_LT((unique[i].T_plan_slam * Eigen::Vector2d(10, 2) - Eigen::Vector2d(10, 2)).norm(),
+              0.3);
+    EXPECT_LT(std::abs(std::sin(unique[i].T_plan_slam.theta)), 0.1);
+  }
 }
 
 }  // namespace

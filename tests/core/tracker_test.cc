@@ -853,6 +853,58 @@ TEST_F(GlobalPlacementDecisionTest, APlaceALittleAheadSearchAfterSearchLeadsInTh
   EXPECT_TRUE(Offer({truth_place_, twin}, 35).accepted);
 }
 
+TEST_F(GlobalPlacementDecisionTest, APlaceWithATwinTheWallsCannotTellApartNeverLeads) {
+  // A hall that looks the same both ways round: the search finds the place and its
+  // half-turn, under which the plan around the walk looks the same (RefinePlaces' alike
+  // share). The one fits 15% better search after search, which in such a hall is the
+  // drift's noise, not evidence: no lead counts while the twin is there (the default
+  // global_alike_share, 0.9).
+  GlobalPlace twin = other_place_;
+  twin.fit_mse = truth_place_.fit_mse * 1.15;
+  twin.alike = 0.98;
+  for (int i = 0; i < 8; ++i) {
+    const Tracker::Decision d = Offer({truth_place_, twin}, i);
+    EXPECT_FALSE(d.accepted) << i;
+    EXPECT_THAT(d.reason, HasSubstr("looks the same from the walk (98% of the walls in sight)"));
+  }
+  EXPECT_FALSE(tracker_.has_alignment());
+  // A twin it is clear of (the walk left the symmetric part of the hall: the walls tell
+  // them apart after all) does not hold it back; nor does a place where the plan looks
+  // different (a share under global_alike_share).
+  twin.fit_mse = truth_place_.fit_mse * 2.5;
+  EXPECT_FALSE(Offer({truth_place_, twin}, 10).accepted);
+  EXPECT_TRUE(Offer({truth_place_, twin}, 11).accepted);
+  tracker_.Reset();
+  twin.fit_mse = truth_place_.fit_mse * 1.3;
+  twin.alike = 0.8;
+  for (int i = 0; i < 2; ++i) EXPECT_FALSE(Offer({truth_place_, twin}, 20 + i).accepted);
+  EXPECT_TRUE(Offer({truth_place_, twin}, 22).accepted);  // 1.3^3 = 2.2
+}
+
+TEST_F(GlobalPlacementDecisionTest, ASearchWhoseGridWasCrowdedDoesNotCount) {
+  // The grid returned as many places as it may, all scoring within 2% of the best: the
+  // true place may be among those it left out, so the refined best's lead (however
+  // clear) does not count (the default global_crowded_ratio, 0.98). With places spread
+  // out, it does.
+  const std::vector<double> crowded(12, 0.9), spread = {0.9, 0.85, 0.8, 0.8};
+  for (int i = 0; i < 5; ++i) {
+    const Tracker::Decision d =
+        tracker_.OfferPlaces({truth_place_, other_place_}, centre_, 0, i, crowded);
+    EXPECT_FALSE(d.accepted) << i;
+    EXPECT_THAT(d.reason, HasSubstr("the grid's 12 places all score within 0% of the best"));
+  }
+  EXPECT_FALSE(tracker_.OfferPlaces({truth_place_, other_place_}, centre_, 0, 10, spread).accepted);
+  EXPECT_TRUE(tracker_.OfferPlaces({truth_place_, other_place_}, centre_, 0, 11, spread).accepted);
+  // A crowded search in between neither counts nor starts the row of leads over.
+  tracker_.Reset();
+  EXPECT_FALSE(tracker_.OfferPlaces({truth_place_, other_place_}, centre_, 0, 20, spread).accepted);
+  EXPECT_FALSE(
+      tracker_.OfferPlaces({truth_place_, other_place_}, centre_, 0, 21, crowded).accepted);
+  const Tracker::Decision after =
+      tracker_.OfferPlaces({truth_place_, other_place_}, centre_, 0, 22, spread);
+  EXPECT_THAT(after.reason, HasSubstr("ahead 2 searches in a row"));
+}
+
 TEST_F(GlobalPlacementDecisionTest, OnlyAPlaceThatFitsAndWalksClearLeads) {
   // The best place walks the wearer through walls or fits too few of them (RefinePlaces
   // ranks it 2, with every other place): however clear its fit, it never leads.

@@ -188,11 +188,14 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
         for (const GlobalPlace& place : done.places)
           spdlog::debug(
               "at {:.1f} s, truth: place scoring {:.3f} (fit {:.4f}, {:.0f}% inliers, {} "
-              "crossings, {:.0f}% hidden, {:.0f}% unseen of {}, rank {}) is {:.2f} m off at the "
+              "crossings, {:.0f}% hidden, {:.0f}% unseen of {}, {:.0f}% alike, rank {}) is {:.2f} "
+              "m "
+              "off at the "
               "wearer; T {:.3f} {:.3f} {:.4f}, wearer {:.2f} {:.2f} (slam)",
               static_cast<double>(latest->stamp_ns - inputs.front().stamp_ns) * 1e-9, place.score,
               place.fit_mse, 100 * place.inlier_ratio, place.path_crossings,
-              100 * place.hidden_ratio, 100 * place.unseen_ratio, place.unseen_expected, place.rank,
+              100 * place.hidden_ratio, 100 * place.unseen_ratio, place.unseen_expected,
+              100 * place.alike, place.rank,
               (place.T_plan_slam * latest->slam - latest->plan).norm(), place.T_plan_slam.t.x(),
               place.T_plan_slam.t.y(), place.T_plan_slam.theta, latest->slam.x(), latest->slam.y());
       } else if (latest && done.job.index && spdlog::should_log(spdlog::level::debug)) {
