@@ -264,11 +264,12 @@ Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
   const double next =
       usable.size() > 1 ? usable[1].fit_mse : std::numeric_limits<double>::infinity();
   const double lead = std::min(next / std::max(best.fit_mse, 1e-12), 1e6);
-  // A twin the walls cannot tell from the best: whatever the fits say, it is noise.
+  // A twin the walls cannot tell from the best: unless the fits differ by far more than
+  // the drift makes them, the difference is noise.
   const auto twin = std::find_if(usable.begin() + 1, usable.end(), [&](const GlobalPlace& p) {
     return options_.global_alike_share > 0 && p.rank == 0 &&
            p.alike >= options_.global_alike_share &&
-           !(best.fit_mse < options_.global_clear_ratio * p.fit_mse);
+           !(best.fit_mse < options_.global_twin_clear_ratio * p.fit_mse);
   });
   const bool fits =
       best.rank == 0 && best.inlier_ratio >= options_.global_min_inliers && twin == usable.end();

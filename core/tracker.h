@@ -135,13 +135,16 @@ struct TrackerOptions {
   // (RefineOptions::unseen_reach_m); 0: no such check.
   double global_unseen_reach_m = 2.0;
   double global_unseen_allowance = 0.5;
-  // A place of rank 0 that the best is not clear of (global_clear_ratio), under which the
+  // A place of rank 0 that the best is not clear of (global_twin_clear_ratio), under which the
   // plan looks the same from the walk as under the best (PlanAlike over the walls within
   // global_sight_reach_m: at least this share of them lie on walls under both), is one
   // the walls cannot tell from it: a hall's half-turn twin, a copy of a room. The best
   // does not lead while there is one (its row starts over). The engine's search also
   // looks for the best's half-turn twin. 0: neither.
   double global_alike_share = 0.9;
+  // ...a twin the best is not clear of at this ratio (its error under this times the
+  // twin's): twins 97-99% alike were seen to fit 2.4 times apart by the drift alone.
+  double global_twin_clear_ratio = 0.25;
   // A search whose grid returned as many places as it may, the last scoring at least this
   // share of the first's grid score, is crowded: more places as good may be left out (a
   // hall of repeated bays), the true one or a twin among them, so its lead does not count

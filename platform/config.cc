@@ -199,6 +199,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
     return "tracking.global_unseen_allowance must be in [0, 1]";
   if (!(k.global_alike_share() >= 0 && k.global_alike_share() <= 1))
     return "tracking.global_alike_share must be in [0, 1]";
+  if (!(k.global_twin_clear_ratio() > 0 && k.global_twin_clear_ratio() <= 1))
+    return "tracking.global_twin_clear_ratio must be in (0, 1]";
   if (!(k.global_crowded_ratio() >= 0 && k.global_crowded_ratio() <= 1))
     return "tracking.global_crowded_ratio must be in [0, 1]";
   if (k.global_confirm_searches() < 1) return "tracking.global_confirm_searches must be at least 1";
@@ -304,6 +306,7 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.global_unseen_reach_m = k.global_unseen_reach_m();
   t.global_unseen_allowance = k.global_unseen_allowance();
   t.global_alike_share = k.global_alike_share();
+  t.global_twin_clear_ratio = k.global_twin_clear_ratio();
   t.global_crowded_ratio = k.global_crowded_ratio();
   t.turn_sigma_rad = k.turn_sigma_deg() * M_PI / 180.0;
   const double drift_rad = k.drift_heading_deg() * M_PI / 180.0;

@@ -868,12 +868,15 @@ TEST_F(GlobalPlacementDecisionTest, APlaceWithATwinTheWallsCannotTellApartNeverL
     EXPECT_THAT(d.reason, HasSubstr("looks the same from the walk (98% of the walls in sight)"));
   }
   EXPECT_FALSE(tracker_.has_alignment());
-  // A twin it is clear of (the walk left the symmetric part of the hall: the walls tell
-  // them apart after all) does not hold it back; nor does a place where the plan looks
-  // different (a share under global_alike_share).
+  // Twice as good is not enough against a twin (global_twin_clear_ratio: the drift makes
+  // twins fit that far apart). A twin it is clear of at four times (the walk left the
+  // symmetric part of the hall: the walls tell them apart after all) does not hold it
+  // back; nor does a place where the plan looks different (under global_alike_share).
   twin.fit_mse = truth_place_.fit_mse * 2.5;
-  EXPECT_FALSE(Offer({truth_place_, twin}, 10).accepted);
-  EXPECT_TRUE(Offer({truth_place_, twin}, 11).accepted);
+  for (int i = 0; i < 4; ++i) EXPECT_FALSE(Offer({truth_place_, twin}, 8 + i).accepted) << i;
+  twin.fit_mse = truth_place_.fit_mse * 4.5;
+  EXPECT_FALSE(Offer({truth_place_, twin}, 12).accepted);
+  EXPECT_TRUE(Offer({truth_place_, twin}, 13).accepted);
   tracker_.Reset();
   twin.fit_mse = truth_place_.fit_mse * 1.3;
   twin.alike = 0.8;

@@ -161,6 +161,7 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"tracking { global_unseen_allowance: 1.5 }", "global_unseen_allowance"},
            Case{"tracking { global_alike_share: -0.5 }", "global_alike_share"},
            Case{"tracking { global_crowded_ratio: 2 }", "global_crowded_ratio"},
+           Case{"tracking { global_twin_clear_ratio: 0 }", "global_twin_clear_ratio"},
            Case{"tracking { wheel_odometry { window_s: nan } }", "wheel_odometry.window_s"},
            Case{"tracking { wheel_odometry { drift_window: 5000 } }", "drift_window"},
            Case{"routes { body_radius_m: 0 }", "routes.body_radius_m"},
