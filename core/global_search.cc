@@ -291,7 +291,8 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
                                       const std::vector<Eigen::Vector2d>& points_slam,
                                       const std::vector<Eigen::Vector2d>& path_slam,
                                       const ClosestWallIndex& index, const IcpOptions& icp,
-                                      const RefineOptions& options) {
+                                      const RefineOptions& options,
+                                      const std::vector<GlobalPlace>& ranked) {
   std::vector<Eigen::Vector2d> cloud;
   cloud.reserve(points_slam.size());
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
@@ -299,7 +300,7 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
     if (p.allFinite()) cloud.push_back(p), centre += p;
   if (cloud.empty()) return {};
   centre /= static_cast<double>(cloud.size());
-  std::vector<GlobalPlace> refined;
+  std::vector<GlobalPlace> refined = ranked;  // refined on these walls already
   std::vector<Eigen::Vector2d> cloud_plan;
   for (const GlobalPlace& place : places) {
     GlobalPlace r = place;
@@ -376,7 +377,10 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
   uint32_t fewest = UINT32_MAX;
   for (const GlobalPlace& d : distinct)
     if (fits(d)) fewest = std::min(fewest, d.path_crossings);
-  for (GlobalPlace& d : distinct) d.rank = !fits(d) ? 2 : d.path_crossings > fewest ? 1 : 0;
+  for (GlobalPlace& d : distinct) {
+    d.rank = !fits(d) ? 2 : d.path_crossings > fewest ? 1 : 0;
+    d.alike = -1;  // against this call's best, below
+  }
   std::stable_sort(distinct.begin(), distinct.end(),
                    [](const GlobalPlace& a, const GlobalPlace& b) { return a.rank < b.rank; });
   if (options.alike_reach_m > 0 && !distinct.empty() && distinct.front().rank == 0)

@@ -169,12 +169,14 @@ struct RefineOptions {
 // refined fits tell them apart. Places that converge onto one another are merged. The
 // order, best first: places that fit (min_inliers) before those that do not; among them,
 // those whose path crosses no more walls than the fewest of their group first; best fit
-// first within each.
+// first within each. `ranked`, places an earlier call returned on the same cloud and
+// path, are ranked with the new ones without being refined and scored again.
 std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
                                       const std::vector<Eigen::Vector2d>& points_slam,
                                       const std::vector<Eigen::Vector2d>& path_slam,
                                       const ClosestWallIndex& index, const IcpOptions& icp,
-                                      const RefineOptions& options = {});
+                                      const RefineOptions& options = {},
+                                      const std::vector<GlobalPlace>& ranked = {});
 
 // The half-turn twins of a place: where the plan's own walls in sight of the walk there
 // (WallSamplesInSight of the path, slam frame, under `place`) fit again at the headings

@@ -116,13 +116,14 @@ const GlobalSearch& Engine::GlobalSearchCache::Get() {
 }
 
 std::vector<GlobalPlace> Engine::RefineAsSearch(const Job& job,
-                                                const std::vector<GlobalPlace>& places) {
+                                                const std::vector<GlobalPlace>& places,
+                                                const std::vector<GlobalPlace>& ranked) {
   if (!job.global || !job.index) return {};
   const GlobalSearch& search = job.global->Get();
   RefineOptions refine = job.refine;  // places are one place as the search has them
   refine.distinct_m = search.options().distinct_m;
   refine.distinct_rad = search.options().distinct_rad;
-  return RefinePlaces(places, job.cloud, job.path, *job.index, job.options.icp, refine);
+  return RefinePlaces(places, job.cloud, job.path, *job.index, job.options.icp, refine, ranked);
 }
 
 Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
@@ -144,10 +145,7 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
       in_sight.end_margin_m = job.refine.path_margin_m;
       const std::vector<GlobalPlace> twins = HalfTurnTwins(
           search, job.index->plan(), done.places.front().T_plan_slam, job.path, headings, in_sight);
-      if (!twins.empty()) {
-        done.places.insert(done.places.end(), twins.begin(), twins.end());
-        done.places = RefineAsSearch(job, done.places);
-      }
+      if (!twins.empty()) done.places = RefineAsSearch(job, twins, done.places);
     }
     done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
     done.result.points = static_cast<uint32_t>(job.cloud.size());

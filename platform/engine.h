@@ -93,8 +93,10 @@ class Engine {
   static Done Run(Job job, const std::function<int64_t()>& now_ns);
   // Places refined and ranked on a search job's walls and path, as Run does with the
   // search's own (the tools score the true place this way).
+  // `ranked`: places it returned before on this job, ranked with the new ones.
   static std::vector<GlobalPlace> RefineAsSearch(const Job& job,
-                                                 const std::vector<GlobalPlace>& places);
+                                                 const std::vector<GlobalPlace>& places,
+                                                 const std::vector<GlobalPlace>& ranked = {});
 
   // now_ns stamps statuses: the daemon's monotonic clock, or a virtual one.
   Engine(v1::FloorposedConfig config, Publish publish, std::function<int64_t()> now_ns);

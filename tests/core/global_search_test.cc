@@ -215,6 +215,15 @@ TEST(GlobalSearchTest, RefinedPlacesFitToCentimetresAndComeBestFirst) {
               std::abs(WrapAngle(refined[i].T_plan_slam.theta - refined[0].T_plan_slam.theta)),
           0.1);
     }
+    // Places refined already are ranked again with new ones, not refined again: the same
+    // places come back, in the same order, with the same fits.
+    const std::vector<GlobalPlace> again =
+        RefinePlaces({}, scan.points, {}, index, IcpOptions{}, {}, refined);
+    ASSERT_EQ(again.size(), refined.size());
+    for (size_t i = 0; i < again.size(); ++i) {
+      EXPECT_EQ(again[i].fit_mse, refined[i].fit_mse) << i;
+      EXPECT_EQ(again[i].T_plan_slam.t, refined[i].T_plan_slam.t) << i;
+    }
   }
   // Nothing in, nothing out; non-finite points are ignored.
   EXPECT_TRUE(RefinePlaces({}, {}, {}, index, IcpOptions{}).empty());

@@ -189,9 +189,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
           spdlog::debug(
               "at {:.1f} s, truth: place scoring {:.3f} (fit {:.4f}, {:.0f}% inliers, {} "
               "crossings, {:.0f}% hidden, {:.0f}% unseen of {}, {:.0f}% alike, rank {}) is {:.2f} "
-              "m "
-              "off at the "
-              "wearer; T {:.3f} {:.3f} {:.4f}, wearer {:.2f} {:.2f} (slam)",
+              "m off at the wearer; T {:.3f} {:.3f} {:.4f}, wearer {:.2f} {:.2f} (slam)",
               static_cast<double>(latest->stamp_ns - inputs.front().stamp_ns) * 1e-9, place.score,
               place.fit_mse, 100 * place.inlier_ratio, place.path_crossings,
               100 * place.hidden_ratio, 100 * place.unseen_ratio, place.unseen_expected,
