@@ -294,6 +294,9 @@ class Tracker {
   // global_check_min_points to check an alignment in use.
   uint32_t GlobalMinPoints() const;
   void MarkGlobalSearchStarted(int64_t now_ns) { last_global_ns_ = now_ns; }
+  // The best place of the latest search, if any: the next search refines it with the
+  // grid's places, since the grid's coarse scores may leave it out.
+  const std::optional<Se2>& leading_place() const { return leading_place_; }
   // `full_grid_scores`: when the grid returned as many places as it may, their grid
   // scores, best first (for global_crowded_ratio); else empty.
   Decision OfferPlaces(const std::vector<GlobalPlace>& places, const Eigen::Vector2d& centre_slam,

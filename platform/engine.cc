@@ -136,6 +136,7 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
     if (done.places.size() >= search.max_places())
       for (const GlobalPlace& p : done.places) done.full_grid_scores.push_back(p.score);
     if (job.version > 0) done.places.push_back({job.initial});  // the place in use, refined too
+    for (const Se2& seed : job.seeds) done.places.push_back({seed});
     if (job.index) done.places = RefineAsSearch(job, done.places);
     if (job.refine.alike_reach_m > 0 && !done.places.empty() && done.places.front().rank == 0) {
       // The best's half-turn twin, refined and ranked with the others, so that the
@@ -755,6 +756,7 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
       job.refine.alike_reach_m = tracker_.options().global_sight_reach_m;
     job.initial = tracker_.alignment().T_plan_slam;
     job.version = tracker_.alignment().version;
+    if (tracker_.leading_place()) job.seeds.push_back(*tracker_.leading_place());
     job.stamp_ns = latest_stamp_ns_;
     running_ = true;
     return job;

@@ -78,6 +78,8 @@ class Engine {
     // The wearer's slam positions over the same window (a search's, or a first place's
     // after a pick: Tracker::Offer).
     std::vector<Eigen::Vector2d> path;
+    // Places a search refines with the grid's (the previous search's best).
+    std::vector<Se2> seeds;
   };
   struct Done {
     Job job;

@@ -247,7 +247,9 @@ TEST_F(EngineInputTest, TheSearchWaitsForNewWalls) {
   engine_->OnHeadsetPose(Wrap(Pose(1 * s)));
   auto first = engine_->TakeDueJob();
   ASSERT_TRUE(first && first->global);
+  EXPECT_TRUE(first->seeds.empty());
   engine_->OnRegistrationDone(Engine::Run(std::move(*first), [] { return int64_t{0}; }));
+  ASSERT_TRUE(engine_->tracker().leading_place());
   // The wearer stands; the interval passes with nothing new scanned: no search.
   engine_->OnHeadsetPose(Wrap(Pose(5 * s)));
   EXPECT_FALSE(engine_->TakeDueJob());
@@ -256,6 +258,13 @@ TEST_F(EngineInputTest, TheSearchWaitsForNewWalls) {
   engine_->OnHeadsetPose(Wrap(Pose(9 * s)));
   auto second = engine_->TakeDueJob();
   ASSERT_TRUE(second && second->global);
+  // ...with the first search's best refined again, whatever the grid returns this time.
+  ASSERT_EQ(second->seeds.size(), 1u);
+  EXPECT_THAT(second->seeds[0], testing::IsNearlySe2(*engine_->tracker().leading_place(), 0, 0));
+  const Engine::Done done = Engine::Run(std::move(*second), [] { return int64_t{0}; });
+  EXPECT_TRUE(std::any_of(done.places.begin(), done.places.end(), [&](const GlobalPlace& p) {
+    return (p.T_plan_slam.t - engine_->tracker().leading_place()->t).norm() < 1.0;
+  }));
 }
 
 // A building of two floors (a .floors set): the daemon follows the wearer up and down the
