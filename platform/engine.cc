@@ -464,14 +464,17 @@ void Engine::OnMeshDelta(const Envelope& e) {
                         std::to_string(mesh.mesh_id));
   }
   ExploreWalls(points);
+  const size_t extracted = points.size();
   store_.Upsert(mesh.mesh_id, std::move(points), mesh.stamp_ns);
   if (mesh.change == v1::MeshDelta::ADDED && !known)
     counters_.set_meshes_added(counters_.meshes_added() + 1);
   else
     counters_.set_meshes_updated(counters_.meshes_updated() + 1);
-  spdlog::debug("mesh {} {}: {} wall points of {} triangles; store {} points in {} meshes",
-                mesh.mesh_id, v1::MeshDelta::Change_Name(mesh.change), report.vertical_triangles,
-                report.triangles, store_.points(), store_.meshes());
+  spdlog::debug(
+      "mesh {} {}: {} wall points ({} of {} triangles vertical, {} points outside the height "
+      "band); store {} points in {} meshes",
+      mesh.mesh_id, v1::MeshDelta::Change_Name(mesh.change), extracted, report.vertical_triangles,
+      report.triangles, report.outside_band, store_.points(), store_.meshes());
 }
 
 void Engine::OnHeadsetPose(const Envelope& e) {
