@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -75,6 +76,56 @@ TEST(EvalSuiteTest, WritesResultsAndTheTrackingTargets) {
                 c[7] == "1 of 1, 1" || c[7] == "0 of 0, 0")
         << c[7];
   }
+  fs::remove_all(dir);
+  fs::remove(dir.string() + ".log");
+}
+
+// The kidnap table (issue 7) counts from the runs in results.json: flagged UNRELIABLE
+// within 5 s, recovered within 60 s, and both in the same run.
+TEST(EvalSuiteTest, TheKidnapTableCountsTheRunsOfResultsJson) {
+  const fs::path dir = fs::path(::testing::TempDir()) / ("kidnap-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  tools::ChildProcess suite(
+      {FLOORPOSE_PATH, "eval-suite", "--plans", FLOORPOSE_DEMO_PLAN, "--seeds", "1", "--length",
+       "60", "--methods", "icp", "--kidnap", "--out", dir.string()},
+      (dir.string() + ".log"));
+  ASSERT_TRUE(suite.started());
+  ASSERT_EQ(suite.Wait(std::chrono::seconds(120)), 0) << testing::ReadText(dir.string() + ".log");
+
+  auto number = [](const std::string& line, const std::string& key) {
+    const size_t at = line.find("\"" + key + "\": ");
+    return at == std::string::npos ? -2.0 : std::stod(line.substr(at + key.size() + 4));
+  };
+  int runs = 0, flagged = 0, recovered = 0, both = 0;
+  std::ifstream json(dir / "results.json");
+  for (std::string line; std::getline(json, line);) {
+    if (line.empty()) continue;
+    ++runs;
+    const double unreliable = number(line, "time_to_unreliable_s");
+    const double recovery = number(line, "time_to_recovered_s");
+    ASSERT_GT(unreliable, -2) << line;
+    ASSERT_GT(recovery, -2) << line;
+    const bool f = unreliable >= 0 && unreliable <= 5, r = recovery >= 0 && recovery <= 60;
+    flagged += f, recovered += r, both += f && r;
+  }
+  ASSERT_EQ(runs, 5);  // 5 scenarios on one plan, one seed, one method
+
+  const std::string md = testing::ReadText(dir / "results.md");
+  std::vector<std::string> all;
+  bool in_kidnap = false;
+  std::stringstream rows(md);
+  for (std::string row; std::getline(rows, row);) {
+    if (row.rfind("Kidnapped (icp", 0) == 0) in_kidnap = true;
+    const std::vector<std::string> c = Cells(row);
+    if (in_kidnap && c.size() == 8 && c[0] == "all") all = c;
+  }
+  ASSERT_EQ(all.size(), 8u) << md;
+  EXPECT_EQ(all[1], "5");
+  auto count = [](const std::string& cell) { return std::stoi(cell.substr(0, cell.find(' '))); };
+  EXPECT_EQ(count(all[2]), flagged) << all[2];
+  EXPECT_EQ(count(all[3]), recovered) << all[3];
+  EXPECT_EQ(count(all[4]), both) << all[4];
+  EXPECT_LE(both, std::min(flagged, recovered));
   fs::remove_all(dir);
   fs::remove(dir.string() + ".log");
 }
