@@ -81,7 +81,8 @@ TEST(EvalSuiteTest, WritesResultsAndTheTrackingTargets) {
 }
 
 // The kidnap table (issue 7) counts from the runs in results.json: flagged UNRELIABLE
-// within 5 s, recovered within 60 s, and both in the same run.
+// within 5 s, recovered within 60 s, both in the same run, and the RELIABLE poses more
+// than 1 m off before the run recovered and in all.
 TEST(EvalSuiteTest, TheKidnapTableCountsTheRunsOfResultsJson) {
   const fs::path dir = fs::path(::testing::TempDir()) / ("kidnap-" + std::to_string(getpid()));
   fs::remove_all(dir);
@@ -96,7 +97,7 @@ TEST(EvalSuiteTest, TheKidnapTableCountsTheRunsOfResultsJson) {
     const size_t at = line.find("\"" + key + "\": ");
     return at == std::string::npos ? -2.0 : std::stod(line.substr(at + key.size() + 4));
   };
-  int runs = 0, flagged = 0, recovered = 0, both = 0;
+  int runs = 0, flagged = 0, recovered = 0, both = 0, trusted_wrong = 0, false_reliable = 0;
   std::ifstream json(dir / "results.json");
   for (std::string line; std::getline(json, line);) {
     if (line.empty()) continue;
@@ -105,6 +106,11 @@ TEST(EvalSuiteTest, TheKidnapTableCountsTheRunsOfResultsJson) {
     const double recovery = number(line, "time_to_recovered_s");
     ASSERT_GT(unreliable, -2) << line;
     ASSERT_GT(recovery, -2) << line;
+    const double before = number(line, "false_reliable_before_recovered");
+    const double all = number(line, "false_reliable_poses");
+    ASSERT_GE(before, 0) << line;
+    EXPECT_LE(before, all) << line;
+    trusted_wrong += static_cast<int>(before), false_reliable += static_cast<int>(all);
     const bool f = unreliable >= 0 && unreliable <= 5, r = recovery >= 0 && recovery <= 60;
     flagged += f, recovered += r, both += f && r;
   }
@@ -117,15 +123,17 @@ TEST(EvalSuiteTest, TheKidnapTableCountsTheRunsOfResultsJson) {
   for (std::string row; std::getline(rows, row);) {
     if (row.rfind("Kidnapped (icp", 0) == 0) in_kidnap = true;
     const std::vector<std::string> c = Cells(row);
-    if (in_kidnap && c.size() == 8 && c[0] == "all") all = c;
+    if (in_kidnap && c.size() == 9 && c[0] == "all") all = c;
   }
-  ASSERT_EQ(all.size(), 8u) << md;
+  ASSERT_EQ(all.size(), 9u) << md;
   EXPECT_EQ(all[1], "5");
   auto count = [](const std::string& cell) { return std::stoi(cell.substr(0, cell.find(' '))); };
   EXPECT_EQ(count(all[2]), flagged) << all[2];
   EXPECT_EQ(count(all[3]), recovered) << all[3];
   EXPECT_EQ(count(all[4]), both) << all[4];
   EXPECT_LE(both, std::min(flagged, recovered));
+  EXPECT_EQ(count(all[7]), trusted_wrong) << all[7];
+  EXPECT_EQ(count(all[8]), false_reliable) << all[8];
   fs::remove_all(dir);
   fs::remove(dir.string() + ".log");
 }

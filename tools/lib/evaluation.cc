@@ -307,9 +307,14 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     };
     report->time_to_unreliable_s = since_first(
         std::find_if(scored.begin(), scored.end(), [](const EvalPose& p) { return p.unreliable; }));
-    report->time_to_recovered_s =
-        since_first(std::find_if(scored.begin(), scored.end(),
-                                 [](const EvalPose& p) { return p.reliable && p.error_m <= 1.0; }));
+    const auto recovered = std::find_if(scored.begin(), scored.end(), [](const EvalPose& p) {
+      return p.reliable && p.error_m <= 1.0;
+    });
+    report->time_to_recovered_s = since_first(recovered);
+    report->false_reliable_before_recovered =
+        static_cast<size_t>(std::count_if(scored.begin(), recovered, [](const EvalPose& p) {
+          return p.reliable && p.error_m > 1.0;
+        }));
     const std::vector<EvalPose>& t = report->track;
     report->pick_error_m = t.front().error_m;
     // The first pose under a registered alignment (turning the pick onto the walls'
@@ -362,6 +367,7 @@ std::string ToJson(const EvalReport& r) {
     << ", \"false_reliable_poses\": " << r.false_reliable_poses
     << ", \"time_to_unreliable_s\": " << r.time_to_unreliable_s
     << ", \"time_to_recovered_s\": " << r.time_to_recovered_s
+    << ", \"false_reliable_before_recovered\": " << r.false_reliable_before_recovered
     << ", \"global_searches\": " << r.global_searches
     << ", \"wrong_floor_poses\": " << r.wrong_floor_poses
     << ", \"floor_changes\": " << r.floor_changes << "}";
@@ -392,7 +398,9 @@ std::string ToText(const EvalReport& r) {
     << "  first reliable pose after     " << r.time_to_first_reliable_s << " s (-1: none)\n"
     << "  reliable but over 1 m off     " << r.false_reliable_poses << " poses\n"
     << "  first unreliable pose after   " << r.time_to_unreliable_s << " s (-1: none)\n"
-    << "  first reliable within 1 m     " << r.time_to_recovered_s << " s (-1: none)\n";
+    << "  first reliable within 1 m     " << r.time_to_recovered_s << " s (-1: none)\n"
+    << "  ...and before it              " << r.false_reliable_before_recovered
+    << " poses reliable but over 1 m off\n";
   if (r.global_searches) s << "  whole-plan searches           " << r.global_searches << "\n";
   if (r.floor_changes || r.wrong_floor_poses)
     s << "  floor changes                 " << r.floor_changes << ", " << r.wrong_floor_poses

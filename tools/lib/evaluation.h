@@ -65,6 +65,9 @@ struct EvalReport {
   // From the first scored pose (a wrong pick: simulate --kidnap) to the first flagged
   // UNRELIABLE, and to the first RELIABLE within 1 m (-1: never).
   double time_to_unreliable_s = -1, time_to_recovered_s = -1;
+  // The poses flagged RELIABLE while more than 1 m off before that first RELIABLE pose
+  // within 1 m (all of them when there is none): a wrong place trusted, not drift.
+  size_t false_reliable_before_recovered = 0;
   size_t global_searches = 0;  // whole-plan searches run (placements and checks)
   // A .floors plan set: floors the daemon changed to, and poses published with another
   // floor than the truth's.
