@@ -575,7 +575,15 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
     }
   }
   if (d.accepted) {
+    // A registration refits the walls, not the walk: after a step through a wall, the
+    // flag stays while the walk of the window goes through a wall under the new
+    // alignment too (a wrong place refined is the same wrong place).
+    const uint32_t still = crossings_ > 0 && options_.path_check && path_slam.size() >= 2
+                               ? PathCrossings(PathOnPlan(filter_.T(), path_slam), index_->plan(),
+                                               options_.path_check_margin_m)
+                               : 0;
     SetAlignment(filter_.T(), AlignmentSource::kRegistration, stamp_ns);
+    crossings_ = still;
     alignment_.registration = result;
     alignment_.registration->T_plan_slam = filter_.T();
     ++fused_;

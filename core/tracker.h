@@ -89,7 +89,8 @@ struct TrackerOptions {
   uint32_t min_points = 50;        // no registration on fewer points...
   uint32_t check_min_points = 20;  // ...but this many to check a pick, flip or search's place
   // A step of the path under the alignment in use (since it was last set) through a plan
-  // wall, path_check_margin_m or more from the wall's ends: UNRELIABLE.
+  // wall, path_check_margin_m or more from the wall's ends: UNRELIABLE, until an alignment
+  // under which the walk of the registration's window goes through no wall (Offer).
   bool path_check = true;
   double path_check_margin_m = 0.4;
   size_t history = 16;  // accepted alignments kept
@@ -297,6 +298,8 @@ class Tracker {
   // The best place of the latest search, if any: the next search refines it with the
   // grid's places, since the grid's coarse scores may leave it out.
   const std::optional<Se2>& leading_place() const { return leading_place_; }
+  // The wearer's path went through a wall of the plan under the alignment in use.
+  bool path_crossed() const { return crossings_ > 0; }
   // `full_grid_scores`: when the grid returned as many places as it may, their grid
   // scores, best first (for global_crowded_ratio); else empty.
   Decision OfferPlaces(const std::vector<GlobalPlace>& places, const Eigen::Vector2d& centre_slam,
@@ -312,7 +315,8 @@ class Tracker {
   // the filter's gate; a result beyond the gate is taken only when the next one
   // confirms it (the navigation app's rule for jumps). `path_slam` is the wearer's walk
   // over the cloud's window (slam frame, in order): a first place after a pick or flip
-  // that walks it through a wall of the plan (path_check) is not taken.
+  // that walks it through a wall of the plan (path_check) is not taken, and after a step
+  // through a wall the flag stays while the walk goes through one under the result too.
   Decision Offer(const RegistrationResult& result, const std::vector<Eigen::Vector2d>& cloud,
                  uint64_t based_on_version, int64_t stamp_ns,
                  const std::vector<Eigen::Vector2d>& path_slam = {});

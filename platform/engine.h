@@ -75,8 +75,8 @@ class Engine {
     // on `index` with options.icp, as `refine` says.
     std::shared_ptr<GlobalSearchCache> global;
     RefineOptions refine;
-    // The wearer's slam positions over the same window (a search's, or a first place's
-    // after a pick: Tracker::Offer).
+    // The wearer's slam positions over the same window (a search's, a first place's after
+    // a pick, or any registration's after a step through a wall: Tracker::Offer).
     std::vector<Eigen::Vector2d> path;
     // Places a search refines with the grid's (the previous search's best).
     std::vector<Se2> seeds;

@@ -639,6 +639,39 @@ TEST_F(TrackerTest, APathThroughAWallIsUnreliable) {
   EXPECT_EQ(walk({{4.2, 2.0}, {3.8, 2.0}}).flag, ReliabilityFlag::kDegraded);
 }
 
+// A registration refits the walls, not the walk: after a step through a wall, the flag
+// stays while the walk of the registration's window goes through a wall under the new
+// alignment too, and goes once it does not.
+TEST_F(TrackerTest, APathThroughAWallStaysFlaggedUntilAnAlignmentWalksItClear) {
+  const auto cloud = Cloud();
+  auto walk = [&](double from_x, double to_x) {  // slam, 0.25 m steps along y = 2 of the plan
+    std::vector<Eigen::Vector2d> path;
+    for (double x = from_x; x <= to_x + 1e-9; x += 0.25)
+      path.push_back(truth_.Inverse() * Eigen::Vector2d(x, 2));
+    return path;
+  };
+  const std::vector<Eigen::Vector2d> through = walk(2.1, 6.1);  // across the inner wall x = 4
+  const std::vector<Eigen::Vector2d> clear = walk(5, 9);
+  tracker_.SetPlan(index_);
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
+  ASSERT_TRUE(tracker_.Offer(ResultFor(truth_, cloud), cloud, 1, 2, clear).accepted);
+  for (const Eigen::Vector2d& p : through) tracker_.Correct({p, 0, 1.6});
+  ASSERT_TRUE(tracker_.path_crossed());
+  EXPECT_EQ(tracker_.CurrentReliability().flag, ReliabilityFlag::kUnreliable);
+
+  Tracker::Decision d =
+      tracker_.Offer(ResultFor(truth_, cloud), cloud, tracker_.alignment().version, 3, through);
+  ASSERT_TRUE(d.accepted) << d.reason;
+  EXPECT_TRUE(tracker_.path_crossed());
+  EXPECT_THAT(tracker_.CurrentReliability().reason, HasSubstr("crosses a wall"));
+
+  d = tracker_.Offer(ResultFor(truth_, cloud), cloud, tracker_.alignment().version, 4, clear);
+  ASSERT_TRUE(d.accepted) << d.reason;
+  EXPECT_FALSE(tracker_.path_crossed());
+  EXPECT_NE(tracker_.CurrentReliability().flag, ReliabilityFlag::kUnreliable)
+      << tracker_.CurrentReliability().reason;
+}
+
 // A pick is registered on check_min_points wall points, fewer than a place needs: the
 // result is not taken (too few walls to place the wearer), but the pick is checked, and
 // with the plan search on, a pick whose walls do not fit is UNRELIABLE at once.
