@@ -32,15 +32,44 @@ std::vector<std::string> Cells(const std::string& row) {
   return out;
 }
 
-TEST(EvalSuiteTest, WritesResultsAndTheTrackingTargets) {
-  const fs::path dir = fs::path(::testing::TempDir()) / ("suite-" + std::to_string(getpid()));
+// Runs `floorpose eval-suite` on the bundled plan with `args`, into a fresh directory
+// named after `name`; empty when it failed (a test failure says why).
+fs::path RunSuite(const std::string& name, std::vector<std::string> args,
+                  std::chrono::seconds timeout) {
+  const fs::path dir = fs::path(::testing::TempDir()) / (name + "-" + std::to_string(getpid()));
   fs::remove_all(dir);
-  tools::ChildProcess suite(
-      {FLOORPOSE_PATH, "eval-suite", "--plans", FLOORPOSE_DEMO_PLAN, "--seeds", "1", "--length",
-       "40", "--methods", "ik", "best-fit", "--out", dir.string()},
-      (dir.string() + ".log"));
-  ASSERT_TRUE(suite.started());
-  ASSERT_EQ(suite.Wait(std::chrono::seconds(60)), 0) << testing::ReadText(dir.string() + ".log");
+  args.insert(args.begin(), {FLOORPOSE_PATH, "eval-suite", "--plans", FLOORPOSE_DEMO_PLAN});
+  args.insert(args.end(), {"--out", dir.string()});
+  tools::ChildProcess suite(args, dir.string() + ".log");
+  if (!suite.started() || suite.Wait(timeout) != 0) {
+    ADD_FAILURE() << "eval-suite failed: " << testing::ReadText(dir.string() + ".log");
+    return {};
+  }
+  return dir;
+}
+
+void RemoveSuite(const fs::path& dir) {
+  fs::remove_all(dir);
+  fs::remove(dir.string() + ".log");
+}
+
+// Every table of results.md has as many columns in its separator row as in its header,
+// or it is no table to a markdown reader.
+void ExpectTablesWellFormed(const std::string& md) {
+  std::stringstream rows(md);
+  std::string header;
+  for (std::string row; std::getline(rows, row); header = row) {
+    if (row.rfind("|---", 0) == 0) {
+      EXPECT_EQ(Cells(row).size(), Cells(header).size()) << header;
+    }
+  }
+}
+
+TEST(EvalSuiteTest, WritesResultsAndTheTrackingTargets) {
+  const fs::path dir =
+      RunSuite("suite", {"--seeds", "1", "--length", "40", "--methods", "ik", "best-fit"},
+               std::chrono::seconds(60));
+  ASSERT_FALSE(dir.empty());
 
   // One JSON line per run: 5 scenarios x 2 methods on one plan and seed.
   std::ifstream json(dir / "results.json");
@@ -51,6 +80,7 @@ TEST(EvalSuiteTest, WritesResultsAndTheTrackingTargets) {
 
   // Per cell means (first table), then the targets table, which must agree with them.
   const std::string md = testing::ReadText(dir / "results.md");
+  ExpectTablesWellFormed(md);
   std::map<std::string, std::string> cell_mean;  // scenario -> ik's mean in the first table
   std::map<std::string, std::vector<std::string>> target_row;
   bool in_targets = false;
@@ -76,22 +106,17 @@ TEST(EvalSuiteTest, WritesResultsAndTheTrackingTargets) {
                 c[7] == "1 of 1, 1" || c[7] == "0 of 0, 0")
         << c[7];
   }
-  fs::remove_all(dir);
-  fs::remove(dir.string() + ".log");
+  RemoveSuite(dir);
 }
 
 // The kidnap table (issue 7) counts from the runs in results.json: flagged UNRELIABLE
 // within 5 s, recovered within 60 s, both in the same run, and the RELIABLE poses more
 // than 1 m off before the run recovered and in all.
 TEST(EvalSuiteTest, TheKidnapTableCountsTheRunsOfResultsJson) {
-  const fs::path dir = fs::path(::testing::TempDir()) / ("kidnap-" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  tools::ChildProcess suite(
-      {FLOORPOSE_PATH, "eval-suite", "--plans", FLOORPOSE_DEMO_PLAN, "--seeds", "1", "--length",
-       "60", "--methods", "icp", "--kidnap", "--out", dir.string()},
-      (dir.string() + ".log"));
-  ASSERT_TRUE(suite.started());
-  ASSERT_EQ(suite.Wait(std::chrono::seconds(120)), 0) << testing::ReadText(dir.string() + ".log");
+  const fs::path dir =
+      RunSuite("kidnap", {"--seeds", "1", "--length", "60", "--methods", "icp", "--kidnap"},
+               std::chrono::seconds(120));
+  ASSERT_FALSE(dir.empty());
 
   auto number = [](const std::string& line, const std::string& key) {
     const size_t at = line.find("\"" + key + "\": ");
@@ -117,6 +142,7 @@ TEST(EvalSuiteTest, TheKidnapTableCountsTheRunsOfResultsJson) {
   ASSERT_EQ(runs, 5);  // 5 scenarios on one plan, one seed, one method
 
   const std::string md = testing::ReadText(dir / "results.md");
+  ExpectTablesWellFormed(md);
   std::vector<std::string> all;
   bool in_kidnap = false;
   std::stringstream rows(md);
@@ -134,8 +160,7 @@ TEST(EvalSuiteTest, TheKidnapTableCountsTheRunsOfResultsJson) {
   EXPECT_LE(both, std::min(flagged, recovered));
   EXPECT_EQ(count(all[7]), trusted_wrong) << all[7];
   EXPECT_EQ(count(all[8]), false_reliable) << all[8];
-  fs::remove_all(dir);
-  fs::remove(dir.string() + ".log");
+  RemoveSuite(dir);
 }
 
 }  // namespace

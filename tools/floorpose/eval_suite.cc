@@ -350,7 +350,7 @@ int RunSuite(const SuiteOptions& o) {
         "| scenario | mean | worst cell | cells above the mean target | runs above the max "
         "target | runs diverged | cells above best-fit + 0.1 m | from the first registration: "
         "cells above the mean target, runs above the max target |\n"
-        "|---|---|---|---|---|---|---|---|---|\n";
+        "|---|---|---|---|---|---|---|---|\n";
   for (const std::string& scenario : o.scenarios) {
     const bool strict = scenario == "corridor" || scenario == "hall";
     const double mean_target = strict ? 0.3 : 0.6, max_target = strict ? 1.5 : 3.0;
