@@ -74,6 +74,15 @@ class TrackerTest : public ::testing::Test {
     return out;
   }
 
+  // The wearer's walk in the slam frame of truth_: 0.25 m steps along y = 2 of the plan,
+  // from x = from_x to to_x (the inner wall is x = 4).
+  std::vector<Eigen::Vector2d> WalkAlongY2(double from_x, double to_x) const {
+    std::vector<Eigen::Vector2d> path;
+    for (double x = from_x; x <= to_x + 1e-9; x += 0.25)
+      path.push_back(truth_.Inverse() * Eigen::Vector2d(x, 2));
+    return path;
+  }
+
   // A registration result for transform T on the cloud, as RegisterIcp would report it.
   RegistrationResult ResultFor(const Se2& T, const std::vector<Eigen::Vector2d>& cloud) const {
     RegistrationResult r;
@@ -202,15 +211,8 @@ TEST_F(TrackerTest, CorrectAppliesTheAlignment) {
 // the walk so far tells such a first place apart: the wearer walked through no wall.
 TEST_F(TrackerTest, AFirstPlaceThatWalksTheWearerThroughAWallIsNotTaken) {
   const auto cloud = Cloud();
-  // The walk in slam, 0.25 m steps along y = 2 of the plan (under truth_).
-  auto walk = [&](double from_x, double to_x) {
-    std::vector<Eigen::Vector2d> path;
-    for (double x = from_x; x <= to_x + 1e-9; x += 0.25)
-      path.push_back(truth_.Inverse() * Eigen::Vector2d(x, 2));
-    return path;
-  };
-  const std::vector<Eigen::Vector2d> through = walk(2.1, 6.1);  // across the inner wall x = 4
-  const std::vector<Eigen::Vector2d> clear = walk(5, 9);
+  const std::vector<Eigen::Vector2d> through = WalkAlongY2(2.1, 6.1);  // across the inner wall
+  const std::vector<Eigen::Vector2d> clear = WalkAlongY2(5, 9);
   const Se2 picked = Se2{Deg(2), {0.1, -0.1}} * truth_;
 
   tracker_.SetPlan(index_);
@@ -644,14 +646,8 @@ TEST_F(TrackerTest, APathThroughAWallIsUnreliable) {
 // alignment too, and goes once it does not.
 TEST_F(TrackerTest, APathThroughAWallStaysFlaggedUntilAnAlignmentWalksItClear) {
   const auto cloud = Cloud();
-  auto walk = [&](double from_x, double to_x) {  // slam, 0.25 m steps along y = 2 of the plan
-    std::vector<Eigen::Vector2d> path;
-    for (double x = from_x; x <= to_x + 1e-9; x += 0.25)
-      path.push_back(truth_.Inverse() * Eigen::Vector2d(x, 2));
-    return path;
-  };
-  const std::vector<Eigen::Vector2d> through = walk(2.1, 6.1);  // across the inner wall x = 4
-  const std::vector<Eigen::Vector2d> clear = walk(5, 9);
+  const std::vector<Eigen::Vector2d> through = WalkAlongY2(2.1, 6.1);  // across the inner wall
+  const std::vector<Eigen::Vector2d> clear = WalkAlongY2(5, 9);
   tracker_.SetPlan(index_);
   ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
   ASSERT_TRUE(tracker_.Offer(ResultFor(truth_, cloud), cloud, 1, 2, clear).accepted);
