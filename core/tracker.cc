@@ -225,6 +225,15 @@ bool Tracker::WallsDoNotFit() const {
              options_.global_min_inliers * static_cast<double>(current_fit_->points);
 }
 
+double Tracker::OffPlanM() const {
+  if (options_.off_plan_margin_m <= 0 || !index_ || !has_alignment() || !last_slam_position_)
+    return 0;
+  const FloorPlan& plan = index_->plan();
+  const Eigen::Vector2d p = alignment_.T_plan_slam * *last_slam_position_;
+  const Eigen::Vector2d outside = (plan.min - p).cwiseMax(p - plan.max).cwiseMax(0.0);
+  return std::max(0.0, outside.norm() - options_.off_plan_margin_m);
+}
+
 Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
                                        const Eigen::Vector2d& centre_slam,
                                        uint64_t based_on_version, int64_t stamp_ns,
@@ -521,9 +530,13 @@ Tracker::Decision Tracker::Offer(const RegistrationResult& result,
   } else if (const uint32_t crossings = FirstPlaceCrossings(result.T_plan_slam, path_slam);
              crossings > 0) {
     // A wrong pick's walls often fit a corner or a wall nearby as well as the true one
-    // (a hall's few walls fit anywhere); the walk so far tells them apart.
+    // (a hall's few walls fit anywhere); the walk so far tells them apart. The pick is
+    // then in doubt too: flagged as a walk through a wall until an alignment under which
+    // the walk goes through none (a right pick's first place never walked through one
+    // in the suites, a wrong one's often does).
     d.reason = "first place: the walk so far would cross " + std::to_string(crossings) + " wall" +
                (crossings == 1 ? "" : "s") + " of the plan there";
+    crossings_ = std::max(crossings_, crossings);
   } else if (const std::string doubt = FirstRegistrationDoubt(result);
              alignment_.source != AlignmentSource::kRegistration &&
              !(doubt.empty() && FirstPlaceClear(result)) &&
@@ -726,6 +739,14 @@ Reliability Tracker::CurrentReliability() const {
     r.reason = "the path crosses a wall of the plan";
     return r;
   }
+  if (const double off = OffPlanM(); off > 0) {
+    char text[64];
+    std::snprintf(text, sizeof text, "outside the floor plan (%.1f m)",
+                  off + options_.off_plan_margin_m);
+    r.flag = ReliabilityFlag::kUnreliable;
+    r.reason = text;
+    return r;
+  }
   if (options_.global_search && WallsDoNotFit()) {
     // The alignment in use stops explaining the walls (a wrong pick, a wrong place): the
     // search is checking the plan for a better one.
@@ -735,6 +756,15 @@ Reliability Tracker::CurrentReliability() const {
     r.flag = ReliabilityFlag::kUnreliable;
     r.reason = text;
     return r;
+  }
+  if ((alignment_.source == AlignmentSource::kWallPick ||
+       alignment_.source == AlignmentSource::kFlip) &&
+      r.flag == ReliabilityFlag::kReliable) {
+    // Checked on a few walls (check_min_points), not registered yet: a wrong pick's few
+    // walls often fit it as well as a right pick's; only a registration places.
+    r.flag = ReliabilityFlag::kDegraded;
+    r.reason = alignment_.source == AlignmentSource::kFlip ? "flipped, not yet registered"
+                                                           : "wall pick, not yet registered";
   }
   if (!placement_confirmed_ && r.flag == ReliabilityFlag::kReliable) {
     r.flag = ReliabilityFlag::kDegraded;

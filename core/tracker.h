@@ -87,12 +87,16 @@ struct TrackerOptions {
   double min_walk_m = 2.0;         // ...or this many metres walked with new points...
   double max_interval_s = 3.0;     // ...or after this long with any new points
   uint32_t min_points = 50;        // no registration on fewer points...
-  uint32_t check_min_points = 20;  // ...but this many to check a pick, flip or search's place
+  uint32_t check_min_points = 15;  // ...but this many to check a pick, flip or search's place
   // A step of the path under the alignment in use (since it was last set) through a plan
   // wall, path_check_margin_m or more from the wall's ends: UNRELIABLE, until an alignment
   // under which the walk of the registration's window goes through no wall (Offer).
   bool path_check = true;
   double path_check_margin_m = 0.4;
+  // The wearer more than this far outside the plan's bounding box under the alignment in
+  // use: UNRELIABLE (the plan has no walls there to check against; a wrong pick or place
+  // often puts the wearer outside the building). 0: no such check.
+  double off_plan_margin_m = 1.0;
   size_t history = 16;  // accepted alignments kept
   // Without a pick: search the whole plan (GlobalSearch) once this many wall points are
   // in, every global_interval_s, over the walls of the last global_window_s (0: all).
@@ -308,6 +312,9 @@ class Tracker {
   // Whether the walls of the latest registration fit the alignment in use under
   // global_min_inliers (the latest fit says so; nothing before the first).
   bool WallsDoNotFit() const;
+  // How far the wearer's latest position lies outside the plan's bounding box under the
+  // alignment in use, beyond off_plan_margin_m (0: within it, or no check).
+  double OffPlanM() const;
 
   // Offers a finished registration that started from alignment `based_on_version` on
   // `cloud`. Fused into the alignment when it still applies, fits the cloud about as

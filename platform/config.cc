@@ -181,6 +181,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (k.check_min_points() < 3) return "tracking.check_min_points must be at least 3";
   if (!(k.path_check_margin_m() >= 0 && k.path_check_margin_m() <= 5))
     return "tracking.path_check_margin_m must be in [0, 5]";
+  if (!(k.off_plan_margin_m() >= 0 && k.off_plan_margin_m() <= 1000))
+    return "tracking.off_plan_margin_m must be in [0, 1000]";
   if (!(k.global_interval_s() > 0)) return "tracking.global_interval_s must be positive";
   if (!(k.global_window_s() >= 0)) return "tracking.global_window_s must be 0 or positive";
   if (!(k.global_clear_ratio() > 0 && k.global_clear_ratio() <= 1))
@@ -275,6 +277,7 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.check_min_points = k.check_min_points();
   t.path_check = k.path_check();
   t.path_check_margin_m = k.path_check_margin_m();
+  t.off_plan_margin_m = k.off_plan_margin_m();
   t.score_cap_m = k.score_cap_m();
   t.worse_fit_ratio = k.worse_fit_ratio();
   t.min_walk_m = k.min_walk_m();

@@ -767,7 +767,6 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
   if (!tracker_.RegistrationDue(latest_stamp_ns_, store_.points(), store_.new_points()))
     return std::nullopt;
   store_.TakeNewPoints();
-  tracker_.MarkRegistrationStarted(latest_stamp_ns_);
   Job job;
   const TrackerOptions& options = tracker_.options();
   const double window_s = config_.tracking().window_s();
@@ -775,8 +774,11 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
       window_s > 0 ? latest_stamp_ns_ - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
   job.cloud = store_.Snapshot(config_.tracking().max_points(), &job.normals,
                               options.local_meshes ? last_run_generation_ : 0, min_stamp);
-  // The live points were enough, but not those in the window: wait for more walls.
+  // The live points were enough, but not the distinct ones in the window (a voxel keeps
+  // one): try again as soon as new walls come, not a whole interval later (a wrong pick
+  // is told by its first check).
   if (job.cloud.size() < tracker_.MinPoints()) return std::nullopt;
+  tracker_.MarkRegistrationStarted(latest_stamp_ns_);
   // A first place after a pick must not walk the wearer through walls (Tracker::Offer).
   if (tracker_.alignment().source == AlignmentSource::kWallPick ||
       tracker_.alignment().source == AlignmentSource::kFlip || tracker_.path_crossed())

@@ -188,9 +188,10 @@ TEST_F(TrackerTest, CorrectAppliesTheAlignment) {
   EXPECT_EQ(e.reliability.flag, ReliabilityFlag::kUnreliable);
   EXPECT_EQ(e.pose.position, pose.position);
 
-  // Random poses jump through walls: that check is another test's.
+  // Random poses jump through walls and out of the plan: those checks are other tests'.
   TrackerOptions options;
   options.path_check = false;
+  options.off_plan_margin_m = 0;
   tracker_ = Tracker(options);
   tracker_.SetPlan(index_);
   ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
@@ -223,12 +224,17 @@ TEST_F(TrackerTest, AFirstPlaceThatWalksTheWearerThroughAWallIsNotTaken) {
   EXPECT_EQ(d.reason, "first place: the walk so far would cross 1 wall of the plan there");
   EXPECT_EQ(tracker_.alignment().version, v1);
   EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kWallPick);
+  // The pick it refined is in doubt too: flagged until an alignment walks the wearer clear.
+  EXPECT_TRUE(tracker_.path_crossed());
+  EXPECT_EQ(tracker_.CurrentReliability().flag, ReliabilityFlag::kUnreliable);
+  EXPECT_THAT(tracker_.CurrentReliability().reason, HasSubstr("crosses a wall"));
 
   // The same place with a walk that stays in the room is taken at once (clear, within
   // the pick search); from then on the path check of every pose is the tracker's.
   d = tracker_.Offer(ResultFor(truth_, cloud), cloud, v1, 3, clear);
   ASSERT_TRUE(d.accepted) << d.reason;
   EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kRegistration);
+  EXPECT_FALSE(tracker_.path_crossed());
   d = tracker_.Offer(ResultFor(truth_, cloud), cloud, tracker_.alignment().version, 4, through);
   EXPECT_TRUE(d.accepted) << d.reason;
 
@@ -691,6 +697,65 @@ TEST_F(TrackerTest, AWrongPickIsFlaggedOnAFewWalls) {
   EXPECT_EQ(r.flag, ReliabilityFlag::kUnreliable);
   EXPECT_THAT(r.reason, HasSubstr("do not fit"));
   EXPECT_EQ(tracker_.alignment().source, AlignmentSource::kWallPick);
+}
+
+// A check on a few walls tells a pick whose walls do not fit; one whose walls fit is not
+// placed by it (a wrong pick's few walls often fit too): DEGRADED until a registration.
+TEST_F(TrackerTest, APickWhoseFewWallsFitIsNotReliableUntilARegistration) {
+  tracker_.SetPlan(index_);
+  const Se2 picked = Se2{Deg(0.5), {0.03, -0.02}} * truth_;
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(picked, {4, 2}, {1, 0}), 1), "");
+  const std::vector<Eigen::Vector2d> cloud = Cloud();
+  std::vector<Eigen::Vector2d> few;
+  for (size_t i = 0; i < cloud.size() && few.size() < tracker_.options().check_min_points; i += 37)
+    few.push_back(cloud[i]);
+  for (int i = 0; i < 3; ++i) {
+    const Tracker::Decision d =
+        tracker_.Offer(ResultFor(truth_, few), few, tracker_.alignment().version, 2 + i);
+    ASSERT_FALSE(d.accepted);
+    EXPECT_THAT(d.reason, HasSubstr("few walls"));
+  }
+  tracker_.Correct({truth_.Inverse() * Eigen::Vector2d(2, 2), 0, 1.6});
+  Reliability r = tracker_.CurrentReliability();
+  EXPECT_EQ(r.flag, ReliabilityFlag::kDegraded);
+  EXPECT_EQ(r.reason, "wall pick, not yet registered");
+
+  // The same place registered on enough walls, again and again, is trusted.
+  for (int i = 0; i < 5; ++i)
+    ASSERT_TRUE(
+        tracker_.Offer(ResultFor(truth_, cloud), cloud, tracker_.alignment().version, 10 + i)
+            .accepted);
+  tracker_.Correct({truth_.Inverse() * Eigen::Vector2d(2, 2.1), 0, 1.6});
+  r = tracker_.CurrentReliability();
+  EXPECT_EQ(r.flag, ReliabilityFlag::kReliable) << r.reason;
+}
+
+// A wrong pick 10 m off often puts the wearer outside the building, where the plan has no
+// walls to check the walk against: off_plan_margin_m beyond the plan's box is UNRELIABLE.
+TEST_F(TrackerTest, AWearerOutsideThePlanIsUnreliable) {
+  TrackerOptions options;
+  options.path_check = false;  // the walk below goes through the outer wall
+  ASSERT_EQ(options.off_plan_margin_m, 1.0);
+  const auto flag_at = [&](Tracker& tracker, const Eigen::Vector2d& plan_point) {
+    tracker.Correct({truth_.Inverse() * plan_point, 0, 1.6});
+    return tracker.CurrentReliability();
+  };
+  Tracker tracker(options);
+  tracker.SetPlan(index_);
+  ASSERT_EQ(tracker.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
+  EXPECT_EQ(flag_at(tracker, {2, 2}).flag, ReliabilityFlag::kDegraded);
+  // The plan spans (0, 0)-(10, 7): half a metre outside is within the margin.
+  EXPECT_EQ(flag_at(tracker, {10.5, 7.5}).flag, ReliabilityFlag::kDegraded);
+  const Reliability r = flag_at(tracker, {13, 9});
+  EXPECT_EQ(r.flag, ReliabilityFlag::kUnreliable);
+  EXPECT_EQ(r.reason, "outside the floor plan (3.6 m)");  // from the box's corner (10, 7)
+  EXPECT_EQ(flag_at(tracker, {9, 6}).flag, ReliabilityFlag::kDegraded);  // back inside
+
+  options.off_plan_margin_m = 0;
+  Tracker unchecked(options);
+  unchecked.SetPlan(index_);
+  ASSERT_EQ(unchecked.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
+  EXPECT_EQ(flag_at(unchecked, {13, 9}).flag, ReliabilityFlag::kDegraded);
 }
 
 // The search places a wearer from global_min_points wall points of its window, but
