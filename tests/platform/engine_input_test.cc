@@ -267,6 +267,38 @@ TEST_F(EngineInputTest, TheSearchWaitsForNewWalls) {
   }));
 }
 
+// A registration is due, but the walls of its window are too few (the wearer's walls were
+// scanned long ago): no job, and the next one is tried as soon as new walls come, not a
+// whole interval later (a wrong pick is told by its first check).
+TEST_F(EngineInputTest, ACheckWithTooFewWallsInItsWindowIsTriedAgainOnTheNextWalls) {
+  config_.mutable_tracking()->set_window_s(10);
+  Start(/*with_plan=*/true);
+  v1::Command pick;
+  pick.set_request_id(1);
+  v1::Command::WallPick* w = pick.mutable_wall_pick();
+  w->mutable_headset_point()->set_x(2);
+  w->mutable_headset_point()->set_y(1);
+  w->mutable_headset_point()->set_z(1.5);
+  w->mutable_headset_normal()->set_y(-1);
+  w->set_plan_x(2);
+  w->set_plan_normal_y(1);
+  engine_->OnCommand(Wrap(pick));
+  ASSERT_TRUE(engine_->tracker().has_alignment());
+  const int64_t s = 1'000'000'000;
+  engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::ADDED, 1 * s)));
+  ASSERT_GE(engine_->store().points(), engine_->tracker().MinPoints());
+  // 20 s on, the wall is still in the store but 19 s old: out of the 10 s window.
+  engine_->OnHeadsetPose(Wrap(Pose(20 * s)));
+  EXPECT_FALSE(engine_->TakeDueJob());
+  // Scanned again 0.3 s later, well within max_interval_s of that attempt.
+  engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::UPDATED, 20 * s + 300'000'000)));
+  engine_->OnHeadsetPose(Wrap(Pose(20 * s + 300'000'000)));
+  auto job = engine_->TakeDueJob();
+  ASSERT_TRUE(job);
+  EXPECT_FALSE(job->global);
+  EXPECT_GE(job->cloud.size(), engine_->tracker().MinPoints());
+}
+
 // A building of two floors (a .floors set): the daemon follows the wearer up and down the
 // stairs by the headset's height, keeps the alignment (the floors share one frame), drops
 // the walls of the floor left, and is not fooled by a crouch or a short look upwards.
