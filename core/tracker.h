@@ -428,7 +428,8 @@ class Tracker {
   std::optional<RegistrationResult> current_fit_;
   bool restored_ = false;       // the alignment in use came from a saved state
   bool floor_changed_ = false;  // ...was carried to another floor, not checked there yet
-  uint32_t crossings_ = 0;      // steps of the path through a plan wall under the alignment
+  uint32_t crossings_ = 0;      // steps of the path through a plan wall under the alignment, or
+                                // of the walk under a first place refused for them (Offer)
 };
 
 const char* ToString(ReliabilityFlag flag);
