@@ -67,6 +67,19 @@ class EngineInputTest : public testing::TempDirTest {
     p.mutable_orientation()->set_w(1.0);
     return p;
   }
+  // A pick of the Wall() below (headset y = 1, facing -y) on the plan wall y = 0 at x = 2.
+  static v1::Command WallPickAtWall() {
+    v1::Command pick;
+    pick.set_request_id(1);
+    v1::Command::WallPick* w = pick.mutable_wall_pick();
+    w->mutable_headset_point()->set_x(2);
+    w->mutable_headset_point()->set_y(1);
+    w->mutable_headset_point()->set_z(1.5);
+    w->mutable_headset_normal()->set_y(-1);
+    w->set_plan_x(2);
+    w->set_plan_normal_y(1);
+    return pick;
+  }
   const v1::DaemonStatus::Counters& c() const { return engine_->counters(); }
 
   v1::FloorposedConfig config_;
@@ -273,16 +286,7 @@ TEST_F(EngineInputTest, TheSearchWaitsForNewWalls) {
 TEST_F(EngineInputTest, ACheckWithTooFewWallsInItsWindowIsTriedAgainOnTheNextWalls) {
   config_.mutable_tracking()->set_window_s(10);
   Start(/*with_plan=*/true);
-  v1::Command pick;
-  pick.set_request_id(1);
-  v1::Command::WallPick* w = pick.mutable_wall_pick();
-  w->mutable_headset_point()->set_x(2);
-  w->mutable_headset_point()->set_y(1);
-  w->mutable_headset_point()->set_z(1.5);
-  w->mutable_headset_normal()->set_y(-1);
-  w->set_plan_x(2);
-  w->set_plan_normal_y(1);
-  engine_->OnCommand(Wrap(pick));
+  engine_->OnCommand(Wrap(WallPickAtWall()));
   ASSERT_TRUE(engine_->tracker().has_alignment());
   const int64_t s = 1'000'000'000;
   engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::ADDED, 1 * s)));
@@ -309,16 +313,7 @@ TEST_F(EngineInputTest, TheFloorFollowsTheHeadsetUpAndDownTheStairs) {
       Write("building.floors", "# id height plan\n0 0.0 ground.txt\n1 3.5 first.txt  # up\n"));
   Start(/*with_plan=*/false);
   ASSERT_TRUE(engine_->tracker().has_plan());
-  v1::Command pick;
-  pick.set_request_id(1);
-  v1::Command::WallPick* w = pick.mutable_wall_pick();
-  w->mutable_headset_point()->set_x(2);
-  w->mutable_headset_point()->set_y(1);
-  w->mutable_headset_point()->set_z(1.5);
-  w->mutable_headset_normal()->set_y(-1);
-  w->set_plan_x(2);
-  w->set_plan_normal_y(1);
-  engine_->OnCommand(Wrap(pick));
+  engine_->OnCommand(Wrap(WallPickAtWall()));
   ASSERT_TRUE(engine_->tracker().has_alignment());
   const Se2 aligned = engine_->tracker().alignment().T_plan_slam;
   engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::ADDED, 1)));
