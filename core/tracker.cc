@@ -280,8 +280,8 @@ Tracker::Decision Tracker::OfferPlaces(const std::vector<GlobalPlace>& places,
            p.alike >= options_.global_alike_share &&
            !(best.fit_mse < options_.global_twin_clear_ratio * p.fit_mse);
   });
-  const bool fits =
-      best.rank == 0 && best.inlier_ratio >= options_.global_min_inliers && twin == usable.end();
+  const bool fits = best.rank == 0 && best.inlier_ratio >= options_.global_place_min_inliers &&
+                    twin == usable.end();
   // The grid may have left out places as good as those it returned.
   const std::vector<double>& grid = full_grid_scores;
   const bool crowded = options_.global_crowded_ratio > 0 && grid.size() >= 2 &&

@@ -101,7 +101,7 @@ struct TrackerOptions {
   // Without a pick: search the whole plan (GlobalSearch) once this many wall points are
   // in, every global_interval_s, over the walls of the last global_window_s (0: all).
   // The places found are refined and ranked (RefinePlaces); only a place of rank 0 (it
-  // fits global_min_inliers of the walls, and the path under it crosses fewer than
+  // fits global_place_min_inliers of the walls, and the path under it crosses fewer than
   // global_max_crossings walls, or it fits global_excuse_crossings times better than any
   // other, and no more than under any other) can lead. A search counts towards its lead
   // when the next one's error is at least global_min_lead times its own (a search where
@@ -125,6 +125,10 @@ struct TrackerOptions {
   double global_min_lead = 1.05;
   uint32_t global_confirm_searches = 3;
   double global_min_inliers = 0.6;
+  // A searched place fits (rank 0, may lead) from this share of the walls, lower than
+  // global_min_inliers: where the plan lacks walls that stand (a `mismatch` walk) the true
+  // place fits 44-58% of a minute's walls for minutes on end, and the other places less.
+  double global_place_min_inliers = 0.45;
   // A place under which the wearer's path over the window crosses this many plan walls
   // (path_check_margin_m clear of their ends) does not fit either; 0: any number.
   uint32_t global_max_crossings = 2;

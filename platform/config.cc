@@ -208,6 +208,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (k.global_confirm_searches() < 1) return "tracking.global_confirm_searches must be at least 1";
   if (!(k.global_min_inliers() >= 0 && k.global_min_inliers() <= 1))
     return "tracking.global_min_inliers must be in [0, 1]";
+  if (!(k.global_place_min_inliers() >= 0 && k.global_place_min_inliers() <= 1))
+    return "tracking.global_place_min_inliers must be in [0, 1]";
   if (!(k.jump_clear_ratio() >= 0 && k.jump_clear_ratio() <= 1 &&
         k.wheel_odometry().jump_clear_ratio() >= 0 && k.wheel_odometry().jump_clear_ratio() <= 1))
     return "tracking.jump_clear_ratio and wheel_odometry.jump_clear_ratio must be in [0, 1]";
@@ -302,6 +304,7 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.global_lead_ratio = k.global_lead_ratio();
   t.global_confirm_searches = k.global_confirm_searches();
   t.global_min_inliers = k.global_min_inliers();
+  t.global_place_min_inliers = k.global_place_min_inliers();
   t.global_max_crossings = k.global_max_crossings();
   t.global_min_lead = k.global_min_lead();
   t.global_excuse_crossings = k.global_excuse_crossings();

@@ -748,7 +748,7 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
     job.options.icp = tracker_.options().icp;
     job.refine.cap_m = tracker_.options().score_cap_m;
     job.refine.path_margin_m = tracker_.options().path_check_margin_m;
-    job.refine.min_inliers = tracker_.options().global_min_inliers;
+    job.refine.min_inliers = tracker_.options().global_place_min_inliers;
     if (tracker_.options().global_max_crossings > 0)
       job.refine.max_crossings = tracker_.options().global_max_crossings;
     job.refine.excuse_crossings_ratio = tracker_.options().global_excuse_crossings;

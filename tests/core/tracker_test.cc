@@ -1025,6 +1025,27 @@ TEST_F(GlobalPlacementDecisionTest, OnlyAPlaceThatFitsAndWalksClearLeads) {
   EXPECT_TRUE(Offer({truth_place_, twin}, 21).accepted);
 }
 
+// Where the plan lacks walls that stand, the true place fits half of the walls and the
+// others less: it may lead from global_place_min_inliers (0.45), not only from the 60%
+// under which the walls "do not fit" an alignment in use.
+TEST_F(GlobalPlacementDecisionTest, APlaceFittingHalfTheWallsOfAPlanThatLacksSomeCanLead) {
+  ASSERT_LT(tracker_.options().global_place_min_inliers, 0.5);
+  ASSERT_GT(tracker_.options().global_min_inliers, 0.5);
+  GlobalPlace half = truth_place_, less = other_place_;
+  half.inlier_ratio = 0.5;
+  less.inlier_ratio = 0.35;
+  EXPECT_FALSE(Offer({half, less}, 1).accepted);
+  const Tracker::Decision taken = Offer({half, less}, 2);
+  EXPECT_TRUE(taken.accepted) << taken.reason;
+
+  TrackerOptions o = tracker_.options();
+  o.global_place_min_inliers = 0.6;
+  tracker_ = Tracker(o);
+  tracker_.SetPlan(index_);
+  for (int i = 0; i < 5; ++i) EXPECT_FALSE(Offer({half, less}, 10 + i).accepted);
+  EXPECT_FALSE(tracker_.has_alignment());
+}
+
 TEST_F(GlobalPlacementDecisionTest, AWrongPickIsReplacedByAPlaceThatKeepsWinning) {
   // The pick put the wearer 6 m off (the other place); the walls fit the truth. The
   // first registration finds the walls do not fit the pick: UNRELIABLE at once.
