@@ -211,8 +211,10 @@ std::string Tracker::ApplyWallPick(const WallPick& pick, int64_t stamp_ns) {
 bool Tracker::GlobalSearchDue(int64_t now_ns, size_t live_points) const {
   if (!options_.global_search || !index_ || live_points < GlobalMinPoints()) return false;
   if (has_alignment() && placement_confirmed_ && !WallsDoNotFit()) return false;
-  return !last_global_ns_ ||
-         static_cast<double>(now_ns - *last_global_ns_) * 1e-9 >= options_.global_interval_s;
+  // A check runs more often: the wearer is on the plan already, perhaps on a wrong place.
+  const double interval =
+      has_alignment() ? options_.global_check_interval_s : options_.global_interval_s;
+  return !last_global_ns_ || static_cast<double>(now_ns - *last_global_ns_) * 1e-9 >= interval;
 }
 
 uint32_t Tracker::GlobalMinPoints() const {

@@ -116,8 +116,9 @@ struct TrackerOptions {
   // fit the one in use, a place that fits better by a lead does.
   bool global_search = false;
   uint32_t global_min_points = 150;
-  // ...and to check an alignment in use (it has that place to beat).
+  // ...and to check an alignment in use (it has that place to beat), every this often.
   uint32_t global_check_min_points = 60;
+  double global_check_interval_s = 2.0;
   double global_interval_s = 3.0;
   double global_window_s = 60.0;
   double global_clear_ratio = 0.5;

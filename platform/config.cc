@@ -184,6 +184,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (!(k.off_plan_margin_m() >= 0 && k.off_plan_margin_m() <= 1000))
     return "tracking.off_plan_margin_m must be in [0, 1000]";
   if (!(k.global_interval_s() > 0)) return "tracking.global_interval_s must be positive";
+  if (!(k.global_check_interval_s() > 0))
+    return "tracking.global_check_interval_s must be positive";
   if (!(k.global_window_s() >= 0)) return "tracking.global_window_s must be 0 or positive";
   if (!(k.global_clear_ratio() > 0 && k.global_clear_ratio() <= 1))
     return "tracking.global_clear_ratio must be in (0, 1]";
@@ -298,6 +300,7 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.global_search = k.global_search();
   t.global_min_points = k.global_min_points();
   t.global_check_min_points = k.global_check_min_points();
+  t.global_check_interval_s = k.global_check_interval_s();
   t.global_interval_s = k.global_interval_s();
   t.global_window_s = k.global_window_s();
   t.global_clear_ratio = k.global_clear_ratio();

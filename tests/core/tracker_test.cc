@@ -785,6 +785,31 @@ TEST_F(TrackerTest, ASearchChecksAPickOnFewerWallsThanItPlacesOn) {
   EXPECT_TRUE(tracker_.GlobalSearchDue(3, 60));
 }
 
+// Placing waits global_interval_s between searches; a check of the place in use,
+// global_check_interval_s (a wrong place is undone sooner).
+TEST_F(TrackerTest, AChecksIntervalIsItsOwn) {
+  TrackerOptions options;
+  options.global_search = true;
+  ASSERT_LT(options.global_check_interval_s, options.global_interval_s);
+  tracker_ = Tracker(options);
+  tracker_.SetPlan(index_);
+  const int64_t s = 1'000'000'000;
+  tracker_.MarkGlobalSearchStarted(10 * s);
+  const auto after = [&](double seconds) {
+    return tracker_.GlobalSearchDue(10 * s + static_cast<int64_t>(seconds * 1e9), 1000);
+  };
+  EXPECT_FALSE(after(options.global_check_interval_s));
+  EXPECT_TRUE(after(options.global_interval_s));
+  // A pick whose walls do not fit: checked every global_check_interval_s.
+  const Se2 wrong = Se2{Deg(90), {3.0, -2.0}} * truth_;
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(wrong, {4, 2}, {1, 0}), 10 * s), "");
+  const std::vector<Eigen::Vector2d> cloud = Cloud();
+  tracker_.Offer(ResultFor(truth_, cloud), cloud, tracker_.alignment().version, 10 * s);
+  ASSERT_TRUE(tracker_.WallsDoNotFit());
+  EXPECT_FALSE(after(options.global_check_interval_s - 0.1));
+  EXPECT_TRUE(after(options.global_check_interval_s));
+}
+
 // Two identical rooms 6 m apart: a registered alignment that would put the wearer in the
 // other room (a better fit than a slightly-off one) is beyond the filter's gate; it is
 // held until later results, over metres walked, keep landing on it (the navigation

@@ -159,6 +159,7 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"tracking { global_check_min_points: 5 }", "global_check_min_points"},
            Case{"tracking { off_plan_margin_m: -1 }", "off_plan_margin_m"},
            Case{"tracking { global_place_min_inliers: 1.5 }", "global_place_min_inliers"},
+           Case{"tracking { global_check_interval_s: 0 }", "global_check_interval_s"},
            Case{"tracking { off_plan_margin_m: nan }", "off_plan_margin_m"},
            Case{"tracking { global_unseen_reach_m: -1 }", "global_unseen_reach_m"},
            Case{"tracking { global_unseen_allowance: 1.5 }", "global_unseen_allowance"},
