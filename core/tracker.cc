@@ -427,10 +427,7 @@ std::string Tracker::FirstRegistrationDoubt(const RegistrationResult& result) co
 
 uint32_t Tracker::FirstPlaceCrossings(const Se2& T_plan_slam,
                                       const std::vector<Eigen::Vector2d>& path_slam) const {
-  if (!options_.path_check || path_slam.size() < 2 ||
-      (alignment_.source != AlignmentSource::kWallPick &&
-       alignment_.source != AlignmentSource::kFlip))
-    return 0;
+  if (!options_.path_check || path_slam.size() < 2 || !on_pick()) return 0;
   return PathCrossings(PathOnPlan(T_plan_slam, path_slam), index_->plan(),
                        options_.path_check_margin_m);
 }
@@ -759,9 +756,7 @@ Reliability Tracker::CurrentReliability() const {
     r.reason = text;
     return r;
   }
-  if ((alignment_.source == AlignmentSource::kWallPick ||
-       alignment_.source == AlignmentSource::kFlip) &&
-      r.flag == ReliabilityFlag::kReliable) {
+  if (on_pick() && r.flag == ReliabilityFlag::kReliable) {
     // Checked on a few walls (check_min_points), not registered yet: a wrong pick's few
     // walls often fit it as well as a right pick's; only a registration places.
     r.flag = ReliabilityFlag::kDegraded;

@@ -309,6 +309,12 @@ class Tracker {
   const std::optional<Se2>& leading_place() const { return leading_place_; }
   // The wearer's path went through a wall of the plan under the alignment in use.
   bool path_crossed() const { return crossings_ > 0; }
+  // The alignment in use is a wall pick or its flip: no registration has placed the
+  // wearer since.
+  bool on_pick() const {
+    return alignment_.source == AlignmentSource::kWallPick ||
+           alignment_.source == AlignmentSource::kFlip;
+  }
   // `full_grid_scores`: when the grid returned as many places as it may, their grid
   // scores, best first (for global_crowded_ratio); else empty.
   Decision OfferPlaces(const std::vector<GlobalPlace>& places, const Eigen::Vector2d& centre_slam,

@@ -780,9 +780,7 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
   if (job.cloud.size() < tracker_.MinPoints()) return std::nullopt;
   tracker_.MarkRegistrationStarted(latest_stamp_ns_);
   // A first place after a pick must not walk the wearer through walls (Tracker::Offer).
-  if (tracker_.alignment().source == AlignmentSource::kWallPick ||
-      tracker_.alignment().source == AlignmentSource::kFlip || tracker_.path_crossed())
-    job.path = PathSince(min_stamp);
+  if (tracker_.on_pick() || tracker_.path_crossed()) job.path = PathSince(min_stamp);
   const double refine_s = config_.tracking().refine_window_s();
   if (refine_s > 0) {
     job.recent = store_.Snapshot(config_.tracking().max_points(), &job.recent_normals,
