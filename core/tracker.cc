@@ -420,7 +420,12 @@ std::string Tracker::FirstRegistrationDoubt(const RegistrationResult& result) co
                   100 * (1 - result.ambiguity));
     return text;
   }
-  if (result.points > 0 && result.inliers < options_.first_inlier_ratio * result.points)
+  // A searched place was refined on a minute of walls and led every other place of the
+  // plan; a pick may be metres off.
+  const double ratio = alignment_.source == AlignmentSource::kGlobalSearch
+                           ? options_.searched_first_inlier_ratio
+                           : options_.first_inlier_ratio;
+  if (result.points > 0 && result.inliers < ratio * result.points)
     return "too few wall points fit for a first registration";
   return {};
 }

@@ -77,6 +77,7 @@ struct TrackerOptions {
   double max_ambiguity = 0.7;       // results after a pick with RegistrationResult::ambiguity above
                                     // this: refused until later ones confirm the place (as jumps)
   double first_inlier_ratio = 0.9;  // results after a pick with fewer inliers: refused
+  double searched_first_inlier_ratio = 0.75;  // ...after a place found by searching the plan
   double clear_ambiguity = 0.3;     // a first result this unambiguous, with its inliers, and
                                     // within the pick search of the pick at the wearer: taken
                                     // at once (others wait for the next result to agree)

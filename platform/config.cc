@@ -173,6 +173,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
     return "tracking.max_ambiguity must be in (0, 1]";
   if (!(k.first_inlier_ratio() >= 0 && k.first_inlier_ratio() <= 1))
     return "tracking.first_inlier_ratio must be in [0, 1]";
+  if (!(k.searched_first_inlier_ratio() >= 0 && k.searched_first_inlier_ratio() <= 1))
+    return "tracking.searched_first_inlier_ratio must be in [0, 1]";
   if (!(k.clear_ambiguity() >= 0 && k.clear_ambiguity() <= k.max_ambiguity()))
     return "tracking.clear_ambiguity must be in [0, max_ambiguity]";
   if (k.global_min_points() < 10) return "tracking.global_min_points must be at least 10";
@@ -296,6 +298,7 @@ TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
   t.search_unexplained = k.search_unexplained();
   t.max_ambiguity = k.max_ambiguity();
   t.first_inlier_ratio = k.first_inlier_ratio();
+  t.searched_first_inlier_ratio = k.searched_first_inlier_ratio();
   t.clear_ambiguity = k.clear_ambiguity();
   t.global_search = k.global_search();
   t.global_min_points = k.global_min_points();

@@ -15,6 +15,7 @@ namespace {
 
 using testing::Deg;
 using ::testing::HasSubstr;
+using ::testing::Not;
 using testing::IsNearlySe2;
 
 // The pick a wearer makes when slam and plan are related by T_plan_slam: a point on a
@@ -883,6 +884,39 @@ class GlobalPlacementDecisionTest : public TrackerTest {
   GlobalPlace truth_place_, other_place_;
   const Eigen::Vector2d centre_{1.0, 2.0};  // slam frame
 };
+
+TEST_F(GlobalPlacementDecisionTest, ASearchedPlacesFirstRegistrationNeedsFewerWallsToFitThanAPicks) {
+  // A registration fitting 80% of the walls: refused after a pick (90%), as a place that
+  // explains fewer of the walls than a pick's first place must; taken after a searched
+  // place (75%), which a minute of walls put ahead of every other place of the plan (a
+  // plan that lacks walls that stand leaves a right place's windows under 90%).
+  const std::vector<Eigen::Vector2d> cloud = Cloud();
+  RegistrationResult r = ResultFor(truth_, cloud);
+  r.inliers = r.points * 4 / 5;
+  ASSERT_EQ(tracker_.ApplyWallPick(PickFor(truth_, {4, 2}, {1, 0}), 1), "");
+  tracker_.Correct({{2.0, 1.5}, 0, 1.6});
+  const Tracker::Decision picked = tracker_.Offer(r, cloud, tracker_.alignment().version, 2);
+  EXPECT_FALSE(picked.accepted);
+  EXPECT_THAT(picked.reason, HasSubstr("too few wall points fit"));
+
+  tracker_.Reset();
+  ASSERT_FALSE(Offer({truth_place_, other_place_}, 3).accepted);
+  ASSERT_TRUE(Offer({truth_place_, other_place_}, 4).accepted);
+  ASSERT_EQ(tracker_.alignment().source, AlignmentSource::kGlobalSearch);
+  tracker_.Correct({{2.0, 1.5}, 0, 1.6});
+  const Tracker::Decision searched = tracker_.Offer(r, cloud, tracker_.alignment().version, 5);
+  EXPECT_TRUE(searched.accepted) << searched.reason;
+  EXPECT_THAT(searched.reason, Not(HasSubstr("too few wall points fit")));
+  // ...but not from fewer than 75%.
+  tracker_.Reset();
+  ASSERT_FALSE(Offer({truth_place_, other_place_}, 6).accepted);
+  ASSERT_TRUE(Offer({truth_place_, other_place_}, 7).accepted);
+  r.inliers = r.points * 7 / 10;
+  tracker_.Correct({{2.0, 1.5}, 0, 1.6});
+  const Tracker::Decision fewer = tracker_.Offer(r, cloud, tracker_.alignment().version, 8);
+  EXPECT_FALSE(fewer.accepted);
+  EXPECT_THAT(fewer.reason, HasSubstr("too few wall points fit"));
+}
 
 TEST_F(GlobalPlacementDecisionTest, AClearPlaceIsTakenWhenTheNextSearchAgreesAndTrustedAfterThree) {
   EXPECT_THAT(tracker_.CurrentReliability().reason, HasSubstr("searching the plan"));

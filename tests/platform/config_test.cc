@@ -64,6 +64,7 @@ TEST(ConfigTest, ProtoDefaultsMatchTheCoreDefaults) {
   EXPECT_EQ(t.min_walk_m, core.min_walk_m);
   EXPECT_EQ(t.max_ambiguity, core.max_ambiguity);
   EXPECT_EQ(t.first_inlier_ratio, core.first_inlier_ratio);
+  EXPECT_EQ(t.searched_first_inlier_ratio, core.searched_first_inlier_ratio);
   EXPECT_EQ(t.jump_clear_ratio, core.jump_clear_ratio);
   EXPECT_EQ(t.jump_clear_inliers, core.jump_clear_inliers);
   EXPECT_EQ(t.search_unexplained, core.search_unexplained);
@@ -145,6 +146,7 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"tracking { max_ambiguity: 1.5 }", "max_ambiguity"},
            Case{"tracking { refine_window_s: -1 }", "refine_window_s"},
            Case{"tracking { first_inlier_ratio: 1.1 }", "first_inlier_ratio"},
+           Case{"tracking { searched_first_inlier_ratio: -0.1 }", "searched_first_inlier_ratio"},
            Case{"tracking { jump_clear_ratio: -0.5 }", "jump_clear_ratio"},
            Case{"tracking { jump_clear_inliers: 0 }", "jump_clear_inliers"},
            Case{"tracking { clear_ambiguity: 0.8 }", "clear_ambiguity"},
