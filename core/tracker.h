@@ -77,11 +77,12 @@ struct TrackerOptions {
   double max_ambiguity = 0.7;       // results after a pick with RegistrationResult::ambiguity above
                                     // this: refused until later ones confirm the place (as jumps)
   double first_inlier_ratio = 0.9;  // results after a pick with fewer inliers: refused
-  double searched_first_inlier_ratio = 0.75;  // ...after a place found by searching the plan
-  double clear_ambiguity = 0.3;     // a first result this unambiguous, with its inliers, and
-                                    // within the pick search of the pick at the wearer: taken
-                                    // at once (others wait for the next result to agree)
-  double score_cap_m = 0.2;         // distances capped here in the "better fit" score
+  // ...and after a place found by searching the plan (refined on a minute of walls).
+  double searched_first_inlier_ratio = 0.75;
+  double clear_ambiguity = 0.3;    // a first result this unambiguous, with its inliers, and
+                                   // within the pick search of the pick at the wearer: taken
+                                   // at once (others wait for the next result to agree)
+  double score_cap_m = 0.2;        // distances capped here in the "better fit" score
   double worse_fit_ratio = 1.25;   // results scoring worse than this times the one in use: rejected
   bool local_meshes = false;       // register only meshes new since the last run (thesis "local")
   uint32_t min_new_points = 500;   // register after this many new wall points...

@@ -15,8 +15,8 @@ namespace {
 
 using testing::Deg;
 using ::testing::HasSubstr;
-using ::testing::Not;
 using testing::IsNearlySe2;
+using ::testing::Not;
 
 // The pick a wearer makes when slam and plan are related by T_plan_slam: a point on a
 // plan wall with its normal, and the same point and normal seen in slam.
@@ -885,7 +885,8 @@ class GlobalPlacementDecisionTest : public TrackerTest {
   const Eigen::Vector2d centre_{1.0, 2.0};  // slam frame
 };
 
-TEST_F(GlobalPlacementDecisionTest, ASearchedPlacesFirstRegistrationNeedsFewerWallsToFitThanAPicks) {
+TEST_F(GlobalPlacementDecisionTest,
+       ASearchedPlacesFirstRegistrationNeedsFewerWallsToFitThanAPicks) {
   // A registration fitting 80% of the walls: refused after a pick (90%), as a place that
   // explains fewer of the walls than a pick's first place must; taken after a searched
   // place (75%), which a minute of walls put ahead of every other place of the plan (a
