@@ -35,6 +35,9 @@ struct FloorPlanParse {
   FloorPlan plan;
   std::string error;            // empty on success
   size_t dropped_segments = 0;  // zero-length or duplicate
+  // How the file's coordinates became plan metres when not as written (a WGS84 plan's
+  // projection and origin), for the load log line; empty for a plan in metres.
+  std::string frame;
   bool ok() const { return error.empty(); }
 };
 

@@ -227,6 +227,7 @@ Engine::PlanAssets Engine::BuildPlan(const FloorPlanParse& parsed, const std::st
                parsed.plan.segments.size(), parsed.dropped_segments,
                parsed.plan.max.x() - parsed.plan.min.x(), parsed.plan.max.y() - parsed.plan.min.y(),
                static_cast<double>(a.index->MemoryBytes()) / 1e6);
+  if (!parsed.frame.empty()) spdlog::info("floor plan {}: {}", file, parsed.frame);
   if (config_.tracking().global_search()) {
     GlobalSearchOptions search;
     search.crowd_ratio = config_.tracking().global_crowded_ratio();

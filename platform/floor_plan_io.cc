@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -12,6 +13,7 @@
 #include <sstream>
 
 #include "platform/raster_plan_io.h"
+#include "platform/wgs84.h"
 
 namespace floorpose::platform {
 namespace {
@@ -83,6 +85,55 @@ std::string AddGeometry(const Json& g, std::vector<Segment>* out, int depth) {
   return ok ? std::string() : "bad coordinates in a " + type;
 }
 
+// A GeoJSON in longitude/latitude (RFC 7946) has no `crs` member or names CRS84 / EPSG:4326
+// in it, does not say `"units": "m"`, and has coordinates that can be longitude/latitude
+// of one building. Anything else is metres in a local frame, as written.
+bool IsLonLat(const Json& doc, const std::vector<Segment>& raw) {
+  if (doc.contains("properties") && doc["properties"].is_object() &&
+      doc["properties"].contains("units") && doc["properties"]["units"] == "m")
+    return false;
+  if (doc.contains("crs")) {
+    const std::string crs = doc["crs"].dump();
+    if (crs.find("CRS84") == std::string::npos && crs.find("4326") == std::string::npos)
+      return false;
+  }
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(1e300), hi = -lo;
+  for (const Segment& s : raw)
+    for (const Eigen::Vector2d& p : {s.a, s.b})
+      if (p.allFinite()) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  return (hi - lo).minCoeff() >= 0 && CouldBeLonLat(lo, hi);
+}
+
+// Projects `raw` from longitude/latitude to metres about `properties.origin` ([lon, lat])
+// or else the south-west corner of the bounding box. Returns an error or empty; `frame`
+// says the projection and origin.
+std::string ProjectLonLat(const Json& doc, std::vector<Segment>* raw, std::string* frame) {
+  Eigen::Vector2d origin = Eigen::Vector2d::Constant(1e300);
+  for (const Segment& s : *raw)
+    for (const Eigen::Vector2d& p : {s.a, s.b})
+      if (p.allFinite()) origin = origin.cwiseMin(p);
+  const char* which = "the south-west corner of its bounding box";
+  if (doc.contains("properties") && doc["properties"].is_object() &&
+      doc["properties"].contains("origin")) {
+    if (!ToPoint(doc["properties"]["origin"], &origin) || std::abs(origin.x()) > 180 ||
+        std::abs(origin.y()) > 90)
+      return "properties.origin is not [longitude, latitude]";
+    which = "properties.origin";
+  }
+  std::vector<Eigen::Vector2d> points;
+  for (const Segment& s : *raw) points.push_back(s.a), points.push_back(s.b);
+  std::string error;
+  if (!ProjectToLocalMetres(origin, &points, &error)) return error;
+  for (size_t i = 0; i < raw->size(); ++i) (*raw)[i] = {points[2 * i], points[2 * i + 1]};
+  char text[200];
+  std::snprintf(text, sizeof(text),
+                "WGS84 longitude/latitude, projected to local metres (azimuthal equidistant, "
+                "origin %.7f, %.7f: %s)",
+                origin.x(), origin.y(), which);
+  *frame = text;
+  return {};
+}
+
 }  // namespace
 
 bool ReadFile(const std::string& path, size_t max_bytes, std::string* contents,
@@ -148,11 +199,15 @@ FloorPlanParse ParseGeoJsonFloorPlan(std::string_view text, std::string id) {
   } else {
     error = AddGeometry(doc, &raw, 0);
   }
+  std::string frame;
+  if (error.empty() && IsLonLat(doc, raw)) error = ProjectLonLat(doc, &raw, &frame);
   if (!error.empty()) {
     out.error = "GeoJSON: " + error;
     return out;
   }
-  return MakeFloorPlan(std::move(id), std::move(raw));
+  out = MakeFloorPlan(std::move(id), std::move(raw));
+  out.frame = std::move(frame);
+  return out;
 }
 
 FloorPlanParse LoadFloorPlan(const std::string& path) {

@@ -1,5 +1,7 @@
 // Floor plan files: GeoJSON (LineString, MultiLineString, Polygon and MultiPolygon rings,
-// metres in a local frame), the thesis' text format and raster plans (.yaml beside an
+// metres in a local frame; or RFC 7946 longitude/latitude, projected to metres about the
+// south-west corner of the bounding box or `properties.origin`, platform/wgs84.h), the
+// thesis' text format and raster plans (.yaml beside an
 // image, platform/raster_plan_io.h). Chosen by extension.
 #pragma once
 

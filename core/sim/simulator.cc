@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <set>
 #include <tuple>
@@ -153,17 +154,137 @@ std::string Format(const char* format, double a = 0, double b = 0, double c = 0,
   return text;
 }
 
+// Where the ray from p along unit u first meets a segment of the plan other than `skip`,
+// within [min_m, max_m]: a proper crossing, or the end of a wall lying on the ray's line
+// (a face cut by an opening). Infinity when none.
+double RayHit(const FloorPlan& plan, size_t skip, const Eigen::Vector2d& p,
+              const Eigen::Vector2d& u, double min_m, double max_m) {
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t j = 0; j < plan.segments.size(); ++j) {
+    if (j == skip) continue;
+    const Segment& o = plan.segments[j];
+    const Eigen::Vector2d d = o.b - o.a;
+    const double denom = Cross(u, d);
+    if (std::abs(denom) > 1e-9) {
+      const double t = Cross(o.a - p, d) / denom, s = Cross(o.a - p, u) / denom;
+      if (s >= -1e-6 && s <= 1 + 1e-6 && t >= min_m && t <= max_m) best = std::min(best, t);
+      continue;
+    }
+    for (const Eigen::Vector2d& e : {o.a, o.b}) {  // parallel: its nearer end on the line
+      const double t = (e - p).dot(u);
+      if (std::abs(Cross(u, e - p)) < 0.02 && t >= min_m && t <= max_m) best = std::min(best, t);
+    }
+  }
+  return best;
+}
+
+// The plan's openings up to max_m wide drawn closed: from each wall's end along its own
+// line to the next wall that line meets, 0.6 to max_m on (a door between two walls, once
+// in each face of a thick wall), unless something already stands in the gap.
+std::vector<Segment> DoorLines(const FloorPlan& plan, double max_m) {
+  constexpr double kMinDoor = 0.6;
+  std::vector<Segment> out;
+  std::set<std::tuple<long long, long long, long long, long long>> seen;
+  auto cm = [](double v) { return std::llround(v * 100.0); };
+  for (size_t i = 0; i < plan.segments.size(); ++i) {
+    const Segment& s = plan.segments[i];
+    if (s.Length() < 0.3) continue;  // caps and jambs: the faces close their doors
+    for (const auto& [p, q] : {std::pair{s.a, s.b}, std::pair{s.b, s.a}}) {
+      const Eigen::Vector2d u = (p - q).normalized();
+      const double t = RayHit(plan, i, p, u, kMinDoor, max_m);
+      if (!std::isfinite(t)) continue;
+      const Eigen::Vector2d e = p + t * u;
+      if (StepCrossesPlan(p + 0.01 * u, e - 0.01 * u, plan)) continue;
+      bool covered = false;  // a wall already lies along the gap
+      for (const Segment& o : plan.segments)
+        covered =
+            covered || (ClosestPointOnSegment(o, 0.5 * (p + e)) - 0.5 * (p + e)).norm() < 0.02;
+      if (covered) continue;
+      auto key = std::make_tuple(cm(p.x()), cm(p.y()), cm(e.x()), cm(e.y()));
+      if (std::get<0>(key) > std::get<2>(key) ||
+          (std::get<0>(key) == std::get<2>(key) && std::get<1>(key) > std::get<3>(key)))
+        key = std::make_tuple(cm(e.x()), cm(e.y()), cm(p.x()), cm(p.y()));
+      if (seen.insert(key).second) out.push_back({p, e});
+    }
+  }
+  return out;
+}
+
+// Whether a wall (its faces) is on the building's outside: a ray across one of its faces
+// of 1 m or more, from its middle, leaves the plan without meeting another wall.
+bool ExteriorWall(const FloorPlan& plan, const std::vector<size_t>& group) {
+  const double reach = (plan.max - plan.min).norm() + 1.0;
+  for (size_t i : group) {
+    const Segment& s = plan.segments[i];
+    if (s.Length() < 1.0) continue;
+    for (double side : {1.0, -1.0}) {
+      const Eigen::Vector2d n = side * s.Normal();
+      if (!std::isfinite(RayHit(plan, i, 0.5 * (s.a + s.b) + 0.01 * n, n, 0.0, reach))) return true;
+    }
+  }
+  return false;
+}
+
+// The walls reality has: plan walls present (moved where reality moved them), glass too.
+std::vector<Segment> StandingWalls(const FloorPlan& plan, const Reality& reality) {
+  std::vector<Segment> out;
+  for (size_t i = 0; i < plan.segments.size(); ++i)
+    if (reality.plan_wall_present[i])
+      out.push_back({plan.segments[i].a + reality.plan_wall_offset[i],
+                     plan.segments[i].b + reality.plan_wall_offset[i]});
+  return out;
+}
+
+// Scenario stale: the building was changed after the plan was drawn. Of the interior walls
+// (1 m or longer, whole: both faces and caps), about gone_share of their length is gone
+// and moved_share stands min_move_m to max_move_m across from where it is drawn.
+std::string MarkStale(const FloorPlan& plan, const SimulatorOptions& o, SplitMix64& rng,
+                      Reality* reality) {
+  std::vector<std::vector<size_t>> interior;
+  std::vector<uint8_t> grouped(plan.segments.size(), 0);
+  double total = 0.0;
+  for (size_t i : Shuffled(plan.segments.size(), rng)) {
+    if (grouped[i] || plan.segments[i].Length() < 1.0) continue;
+    std::vector<size_t> group;
+    for (size_t j : WallGroup(plan, i))
+      if (!grouped[j]) group.push_back(j), grouped[j] = 1;
+    if (ExteriorWall(plan, group)) continue;
+    for (size_t j : group) total += plan.segments[j].Length();
+    interior.push_back(std::move(group));
+  }
+  double gone = 0.0, moved = 0.0;
+  for (const std::vector<size_t>& group : interior) {
+    double length = 0.0;
+    for (size_t j : group) length += plan.segments[j].Length();
+    if (gone < o.stale_gone_share * total) {
+      for (size_t j : group) reality->plan_wall_present[j] = 0;
+      gone += length;
+    } else if (moved < o.stale_moved_share * total) {
+      const Eigen::Vector2d offset = rng.Uniform(o.min_move_m, o.max_move_m) *
+                                     (rng.Next() % 2 ? 1.0 : -1.0) *
+                                     plan.segments[group.front()].Normal();
+      for (size_t j : group) reality->plan_wall_offset[j] = offset;
+      moved += length;
+    }
+  }
+  return Format("stale: of %.0f m of interior walls on the plan, %.0f%% are gone and %.0f%% ",
+                total, total > 0 ? 100.0 * gone / total : 0.0,
+                total > 0 ? 100.0 * moved / total : 0.0) +
+         Format("stand %.1f-%.1f m from where they are drawn", o.min_move_m, o.max_move_m);
+}
+
 // ---------------------------------------------------------------------------------------
 // Reality: the plan's walls as they are in the scenario, plus what the plan does not show.
 
 class RealityBuilder {
  public:
   RealityBuilder(const FloorPlan& plan, FreeSpace& free_space,
-                 const std::vector<Eigen::Vector2d>& keep_clear, SplitMix64& rng)
-      : plan_(plan), free_space_(free_space), keep_clear_(keep_clear), rng_(rng) {
-    reality.plan_wall_present.assign(plan.segments.size(), 1);
-    reality.plan_wall_glass.assign(plan.segments.size(), 0);
-  }
+                 const std::vector<Eigen::Vector2d>& keep_clear, SplitMix64& rng, Reality initial)
+      : reality(std::move(initial)),
+        plan_(plan),
+        free_space_(free_space),
+        keep_clear_(keep_clear),
+        rng_(rng) {}
 
   double TotalWallLength() const {
     double total = 0.0;
@@ -192,7 +313,7 @@ class RealityBuilder {
   // Puts an object (or wall) not on the plan on the floor, unless it would stand in a plan
   // wall or another object, on the given trajectory, or cut the walkable region apart.
   bool Place(std::vector<Eigen::Vector2d> footprint, double height, const char* kind) {
-    for (const Segment& s : plan_.segments) {
+    for (const Segment& s : StandingWalls(plan_, reality)) {
       if (InsidePolygon(footprint, s.a) || InsidePolygon(footprint, s.b)) return false;
       for (size_t i = 0, j = footprint.size() - 1; i < footprint.size(); j = i++)
         if (SegmentsIntersect(footprint[j], footprint[i], s.a, s.b)) return false;
@@ -274,10 +395,7 @@ class RealityBuilder {
     for (size_t i = 0; i < absent_marks_.size(); ++i)
       if (absent_marks_[i]) reality.plan_wall_present[i] = 0;
     const double area = free_space_.walkable_area_m2();
-    const int walls = PlaceMany(std::min(40, static_cast<int>(area / 60)), [&] {
-      const Eigen::Vector2d c = RandomFreePoint(0.6);
-      return Place(Rectangle(c, AlignedYaw(c), rng_.Uniform(1.5, 4.0), 0.12), ceiling, "wall");
-    });
+    const int walls = PlaceWalls(ceiling);
     const int pillars = PlaceMany(std::min(10, static_cast<int>(area / 200)), [&] {
       const Eigen::Vector2d c = RandomFreePoint(1.2);
       const double r = rng_.Uniform(0.3, 0.8);
@@ -295,6 +413,20 @@ class RealityBuilder {
         "mismatch: %.0f%% of the wall length on the plan is absent; not on the plan: "
         "%.0f walls (1.5-4 m), %.0f round pillars, %.0f boxes",
         100.0 * absent / TotalWallLength(), walls, pillars, boxes);
+  }
+
+  // New walls where the plan has none (stale), as many as the mismatch scenario's.
+  std::string NewWalls(double ceiling) {
+    return Format("; %.0f new walls (1.5-4 m) not on the plan", PlaceWalls(ceiling));
+  }
+
+  // Walls of 1.5-4 m that are not on the plan, one per 60 m2 of walkable floor (at most 40).
+  int PlaceWalls(double ceiling) {
+    const double area = free_space_.walkable_area_m2();
+    return PlaceMany(std::min(40, static_cast<int>(area / 60)), [&] {
+      const Eigen::Vector2d c = RandomFreePoint(0.6);
+      return Place(Rectangle(c, AlignedYaw(c), rng_.Uniform(1.5, 4.0), 0.12), ceiling, "wall");
+    });
   }
 
   std::string Glass(double share) {
@@ -321,9 +453,10 @@ std::vector<Surface> RealSurfaces(const FloorPlan& plan, const Reality& reality,
   for (size_t i = 0; i < plan.segments.size(); ++i) {
     const Segment& s = plan.segments[i];
     if (!reality.plan_wall_present[i] || reality.plan_wall_glass[i] || s.Length() < 1e-3) continue;
-    out.push_back(MakeSurface({s.a.x(), s.a.y(), 0.0}, {s.b.x() - s.a.x(), s.b.y() - s.a.y(), 0.0},
-                              up, patch_m));
-    out.back().segment = static_cast<int>(i);
+    const Eigen::Vector2d a = s.a + reality.plan_wall_offset[i];
+    out.push_back(
+        MakeSurface({a.x(), a.y(), 0.0}, {s.b.x() - s.a.x(), s.b.y() - s.a.y(), 0.0}, up, patch_m));
+    out.back().segment = reality.plan_wall_offset[i].isZero() ? static_cast<int>(i) : -1;
   }
   for (const Reality::Prism& p : reality.extras) {
     const auto& f = p.footprint;
@@ -376,6 +509,26 @@ Leg MakeLeg(std::vector<Eigen::Vector2d> points, double speed) {
   return leg;
 }
 
+// The head's motion on top of the body's heading: looking around while walking (two
+// sines) and the pitch swinging; random phases per walk.
+class HeadSwing {
+ public:
+  explicit HeadSwing(SplitMix64& rng)
+      : phase1_(rng.Uniform(0, 2 * M_PI)),
+        phase2_(rng.Uniform(0, 2 * M_PI)),
+        phase3_(rng.Uniform(0, 2 * M_PI)) {}
+  double Look(double t, const SimulatorOptions& o) const {
+    return o.look_around_rad * (0.7 * std::sin(2 * M_PI * t / 5.3 + phase1_) +
+                                0.3 * std::sin(2 * M_PI * t / 2.1 + phase2_));
+  }
+  double Pitch(double t, const SimulatorOptions& o) const {
+    return o.head_pitch_rad + o.head_pitch_swing_rad * std::sin(2 * M_PI * t / 7.7 + phase3_);
+  }
+
+ private:
+  double phase1_, phase2_, phase3_;
+};
+
 std::vector<HeadSample> GenerateWalk(const FreeSpace& fs, Scenario scenario,
                                      const SimulatorOptions& o, SplitMix64& rng) {
   const std::vector<int>& cells = fs.cells();
@@ -410,8 +563,7 @@ std::vector<HeadSample> GenerateWalk(const FreeSpace& fs, Scenario scenario,
   };
 
   const double dt = o.pose_period_s;
-  const double phase1 = rng.Uniform(0, 2 * M_PI), phase2 = rng.Uniform(0, 2 * M_PI);
-  const double phase3 = rng.Uniform(0, 2 * M_PI);
+  const HeadSwing swing(rng);
   Eigen::Vector2d position = random_point(0.5);
   visited.push_back(position);
   double body = rng.Uniform(-M_PI, M_PI);
@@ -424,13 +576,9 @@ std::vector<HeadSample> GenerateWalk(const FreeSpace& fs, Scenario scenario,
   std::vector<HeadSample> out;
   for (double t = 0.0; t <= o.max_duration_s; t += dt) {
     // The head: looking around while walking, the scan when stopped, pitch swinging.
-    const double look = o.look_around_rad * (0.7 * std::sin(2 * M_PI * t / 5.3 + phase1) +
-                                             0.3 * std::sin(2 * M_PI * t / 2.1 + phase2));
     const double scan =
         stopped ? scan_amplitude * std::sin(2 * M_PI * stop_elapsed / stop_total) : 0.0;
-    out.push_back(
-        {position, WrapAngle(body + look + scan),
-         o.head_pitch_rad + o.head_pitch_swing_rad * std::sin(2 * M_PI * t / 7.7 + phase3)});
+    out.push_back({position, WrapAngle(body + swing.Look(t, o) + scan), swing.Pitch(t, o)});
     if (walked >= o.target_length_m) break;
 
     if (stopped) {
@@ -491,13 +639,60 @@ Se2 ToSe2(const Pose2& p) { return {p.heading, p.position}; }
 
 }  // namespace
 
+std::vector<TimedPose> WalkWaypoints(const std::vector<TimedPose>& waypoints,
+                                     const SimulatorOptions& o) {
+  std::vector<TimedPose> out;
+  if (waypoints.size() < 2 || !(o.pose_period_s > 0)) return out;
+  SplitMix64 rng = Stream(o.seed, 8);
+  const HeadSwing swing(rng);
+  const double dt = o.pose_period_s, scan_s = o.first_stop_s;
+  const double amplitude = std::min(o.max_scan_rad, 0.25 * scan_s) * (rng.Next() % 2 ? 1 : -1);
+  const Eigen::Vector2d first_leg = waypoints[1].position - waypoints[0].position;
+  double body = std::atan2(first_leg.y(), first_leg.x());
+  const double t0 = waypoints.front().t_s - scan_s;
+  size_t i = 0;
+  for (double t = t0; t <= waypoints.back().t_s + 1e-9; t += dt) {
+    while (i + 2 < waypoints.size() && waypoints[i + 1].t_s <= t) ++i;
+    const TimedPose& a = waypoints[i];
+    const TimedPose& b = waypoints[i + 1];
+    const double span = b.t_s - a.t_s;
+    const double f = span > 0 ? std::clamp((t - a.t_s) / span, 0.0, 1.0) : 1.0;
+    TimedPose pose;
+    pose.t_s = t - t0;
+    pose.position = a.position + f * (b.position - a.position);
+    // The body turns at a human rate towards the leg it walks; at the start it scans.
+    const Eigen::Vector2d leg = b.position - a.position;
+    if (t >= waypoints.front().t_s && leg.norm() > 1e-6) {
+      const double turn = WrapAngle(std::atan2(leg.y(), leg.x()) - body);
+      body = WrapAngle(body +
+                       std::clamp(turn, -o.max_turn_rate_rad_s * dt, o.max_turn_rate_rad_s * dt));
+    }
+    const double scan =
+        t < waypoints.front().t_s ? amplitude * std::sin(2 * M_PI * (t - t0) / scan_s) : 0.0;
+    pose.heading = WrapAngle(body + swing.Look(pose.t_s, o) + scan);
+    pose.pitch = swing.Pitch(pose.t_s, o);
+    out.push_back(pose);
+  }
+  return out;
+}
+
 std::optional<Scenario> ParseScenario(std::string_view name) {
   if (name == "corridor") return Scenario::kCorridor;
   if (name == "office") return Scenario::kOffice;
   if (name == "glass") return Scenario::kGlass;
   if (name == "hall") return Scenario::kHall;
   if (name == "mismatch") return Scenario::kMismatch;
+  if (name == "doors") return Scenario::kDoors;
+  if (name == "stale") return Scenario::kStale;
+  if (name == "scaled") return Scenario::kScaled;
+  if (name == "relocalize") return Scenario::kRelocalize;
   return std::nullopt;
+}
+
+const std::vector<std::string>& ScenarioNames() {
+  static const std::vector<std::string> names = {
+      "corridor", "office", "glass", "hall", "mismatch", "doors", "stale", "scaled", "relocalize"};
+  return names;
 }
 
 const char* ToString(Scenario scenario) {
@@ -507,14 +702,18 @@ const char* ToString(Scenario scenario) {
     case Scenario::kGlass: return "glass";
     case Scenario::kHall: return "hall";
     case Scenario::kMismatch: return "mismatch";
+    case Scenario::kDoors: return "doors";
+    case Scenario::kStale: return "stale";
+    case Scenario::kScaled: return "scaled";
+    case Scenario::kRelocalize: return "relocalize";
   }
   return "?";
 }
 
-Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
+Simulation Simulate(const FloorPlan& input, const SimulatorOptions& o,
                     const std::vector<TimedPose>* trajectory) {
   Simulation sim;
-  if (plan.segments.empty()) {
+  if (input.segments.empty()) {
     sim.error = "the plan has no walls";
     return sim;
   }
@@ -526,17 +725,42 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
   // Every plan and scenario gets its own draws for a seed: the SLAM drift and the wall
   // pick's error would otherwise repeat across a suite's plans (three seeds, three
   // pick errors).
-  const uint64_t walk_key = o.seed ^ Fnv1a(plan.id) ^ (static_cast<uint64_t>(o.scenario) << 56);
+  const uint64_t walk_key = o.seed ^ Fnv1a(input.id) ^ (static_cast<uint64_t>(o.scenario) << 56);
   SplitMix64 reality_rng = Stream(walk_key, 1), walk_rng = Stream(walk_key, 2);
   SplitMix64 drift_rng = Stream(walk_key, 3), sensor_rng = Stream(walk_key, 4);
   SplitMix64 mesh_rng = Stream(walk_key, 5), pick_rng = Stream(walk_key, 6);
+  SplitMix64 loss_rng = Stream(walk_key, 7);
   const double dt = o.pose_period_s;
 
+  // The plan as drawn, and what of it stands. In doors the plan has a line across every
+  // opening that reality lacks; in stale reality lost and moved walls since.
+  sim.plan = input;
+  const FloorPlan& plan = sim.plan;
+  std::string drawn_text;
+  if (o.scenario == Scenario::kDoors) {
+    const std::vector<Segment> doors = DoorLines(input, o.max_door_m);
+    sim.plan.segments.insert(sim.plan.segments.end(), doors.begin(), doors.end());
+    drawn_text = Format(
+        "doors: the plan draws %.0f openings of 0.6-%.1f m closed (one line per "
+        "face of a wall); reality has them open",
+        static_cast<double>(doors.size()), o.max_door_m);
+  }
+  Reality initial;
+  initial.plan_wall_present.assign(plan.segments.size(), 1);
+  initial.plan_wall_glass.assign(plan.segments.size(), 0);
+  initial.plan_wall_offset.assign(plan.segments.size(), Eigen::Vector2d::Zero());
+  for (size_t i = input.segments.size(); i < plan.segments.size(); ++i)
+    initial.plan_wall_present[i] = 0;
+  if (o.scenario == Scenario::kStale) drawn_text = MarkStale(plan, o, reality_rng, &initial);
+
   // Where one can walk: the plan's walls, all of them (so the walk never crosses one, even
-  // where reality lacks it).
+  // where reality lacks it); in the scenarios of a plan that differs from the building,
+  // the walls that stand.
+  const bool reality_first = o.scenario == Scenario::kDoors || o.scenario == Scenario::kStale;
   FreeSpaceOptions fso;
   fso.body_radius_m = o.body_radius_m;
-  FreeSpace free_space(plan.segments, plan.min, plan.max, fso);
+  FreeSpace free_space(reality_first ? StandingWalls(plan, initial) : plan.segments, plan.min,
+                       plan.max, fso);
   std::vector<HeadSample> head;
   std::vector<Eigen::Vector2d> keep_clear;  // a given trajectory: no objects on it
   if (trajectory) {
@@ -552,12 +776,22 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
   }
 
   // Reality.
-  RealityBuilder builder(plan, free_space, keep_clear, reality_rng);
+  RealityBuilder builder(plan, free_space, keep_clear, reality_rng, std::move(initial));
   builder.reality.ceiling_m = o.scenario == Scenario::kHall ? o.hall_ceiling_m : o.ceiling_m;
   std::string scenario_text;
   switch (o.scenario) {
     case Scenario::kCorridor:
       scenario_text = "corridor: reality equals the plan; goals far apart (long hallways)";
+      break;
+    case Scenario::kDoors: scenario_text = drawn_text; break;
+    case Scenario::kStale:
+      scenario_text = drawn_text + builder.NewWalls(builder.reality.ceiling_m);
+      break;
+    case Scenario::kScaled:
+      scenario_text = "scaled: the plan was scanned from paper (below)";
+      break;
+    case Scenario::kRelocalize:
+      scenario_text = "relocalize: reality equals the plan; the headset loses tracking (below)";
       break;
     case Scenario::kOffice: scenario_text = builder.Furnish(); break;
     case Scenario::kGlass: scenario_text = builder.Glass(o.glass_share); break;
@@ -599,6 +833,35 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
   }
   const size_t n = head.size();
 
+  // Losses of tracking (relocalize): count of them spread over the walk after the wall
+  // pick, one in each of count equal slots; no poses and no meshes while lost (lost[i]).
+  struct Loss {
+    size_t from = 0, to = 0;  // the lost steps, [from, to)
+    double angle = 0.0;
+    Eigen::Vector2d offset = Eigen::Vector2d::Zero();
+  };
+  std::vector<Loss> losses;
+  std::vector<uint8_t> lost(n, 0);
+  if (o.scenario == Scenario::kRelocalize) {
+    const int count =
+        o.min_losses + static_cast<int>(loss_rng.Next() % (o.max_losses - o.min_losses + 1));
+    const double begin_s = o.pick_time_s + 10.0, end_s = (n - 1) * dt - 5.0;
+    const double slot = (end_s - begin_s) / count;
+    for (int k = 0; k < count && slot >= o.min_loss_s + 1.0; ++k) {
+      const double duration = std::min(loss_rng.Uniform(o.min_loss_s, o.max_loss_s), slot - 1.0);
+      const double start = begin_s + k * slot + loss_rng.Uniform(0.0, slot - duration);
+      Loss loss;
+      loss.from = static_cast<size_t>(std::ceil(start / dt));
+      loss.to = std::min(n - 1, loss.from + static_cast<size_t>(std::llround(duration / dt)));
+      loss.angle = loss_rng.Uniform(-o.max_jump_rad, o.max_jump_rad);
+      const double direction = loss_rng.Uniform(-M_PI, M_PI);
+      loss.offset = loss_rng.Uniform(0.0, o.max_jump_m) *
+                    Eigen::Vector2d(std::cos(direction), std::sin(direction));
+      for (size_t i = loss.from; i < loss.to; ++i) lost[i] = 1;
+      losses.push_back(loss);
+    }
+  }
+
   // Ground truth and the SLAM drift: the true motion between poses, integrated with a scale
   // error, a heading bias and random walks. The SLAM frame starts at the head, looking
   // along +y (Unity's +z), as HoloLens sets it up.
@@ -625,6 +888,15 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
           k * o.position_walk_m_per_sqrt_m * std::sqrt(d) *
           Eigen::Vector2d(drift_rng.Gaussian(), drift_rng.Gaussian());
       slam = slam * Se2{motion.theta + heading_error, scale * motion.t + position_error};
+    }
+    for (const Loss& loss : losses) {
+      if (loss.to != i) continue;
+      // Relocalized: the frame jumps about where the headset is.
+      const Se2 jump = Se2{0.0, slam.t + loss.offset} * Se2{loss.angle, Eigen::Vector2d::Zero()} *
+                       Se2{0.0, -slam.t};
+      slam = jump * slam;
+      sim.relocalizations.push_back(
+          {o.start_s + loss.from * dt, o.start_s + loss.to * dt, jump, loss.offset.norm()});
     }
     step.T_slam_plan = slam * ToSe2(step.true_plan).Inverse();
     const double jitter_rad = k * o.jitter_rad * drift_rng.Gaussian();
@@ -676,6 +948,7 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
       }
   };
   for (size_t i = 0; i < n && o.mesh; ++i) {
+    if (lost[i]) continue;  // tracking lost: the headset maps nothing
     SimulatedStep& step = sim.steps[i];
     const Eigen::Vector3d eye_at(head[i].position.x(), head[i].position.y(), eye);
     near.clear();
@@ -858,17 +1131,66 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
     sim.pick_height_m = o.pick_height_m - eye;
   }
 
+  // While tracking is lost the headset sends nothing: those steps go.
+  if (!losses.empty()) {
+    std::vector<SimulatedStep> kept;
+    size_t pick_step = 0;
+    for (size_t i = 0; i < n; ++i) {
+      if (lost[i]) continue;
+      if (i == sim.pick_step) pick_step = kept.size();
+      kept.push_back(std::move(sim.steps[i]));
+    }
+    sim.steps = std::move(kept);
+    sim.pick_step = pick_step;
+  }
+
+  // The plan scanned from paper: scaled and skewed about its centre; the truth and the
+  // pick's plan side move with it, as a commander reads them off that plan.
+  std::string scaled_text;
+  if (o.scenario == Scenario::kScaled) {
+    auto error = [&] {
+      return (reality_rng.Next() % 2 ? 1.0 : -1.0) *
+             reality_rng.Uniform(o.min_scale_error, o.max_scale_error);
+    };
+    const double sx = 1.0 + error(), sy = 1.0 + error();
+    const double skew = reality_rng.Uniform(-o.max_skew_rad, o.max_skew_rad);
+    Eigen::Matrix2d A;
+    A << sx, sx * std::tan(skew), 0.0, sy;
+    sim.plan_from_reality = A;
+    const Eigen::Vector2d c = 0.5 * (input.min + input.max);
+    auto to_plan = [&](const Eigen::Vector2d& p) -> Eigen::Vector2d { return c + A * (p - c); };
+    for (Segment& seg : sim.plan.segments) seg = {to_plan(seg.a), to_plan(seg.b)};
+    sim.plan.min = to_plan(input.min).cwiseMin(to_plan(input.max));
+    sim.plan.max = to_plan(input.min).cwiseMax(to_plan(input.max));
+    for (const Segment& seg : sim.plan.segments)
+      sim.plan.min = sim.plan.min.cwiseMin(seg.a).cwiseMin(seg.b),
+      sim.plan.max = sim.plan.max.cwiseMax(seg.a).cwiseMax(seg.b);
+    for (SimulatedStep& step : sim.steps) {
+      const double h = step.true_plan.heading;
+      const Eigen::Vector2d d = A * Eigen::Vector2d(std::cos(h), std::sin(h));
+      step.true_plan.position = to_plan(step.true_plan.position);
+      step.true_plan.heading = std::atan2(d.y(), d.x());
+    }
+    sim.pick.plan_point = to_plan(sim.pick.plan_point);
+    sim.pick.plan_normal = (A.inverse().transpose() * sim.pick.plan_normal).normalized();
+    scaled_text = Format(
+        "The plan is scaled %+.2f%% along x and %+.2f%% along y and skewed %.2f deg about its "
+        "centre. ",
+        100.0 * (sx - 1.0), 100.0 * (sy - 1.0), skew / kDeg);
+  }
+
   // Ten markers at equal distances along the walk, the first at the start and the last at
   // the end (thesis section 5.1), each on the nearest pose.
   {
-    std::vector<double> along(n, 0.0);
-    for (size_t i = 1; i < n; ++i)
+    const size_t kept = sim.steps.size();
+    std::vector<double> along(kept, 0.0);
+    for (size_t i = 1; i < kept; ++i)
       along[i] = along[i - 1] +
                  (sim.steps[i].true_plan.position - sim.steps[i - 1].true_plan.position).norm();
     for (uint32_t m = 1; m <= 10; ++m) {
       const double target = along.back() * (m - 1) / 9.0;
       size_t i = std::lower_bound(along.begin(), along.end(), target) - along.begin();
-      i = std::min(i, n - 1);
+      i = std::min(i, kept - 1);
       if (i > 0 && target - along[i - 1] < along[i] - target) --i;
       sim.steps[i].marker = m;
     }
@@ -901,7 +1223,12 @@ Simulation Simulate(const FloorPlan& plan, const SimulatorOptions& o,
                  100.0 * (scale - 1.0), bias / kDeg) +
           Format("heading walk %.4f rad/sqrt(m), yaw scale error %+.2f%%. ",
                  k * o.heading_walk_rad_per_sqrt_m, 100.0 * (yaw_scale - 1.0));
-  text += Format("Wall pick at %.1f s", sim.pick_step * dt);
+  text += scaled_text;
+  for (const Relocalization& r : sim.relocalizations)
+    text += Format("Tracking lost at %.1f s for %.1f s, then the frame jumped %.2f m", r.lost_s,
+                   r.found_s - r.lost_s, r.jump_m) +
+            Format(" and %.1f deg. ", r.jump.theta / kDeg);
+  text += Format("Wall pick at %.1f s", (sim.steps[sim.pick_step].stamp_ns * 1e-9 - o.start_s));
   if (o.mesh && !picked) text += " (no plan wall ever meshed: an unseen one)";
   text += Format(", error: %.1f deg, %.2f m about the wearer.", angle_deg,
                  (sim.pick_error * sim.steps[sim.pick_step].true_plan.position -

@@ -49,9 +49,17 @@ enum class Scenario {
   kGlass,     // about 30% of the wall length (long walls) is glass: invisible to the sensor
   kHall,      // the walk stays in the plan's most open area; only far walls are in range
   kMismatch,  // ~15% of plan walls absent, extra walls and objects that are not on the plan
+  // Reality that differs from the plan as real buildings do. In these the walk is planned
+  // on reality's free space, not the plan's.
+  kDoors,       // the plan draws every door closed (a line across each opening <= 1.5 m)
+  kStale,       // changed since drawn: ~20% of interior walls gone, new walls, ~10% moved
+  kScaled,      // scanned from paper: 1-2% scale error per axis, up to 0.5 degrees of skew
+  kRelocalize,  // the headset loses tracking 2-4 times for 2-10 s, then its frame jumps
 };
 std::optional<Scenario> ParseScenario(std::string_view name);
 const char* ToString(Scenario scenario);
+// Every scenario's name, in the enum's order.
+const std::vector<std::string>& ScenarioNames();
 
 struct SimulatorOptions {
   uint64_t seed = 1;
@@ -73,10 +81,21 @@ struct SimulatorOptions {
   double start_s = 1.0;  // virtual time of the first pose
 
   // Reality.
-  double ceiling_m = 2.6;       // walls go from the floor to the ceiling
-  double hall_ceiling_m = 4.0;  // the hall scenario's ceiling
-  double glass_share = 0.3;     // of the total wall length, glass scenario
-  double absent_share = 0.15;   // of the walls, mismatch scenario
+  double ceiling_m = 2.6;          // walls go from the floor to the ceiling
+  double hall_ceiling_m = 4.0;     // the hall scenario's ceiling
+  double glass_share = 0.3;        // of the total wall length, glass scenario
+  double absent_share = 0.15;      // of the walls, mismatch scenario
+  double max_door_m = 1.5;         // doors: openings up to this wide are drawn closed
+  double stale_gone_share = 0.2;   // stale: of the interior wall length, gone...
+  double stale_moved_share = 0.1;  // ...and moved by 0.3-1 m across itself
+  double min_move_m = 0.3, max_move_m = 1.0;
+  double min_scale_error = 0.01, max_scale_error = 0.02;  // scaled: per axis, either sign
+  double max_skew_rad = 0.5 * M_PI / 180.0;
+  // relocalize: tracking lost 2-4 times (after the wall pick) for 2-10 s each, then the
+  // SLAM frame jumps by up to 2 m at the wearer and 20 degrees.
+  int min_losses = 2, max_losses = 4;
+  double min_loss_s = 2.0, max_loss_s = 10.0;
+  double max_jump_m = 2.0, max_jump_rad = 20.0 * M_PI / 180.0;
 
   // The sensor.
   double min_range_m = 0.8, max_range_m = 3.5;
@@ -136,6 +155,16 @@ struct TimedPose {
   double pitch = 0.0;
 };
 
+// A walk through given waypoints (plan frame, times increasing, at least two), at their
+// own timing and straight from one to the next (the person went there, whatever the plan
+// says), as head poses every pose period with the simulator's head motion: the body turns
+// towards the leg it walks at max_turn_rate_rad_s, the head looks around and pitches, and
+// before the first waypoint the wearer stands first_stop_s scanning the room (as a
+// generated walk starts, for the wall pick). Times start at 0. Empty on fewer than two
+// waypoints.
+std::vector<TimedPose> WalkWaypoints(const std::vector<TimedPose>& waypoints,
+                                     const SimulatorOptions& options);
+
 struct SimulatedStep {
   int64_t stamp_ns = 0;  // virtual time
   Pose2 true_plan;       // ground truth: plan frame, heading of the view, z above the floor
@@ -152,6 +181,8 @@ struct SimulatedStep {
 struct Reality {
   std::vector<uint8_t> plan_wall_present;  // per plan segment
   std::vector<uint8_t> plan_wall_glass;    // per plan segment: present, but invisible
+  // Per plan segment: where the wall stands, relative to where the plan draws it (stale).
+  std::vector<Eigen::Vector2d> plan_wall_offset;
   // Objects and walls not on the plan, as footprints extruded from the floor.
   struct Prism {
     std::vector<Eigen::Vector2d> footprint;
@@ -162,6 +193,15 @@ struct Reality {
   double ceiling_m = 0.0;
 };
 
+// A loss of tracking (scenario relocalize): no poses and no meshes from lost_s to
+// found_s (virtual time of the first pose, and of the first pose after), after which the
+// SLAM frame has jumped: slam_after = jump * slam_before for the same true pose.
+struct Relocalization {
+  double lost_s = 0.0, found_s = 0.0;
+  Se2 jump;
+  double jump_m = 0.0;  // how far the jump moved the headset's own position
+};
+
 struct MeshCounts {
   size_t added = 0, updated = 0, removed = 0, vertices = 0, triangles = 0;
 };
@@ -170,6 +210,12 @@ struct Simulation {
   std::string error;  // empty on success
   bool ok() const { return error.empty(); }
   std::vector<SimulatedStep> steps;
+  // The plan as drawn: what the daemon is given. The input plan, except in doors (the
+  // openings closed) and scaled (scaled and skewed by plan_from_reality about the input's
+  // centre). Ground truth and the pick's plan side are in this plan's frame.
+  FloorPlan plan;
+  Eigen::Matrix2d plan_from_reality = Eigen::Matrix2d::Identity();
+  std::vector<Relocalization> relocalizations;
   WallPick pick;               // slam / plan frames; AlignFromWallPick(pick) = the start error
   double pick_height_m = 0.0;  // slam z of the picked point
   size_t pick_step = 0;        // the pick is made right after this step's pose

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 
 #include "core/sim/free_space.h"
 #include "core/tracker.h"
@@ -32,8 +33,13 @@ SimulatorOptions Options(Scenario scenario, uint64_t seed, double length_m, bool
   return o;
 }
 
-constexpr Scenario kAllScenarios[] = {Scenario::kCorridor, Scenario::kOffice, Scenario::kGlass,
-                                      Scenario::kHall, Scenario::kMismatch};
+constexpr Scenario kAllScenarios[] = {
+    Scenario::kCorridor, Scenario::kOffice,   Scenario::kGlass,
+    Scenario::kHall,     Scenario::kMismatch, Scenario::kDoors,
+    Scenario::kStale,    Scenario::kScaled,   Scenario::kRelocalize};
+// The scenarios whose walk keeps to the plan's free space (the others to reality's).
+constexpr Scenario kPlanScenarios[] = {Scenario::kCorridor, Scenario::kOffice, Scenario::kGlass,
+                                       Scenario::kHall, Scenario::kMismatch};
 
 double Cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   return a.x() * b.y() - a.y() * b.x();
@@ -89,7 +95,9 @@ double DistanceToRealWalls(const FloorPlan& plan, const Reality& r, const Eigen:
   const Eigen::Vector2d xy = p.head<2>();
   for (size_t i = 0; i < plan.segments.size(); ++i) {
     if (!r.plan_wall_present[i] || r.plan_wall_glass[i]) continue;
-    best = std::min(best, (ClosestPointOnSegment(plan.segments[i], xy) - xy).norm());
+    const Segment wall{plan.segments[i].a + r.plan_wall_offset[i],
+                       plan.segments[i].b + r.plan_wall_offset[i]};
+    best = std::min(best, (ClosestPointOnSegment(wall, xy) - xy).norm());
   }
   for (const Reality::Prism& e : r.extras) {
     double side = 1e300;  // horizontal distance to the side faces
@@ -154,7 +162,7 @@ TEST(SimulatorTest, ParsesScenarioNames) {
 
 TEST(SimulatorTest, WalkStaysOutOfWallsAndObjects) {
   const FloorPlan plan = SyntheticOffice(6, 12.0);
-  for (Scenario scenario : kAllScenarios)
+  for (Scenario scenario : kPlanScenarios)
     for (uint64_t seed : {1, 2, 3}) {
       const Simulation sim = Simulate(plan, Options(scenario, seed, 150, false));
       ASSERT_TRUE(sim.ok()) << sim.error;
@@ -495,6 +503,169 @@ TEST(SimulatorTest, FollowsAGivenTrajectory) {
   for (const Reality::Prism& e : sim.reality.extras)
     for (const SimulatedStep& s : sim.steps)
       EXPECT_GE(DistanceToPolygon(e.footprint, s.true_plan.position), 0.3 - 1e-9);
+}
+
+// The walls that stand in a simulation: the plan's present ones, where reality moved them.
+FloorPlan StandingWalls(const Simulation& sim) {
+  std::vector<Segment> walls;
+  for (size_t i = 0; i < sim.plan.segments.size(); ++i)
+    if (sim.reality.plan_wall_present[i])
+      walls.push_back({sim.plan.segments[i].a + sim.reality.plan_wall_offset[i],
+                       sim.plan.segments[i].b + sim.reality.plan_wall_offset[i]});
+  return MakeFloorPlan("reality", walls).plan;
+}
+
+// Steps of the true path that cross a wall of `plan`.
+size_t PathCrossings(const Simulation& sim, const FloorPlan& plan) {
+  size_t n = 0;
+  for (size_t i = 1; i < sim.steps.size(); ++i)
+    n +=
+        StepCrossesPlan(sim.steps[i - 1].true_plan.position, sim.steps[i].true_plan.position, plan);
+  return n;
+}
+
+TEST(SimulatorTest, DoorsThePlanDrawsClosedAreWalkedThrough) {
+  const FloorPlan input = SyntheticOffice(6, 12.0);  // 12 doors of 1 m off the corridor
+  for (uint64_t seed : {1, 2, 3}) {
+    const Simulation sim = Simulate(input, Options(Scenario::kDoors, seed, 150, false));
+    ASSERT_TRUE(sim.ok()) << sim.error;
+    // One line across each door (single-line walls: one face), each as wide as the door.
+    ASSERT_EQ(sim.plan.segments.size(), input.segments.size() + 12) << sim.description;
+    for (size_t i = input.segments.size(); i < sim.plan.segments.size(); ++i) {
+      EXPECT_NEAR(sim.plan.segments[i].Length(), 1.0, 1e-9);
+      EXPECT_FALSE(sim.reality.plan_wall_present[i]);
+    }
+    // The wearer walks through them: the path crosses the plan, never a wall that stands.
+    EXPECT_GE(PathCrossings(sim, sim.plan), 2u) << "seed " << seed;
+    ExpectWalkClear(StandingWalls(sim), sim, "doors seed " + std::to_string(seed));
+  }
+}
+
+TEST(SimulatorTest, StaleBuildingLostMovedAndGainedWalls) {
+  const FloorPlan plan = SyntheticOffice(10);
+  // Interior walls: all but the outline (y = 6, y = -4, x = 0, x = 50).
+  auto interior = [&](const Segment& s) {
+    return !(s.a.y() == s.b.y() && (s.a.y() == 6.0 || s.a.y() == -4.0)) &&
+           !(s.a.x() == s.b.x() && (s.a.x() == 0.0 || s.a.x() == 50.0));
+  };
+  for (uint64_t seed : {1, 2, 3}) {
+    const Simulation sim = Simulate(plan, Options(Scenario::kStale, seed, 150, false));
+    ASSERT_TRUE(sim.ok()) << sim.error;
+    EXPECT_EQ(sim.plan.segments.size(), plan.segments.size());
+    double total = 0, gone = 0, moved = 0;
+    for (size_t i = 0; i < plan.segments.size(); ++i) {
+      const Segment& s = plan.segments[i];
+      const Eigen::Vector2d offset = sim.reality.plan_wall_offset[i];
+      if (!interior(s)) {
+        EXPECT_TRUE(sim.reality.plan_wall_present[i] && offset.isZero()) << "outline " << i;
+        continue;
+      }
+      total += s.Length();
+      gone += sim.reality.plan_wall_present[i] ? 0.0 : s.Length();
+      if (offset.isZero()) continue;
+      moved += s.Length();
+      EXPECT_GE(offset.norm(), 0.3 - 1e-9);
+      EXPECT_LE(offset.norm(), 1.0 + 1e-9);
+      EXPECT_NEAR(std::abs(offset.normalized().dot(s.Normal())), 1.0, 1e-9) << "across the wall";
+    }
+    EXPECT_NEAR(gone / total, 0.2, 0.05) << sim.description;
+    EXPECT_NEAR(moved / total, 0.1, 0.05) << sim.description;
+    size_t added = 0;
+    for (const Reality::Prism& e : sim.reality.extras) added += e.kind == "wall";
+    EXPECT_GE(added, 2u);
+    ExpectWalkClear(StandingWalls(sim), sim, "stale seed " + std::to_string(seed));
+  }
+}
+
+TEST(SimulatorTest, ScaledPlanIsOffInScaleAndSkew) {
+  const FloorPlan input = SyntheticOffice(6, 12.0);
+  std::set<long long> distinct;
+  for (uint64_t seed : {1, 2, 3, 4}) {
+    const Simulation sim = Simulate(input, Options(Scenario::kScaled, seed, 60, false));
+    ASSERT_TRUE(sim.ok()) << sim.error;
+    const Eigen::Matrix2d& A = sim.plan_from_reality;
+    const double sx = A(0, 0), sy = A(1, 1), skew = std::atan(A(0, 1) / A(0, 0));
+    EXPECT_GE(std::abs(sx - 1), 0.01 - 1e-12);
+    EXPECT_LE(std::abs(sx - 1), 0.02 + 1e-12);
+    EXPECT_GE(std::abs(sy - 1), 0.01 - 1e-12);
+    EXPECT_LE(std::abs(sy - 1), 0.02 + 1e-12);
+    EXPECT_NE(sx, sy);
+    EXPECT_LE(std::abs(skew), Deg(0.5) + 1e-12);
+    EXPECT_EQ(A(1, 0), 0.0);
+    distinct.insert(std::llround(sx * 1e6));
+    // The drawn plan is the building through A about its centre; the truth moves with it,
+    // so the walk is as clear of the drawn walls as of the real ones.
+    const Eigen::Vector2d c = 0.5 * (input.min + input.max);
+    ASSERT_EQ(sim.plan.segments.size(), input.segments.size());
+    for (size_t i = 0; i < input.segments.size(); ++i) {
+      EXPECT_LT((sim.plan.segments[i].a - (c + A * (input.segments[i].a - c))).norm(), 1e-9);
+      EXPECT_LT((sim.plan.segments[i].b - (c + A * (input.segments[i].b - c))).norm(), 1e-9);
+    }
+    ExpectWalkClear(sim.plan, sim, "scaled seed " + std::to_string(seed));
+  }
+  EXPECT_EQ(distinct.size(), 4u);
+}
+
+TEST(SimulatorTest, RelocalizeLosesTrackingAndTheFrameJumps) {
+  const FloorPlan plan = SyntheticOffice(6, 12.0);
+  for (uint64_t seed : {1, 2, 3}) {
+    const Simulation sim = Simulate(plan, Options(Scenario::kRelocalize, seed, 250, true));
+    ASSERT_TRUE(sim.ok()) << sim.error;
+    ASSERT_GE(sim.relocalizations.size(), 2u) << sim.description;
+    ASSERT_LE(sim.relocalizations.size(), 4u);
+    // Gaps in the poses: exactly at the losses, 2-10 s long.
+    std::vector<std::pair<double, double>> gaps;
+    for (size_t i = 1; i < sim.steps.size(); ++i) {
+      const double a = sim.steps[i - 1].stamp_ns * 1e-9, b = sim.steps[i].stamp_ns * 1e-9;
+      if (b - a > 0.31) gaps.emplace_back(a, b);
+    }
+    ASSERT_EQ(gaps.size(), sim.relocalizations.size());
+    for (size_t k = 0; k < gaps.size(); ++k) {
+      const Relocalization& r = sim.relocalizations[k];
+      EXPECT_NEAR(gaps[k].first + 0.3, r.lost_s, 1e-6);
+      EXPECT_NEAR(gaps[k].second, r.found_s, 1e-6);
+      EXPECT_GE(r.found_s - r.lost_s, 2.0 - 0.3);
+      EXPECT_LE(r.found_s - r.lost_s, 10.0 + 0.3);
+      // The jump: at most 2 m at the headset and 20 degrees, and it is in the frame the
+      // poses and meshes come in (T_slam_plan across the gap).
+      EXPECT_LE(std::abs(r.jump.theta), Deg(20) + 1e-9);
+      EXPECT_LE(r.jump_m, 2.0 + 1e-9);
+      size_t after = 0;
+      while (sim.steps[after].stamp_ns * 1e-9 < r.found_s - 1e-6) ++after;
+      const Se2 change = sim.steps[after].T_slam_plan * sim.steps[after - 1].T_slam_plan.Inverse();
+      EXPECT_NEAR(WrapAngle(change.theta - r.jump.theta), 0.0, Deg(1.5)) << "seed " << seed;
+      const Eigen::Vector2d at = sim.steps[after].slam.position;
+      EXPECT_NEAR((change * (r.jump.Inverse() * at) - at).norm(), 0.0, 0.5) << "seed " << seed;
+    }
+    EXPECT_GT(sim.counts.added, 5u);
+  }
+}
+
+TEST(SimulatorTest, WalksWaypointsAtTheirOwnTiming) {
+  // Three waypoints through the synthetic office's corridor and a door, 5 s apart.
+  const std::vector<TimedPose> waypoints = {
+      {1000.0, {1.0, 1.0}, 0, 0}, {1005.0, {8.0, 1.0}, 0, 0}, {1010.0, {7.5, 4.0}, 0, 0}};
+  SimulatorOptions o = Options(Scenario::kCorridor, 1, 300);
+  const std::vector<TimedPose> walk = WalkWaypoints(waypoints, o);
+  ASSERT_FALSE(walk.empty());
+  // First the scan at the first waypoint, then the waypoints at their times, straight.
+  EXPECT_DOUBLE_EQ(walk.front().t_s, 0.0);
+  for (const TimedPose& p : walk) {
+    const double t = p.t_s - o.first_stop_s + 1000.0;
+    Eigen::Vector2d expected = waypoints[0].position;
+    if (t > 1005.0)
+      expected = waypoints[1].position +
+                 (t - 1005.0) / 5.0 * (waypoints[2].position - waypoints[1].position);
+    else if (t > 1000.0)
+      expected = waypoints[0].position +
+                 (t - 1000.0) / 5.0 * (waypoints[1].position - waypoints[0].position);
+    EXPECT_LT((p.position - expected).norm(), 1e-9) << "at " << t;
+  }
+  EXPECT_NEAR(walk.back().t_s, 14.0, 0.3);
+  const Simulation sim = Simulate(SyntheticOffice(), o, &walk);
+  ASSERT_TRUE(sim.ok()) << sim.error;
+  EXPECT_NEAR(sim.length_m, 7.0 + std::hypot(0.5, 3.0), 0.2);  // to the last pose period
+  EXPECT_FALSE(WalkWaypoints({waypoints[0]}, o).size());
 }
 
 TEST(SimulatorTest, RefusesPlansWithoutWalls) {

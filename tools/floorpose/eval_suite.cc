@@ -18,8 +18,10 @@
 #include "platform/config.h"
 #include "platform/floor_plan_io.h"
 #include "tools/floorpose/commands.h"
+#include "tools/floorpose/eval_real.h"
 #include "tools/lib/calibration.h"
 #include "tools/lib/evaluation.h"
+#include "tools/lib/progress.h"
 #include "tools/lib/simulate_recording.h"
 
 namespace floorpose::tools {
@@ -38,21 +40,23 @@ struct SuiteOptions {
   std::vector<std::string> plans;  // files or directories (searched for *.geojson)
   int seeds = 3;
   std::string out;
-  std::vector<std::string> scenarios = {"corridor", "office", "glass", "hall", "mismatch"};
+  std::vector<std::string> scenarios = sim::ScenarioNames();
   // The daemon's default first: the reliability tables and the SVGs are of the first.
   std::vector<std::string> methods = {"icp", "ik", "hough", "none", "best-fit"};
   double length_m = 0;  // 0: the simulator's default
   int jobs = 0;
   std::string config;  // floorposed configuration to evaluate with
   int first_seed = 1;
-  bool no_pick = false;  // drop the walks' wall picks: the daemon searches the plan
-  bool kidnap = false;   // wrong picks (simulate --kidnap), searched and checked
+  bool no_pick = false;                // drop the walks' wall picks: the daemon searches the plan
+  bool kidnap = false;                 // wrong picks (simulate --kidnap), searched and checked
+  RealSuiteOptions carmen, waypoints;  // real data instead of simulated walks
 };
 
 struct SuiteRun {
   std::string plan_path, plan_id, scenario;
   uint64_t seed;
   std::string recording;
+  std::string drawn_plan;  // where the plan as drawn differs (doors, scaled): its file
 };
 
 std::vector<std::string> PlanFiles(const std::vector<std::string>& inputs) {
@@ -195,10 +199,14 @@ int RunSuite(const SuiteOptions& o) {
     for (const std::string& scenario : o.scenarios)
       for (int seed = o.first_seed; seed < o.first_seed + o.seeds; ++seed) {
         const std::string id = fs::path(plan).stem().string();
-        runs.push_back({plan, id, scenario, static_cast<uint64_t>(seed),
+        runs.push_back({plan,
+                        id,
+                        scenario,
+                        static_cast<uint64_t>(seed),
                         (fs::path(o.out) / "recordings" /
                          (id + "_" + scenario + "_" + std::to_string(seed) + ".rec"))
-                            .string()});
+                            .string(),
+                        {}});
       }
   std::map<std::string, FloorPlan> loaded;
   for (const std::string& p : plans) {
@@ -214,70 +222,78 @@ int RunSuite(const SuiteOptions& o) {
   std::vector<EvalReport> reports;
   std::ofstream calibration(fs::path(o.out) / "calibration.csv");
   calibration << CalibrationCsvHeader() << "\n";
+  fs::create_directories(fs::path(o.out) / "plans");
   std::mutex mu;
-  std::atomic<size_t> next{0};
   std::atomic<int> failures{0};
-  auto worker = [&] {
-    for (size_t i = next++; i < runs.size(); i = next++) {
-      const SuiteRun& run = runs[i];
-      sim::SimulatorOptions sim;
-      sim.seed = run.seed;
-      sim.scenario = *sim::ParseScenario(run.scenario);
-      if (o.length_m > 0) sim.target_length_m = o.length_m;
-      if (o.kidnap) {
-        sim.kidnap_m = 10.0;
-        sim.kidnap_rad = M_PI / 2;
+  ParallelFor(runs.size(), o.jobs, "eval-suite", [&](size_t i, Progress& progress) {
+    SuiteRun& run = runs[i];
+    sim::SimulatorOptions sim;
+    sim.seed = run.seed;
+    sim.scenario = *sim::ParseScenario(run.scenario);
+    if (o.length_m > 0) sim.target_length_m = o.length_m;
+    if (o.kidnap) {
+      sim.kidnap_m = 10.0;
+      sim.kidnap_rad = M_PI / 2;
+    }
+    SimulateRecordingResult simulated;
+    std::string error;
+    if (!SimulateToRecording(loaded[run.plan_path], sim, nullptr, {}, run.recording, &simulated,
+                             &error)) {
+      spdlog::error("{}: {}", run.recording, error);
+      ++failures;
+      return;
+    }
+    std::string plan_path = run.plan_path;
+    if (PlanDiffersFromInput(simulated.simulation, loaded[run.plan_path])) {
+      run.drawn_plan =
+          (fs::path(o.out) / "plans" / (fs::path(run.recording).stem().string() + ".geojson"))
+              .string();
+      if (!WriteDrawnPlan(simulated.simulation, run.drawn_plan, &error)) {
+        spdlog::error("{}", error);
+        ++failures;
+        return;
       }
-      SimulateRecordingResult simulated;
-      std::string error;
-      if (!SimulateToRecording(loaded[run.plan_path], sim, nullptr, {}, run.recording, &simulated,
-                               &error)) {
-        spdlog::error("{}: {}", run.recording, error);
+      plan_path = run.drawn_plan;
+    }
+    for (const std::string& method : o.methods) {
+      v1::FloorposedConfig config = base_config;
+      config.set_plan_path(plan_path);
+      config.set_log_level("warn");
+      const bool registers = method != "none" && method != "best-fit";
+      config.mutable_registration()->set_method(registers ? method : "icp");
+      if (o.no_pick || o.kidnap) config.mutable_tracking()->set_global_search(true);
+      const Baseline baseline = method == "none"       ? Baseline::kNoAlgorithm
+                                : method == "best-fit" ? Baseline::kBestFit
+                                                       : Baseline::kNone;
+      EvalReport report;
+      if (!Evaluate(config, run.recording, baseline, &report, &error, nullptr, o.no_pick)) {
+        spdlog::error("{} {}: {}", run.recording, method, error);
         ++failures;
         continue;
       }
-      for (const std::string& method : o.methods) {
-        v1::FloorposedConfig config = base_config;
-        config.set_plan_path(run.plan_path);
-        config.set_log_level("warn");
-        const bool registers = method != "none" && method != "best-fit";
-        config.mutable_registration()->set_method(registers ? method : "icp");
-        if (o.no_pick || o.kidnap) config.mutable_tracking()->set_global_search(true);
-        const Baseline baseline = method == "none"       ? Baseline::kNoAlgorithm
-                                  : method == "best-fit" ? Baseline::kBestFit
-                                                         : Baseline::kNone;
-        EvalReport report;
-        if (!Evaluate(config, run.recording, baseline, &report, &error, nullptr, o.no_pick)) {
-          spdlog::error("{} {}: {}", run.recording, method, error);
-          ++failures;
-          continue;
+      report.plan_id = run.plan_id;
+      report.split = SimulatedSplit(run.seed);
+      std::lock_guard lock(mu);
+      progress.Clear();
+      std::printf(
+          "%-12s %-10s seed %lu %-16s mean %6.2f m  max %6.2f m  reliable %3.0f%% (%3.0f%% "
+          "within 1 m)\n",
+          run.plan_id.c_str(), run.scenario.c_str(), static_cast<unsigned long>(run.seed),
+          report.method.c_str(), report.mean_error_m, report.max_error_m,
+          100 * report.reliable_fraction, 100 * report.reliable_precision_1m);
+      std::fflush(stdout);
+      if (registers) {
+        // Every third pose for calibration: neighbours 0.3 s apart say the same.
+        for (size_t k = 0; k < report.track.size(); k += 3) {
+          const EvalPose& p = report.track[k];
+          calibration << CalibrationCsvLine({p.features, p.error_m <= 1.0}) << "\n";
         }
-        report.plan_id = run.plan_id;
-        std::lock_guard lock(mu);
-        std::printf(
-            "%-12s %-9s seed %lu %-16s mean %6.2f m  max %6.2f m  reliable %3.0f%% (%3.0f%% within "
-            "1 m)\n",
-            run.plan_id.c_str(), run.scenario.c_str(), static_cast<unsigned long>(run.seed),
-            report.method.c_str(), report.mean_error_m, report.max_error_m,
-            100 * report.reliable_fraction, 100 * report.reliable_precision_1m);
-        std::fflush(stdout);
-        if (registers) {
-          // Every third pose for calibration: neighbours 0.3 s apart say the same.
-          for (size_t k = 0; k < report.track.size(); k += 3) {
-            const EvalPose& p = report.track[k];
-            calibration << CalibrationCsvLine({p.features, p.error_m <= 1.0}) << "\n";
-          }
-        }
-        report.track.shrink_to_fit();
-        report.plan_poses.clear();
-        reports.push_back(std::move(report));
       }
+      report.track.shrink_to_fit();
+      report.plan_poses.clear();
+      reports.push_back(std::move(report));
     }
-  };
-  const int jobs = o.jobs > 0 ? o.jobs : std::max(1u, std::thread::hardware_concurrency());
-  std::vector<std::thread> threads;
-  for (int j = 0; j < jobs; ++j) threads.emplace_back(worker);
-  for (std::thread& t : threads) t.join();
+  });
 
   std::sort(reports.begin(), reports.end(), [](const EvalReport& a, const EvalReport& b) {
     return std::tie(a.plan_id, a.scenario, a.seed, a.method) <
@@ -292,6 +308,12 @@ int RunSuite(const SuiteOptions& o) {
   std::ostringstream md;
   md.setf(std::ios::fixed);
   md.precision(2);
+  {
+    size_t development = 0;
+    for (const EvalReport& r : reports) development += r.split == "development";
+    md << "Runs: " << development << " development (seeds 11 and up), "
+       << reports.size() - development << " validation (seeds 1-10).\n\n";
+  }
   md << "| plan | scenario |";
   for (const std::string& m : o.methods) md << " " << m << " |";
   md << "\n|---|---|";
@@ -432,9 +454,15 @@ int RunSuite(const SuiteOptions& o) {
         registered.begin(), registered.end(),
         [](const EvalReport* a, const EvalReport* b) { return a->mean_error_m < b->mean_error_m; });
     for (const auto& [name, r] : {std::pair{"best", *best}, std::pair{"worst", *worst}}) {
-      for (const auto& [path, plan] : loaded)
-        if (fs::path(path).stem() == r->plan_id)
-          std::ofstream(fs::path(o.out) / "svg" / (std::string(name) + ".svg")) << ToSvg(plan, *r);
+      for (const SuiteRun& run : runs) {
+        if (run.plan_id != r->plan_id || run.scenario != r->scenario || run.seed != r->seed)
+          continue;
+        const FloorPlanParse drawn = run.drawn_plan.empty()
+                                         ? FloorPlanParse{loaded[run.plan_path], {}, 0, {}}
+                                         : platform::LoadFloorPlan(run.drawn_plan);
+        std::ofstream(fs::path(o.out) / "svg" / (std::string(name) + ".svg"))
+            << ToSvg(drawn.plan, *r);
+      }
     }
   }
   std::fputs(md.str().c_str(), stdout);
@@ -445,10 +473,24 @@ int RunSuite(const SuiteOptions& o) {
 
 Run AddEvalSuiteCommand(CLI::App& app) {
   auto o = std::make_shared<SuiteOptions>();
-  app.add_option("--plans", o->plans, "floor plan files or directories (*.geojson)")->required();
+  auto* plans = app.add_option("--plans", o->plans, "floor plan files or directories (*.geojson)");
+  auto* carmen = app.add_option("--carmen", o->carmen.dir,
+                                "evaluate every <name>-corrected.log.gz of this directory that has "
+                                "<name>_gt.tum and <name>_plan.yaml (with <name>_odom.tum when "
+                                "there is one) as import-carmen and eval would, one row per log")
+                     ->excludes(plans);
+  app.add_option("--waypoints", o->waypoints.dir,
+                 "walk every walk of every floor under this directory (a folder with a plan and "
+                 "waypoints.csv) as simulate --waypoints would, evaluated with the wall pick and "
+                 "without")
+      ->excludes(plans)
+      ->excludes(carmen);
   app.add_option("--seeds", o->seeds, "seeds per plan and scenario")->capture_default_str();
   app.add_option("--out", o->out, "output directory")->required();
-  app.add_option("--scenarios", o->scenarios, "scenarios")->delimiter(',')->capture_default_str();
+  app.add_option("--scenarios", o->scenarios, "scenarios (simulate --help describes them)")
+      ->delimiter(',')
+      ->check(CLI::IsMember(sim::ScenarioNames()))
+      ->capture_default_str();
   app.add_option("--methods", o->methods, "methods and baselines")
       ->delimiter(',')
       ->check(CLI::IsMember({"icp", "ik", "hough", "none", "best-fit"}))
@@ -465,7 +507,20 @@ Run AddEvalSuiteCommand(CLI::App& app) {
                "start every walk with a wrong wall pick (10 m and 90 degrees off, as "
                "`simulate --kidnap`) and search the plan (tracking.global_search); adds the "
                "kidnap table");
-  return [o] { return RunSuite(*o); };
+  return [o] {
+    for (RealSuiteOptions* real : {&o->carmen, &o->waypoints}) {
+      real->out = o->out;
+      real->config = o->config;
+      real->jobs = o->jobs;
+    }
+    if (!o->carmen.dir.empty()) return RunCarmenSuite(o->carmen);
+    if (!o->waypoints.dir.empty()) return RunWaypointSuite(o->waypoints);
+    if (o->plans.empty()) {
+      spdlog::error("eval-suite: give --plans, --carmen or --waypoints");
+      return 2;
+    }
+    return RunSuite(*o);
+  };
 }
 
 }  // namespace floorpose::tools

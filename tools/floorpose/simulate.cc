@@ -18,6 +18,7 @@ struct SimulateOptions {
   std::string plan;
   std::string scenario = "office";
   std::string trajectory;
+  std::string waypoints, walk;
   std::string out;
   std::string frame = "unity";
   bool no_mesh = false;
@@ -37,20 +38,43 @@ int RunSimulate(SimulateOptions o) {
   o.sim.mesh = !o.no_mesh;
   o.recording.frame = *ParseHeadsetFrame(o.frame);
   std::vector<sim::TimedPose> trajectory;
+  std::string error;
   if (!o.trajectory.empty()) {
-    std::string error;
     if (!ReadTumTrajectory(o.trajectory, &trajectory, &error)) {
       spdlog::error("{}", error);
       return 1;
     }
     if (o.pace_mps > 0) PaceTrajectory(&trajectory, o.pace_mps, M_PI / 4);
+  } else if (!o.waypoints.empty()) {
+    WaypointWalks walks;
+    if (!ReadWaypoints(o.waypoints, &walks, &error)) {
+      spdlog::error("{}", error);
+      return 1;
+    }
+    const auto it = walks.walks.find(o.walk);
+    if (it == walks.walks.end() || it->second.size() < 2) {
+      spdlog::error("{}: {} (of {} walks)", o.waypoints,
+                    it == walks.walks.end() ? "no walk '" + o.walk + "'"
+                                            : "walk '" + o.walk + "' has fewer than two waypoints",
+                    walks.ids.size());
+      return 1;
+    }
+    trajectory = sim::WalkWaypoints(it->second, o.sim);
   }
   SimulateRecordingResult result;
-  std::string error;
-  if (!SimulateToRecording(plan.plan, o.sim, o.trajectory.empty() ? nullptr : &trajectory,
+  if (!SimulateToRecording(plan.plan, o.sim, trajectory.empty() ? nullptr : &trajectory,
                            o.recording, o.out, &result, &error)) {
     spdlog::error("{}", error);
     return 1;
+  }
+  // Where the plan as drawn is not the building (doors, scaled), the daemon is given it.
+  std::string drawn_path;
+  if (PlanDiffersFromInput(result.simulation, plan.plan)) {
+    drawn_path = o.out + ".plan.geojson";
+    if (!WriteDrawnPlan(result.simulation, drawn_path, &error)) {
+      spdlog::error("{}", error);
+      return 1;
+    }
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -71,6 +95,7 @@ int RunSimulate(SimulateOptions o) {
       d.best_fit_max_m);
   std::printf("  recording                      %zu records, %.1f MB, in %.1f s\n", result.records,
               static_cast<double>(result.bytes) / 1e6, seconds);
+  if (!drawn_path.empty()) std::printf("  plan as drawn (evaluate on it) %s\n", drawn_path.c_str());
   return 0;
 }
 
@@ -80,11 +105,23 @@ Run AddSimulateCommand(CLI::App& app) {
   auto o = std::make_shared<SimulateOptions>();
   app.add_option("--plan", o->plan, "floor plan (.geojson or .txt)")->required();
   app.add_option("--seed", o->sim.seed, "simulation seed")->capture_default_str();
-  app.add_option("--scenario", o->scenario, "corridor, office, glass, hall or mismatch")
-      ->check(CLI::IsMember({"corridor", "office", "glass", "hall", "mismatch"}))
+  app.add_option("--scenario", o->scenario,
+                 "corridor, office, glass, hall, mismatch; and reality unlike the plan: doors "
+                 "(drawn closed), stale (walls gone, new, moved), scaled (plan 1-2% off in "
+                 "scale, skewed), relocalize (tracking lost, the SLAM frame jumps). Where the "
+                 "plan as drawn differs (doors, scaled) it is written beside --out")
+      ->check(CLI::IsMember(sim::ScenarioNames()))
       ->capture_default_str();
-  app.add_option("--trajectory", o->trajectory,
-                 "walk this TUM trajectory on the plan ('timestamp x y z qx qy qz qw')");
+  auto* trajectory =
+      app.add_option("--trajectory", o->trajectory,
+                     "walk this TUM trajectory on the plan ('timestamp x y z qx qy qz qw')");
+  auto* waypoints =
+      app.add_option("--waypoints", o->waypoints,
+                     "walk one walk of this waypoint CSV ('walk,t_ms,x_m,y_m', plan frame) at "
+                     "its own timing, straight from waypoint to waypoint")
+          ->excludes(trajectory);
+  app.add_option("--walk", o->walk, "the walk id in --waypoints")->needs(waypoints);
+  waypoints->needs("--walk");
   app.add_option("--pace", o->pace_mps,
                  "re-time the trajectory at this walking speed, m/s (for logs whose "
                  "timestamps are line numbers, such as CARMEN csail's ground truth)")

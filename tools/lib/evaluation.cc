@@ -344,11 +344,26 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
   return true;
 }
 
+const char* SimulatedSplit(uint64_t seed) { return seed >= 11 ? "development" : "validation"; }
+
+const char* CarmenSplit(const std::string& log) {
+  for (const char* dev : {"aces", "csail", "freiburg-101", "orebro"})
+    if (log == dev) return "development";
+  return "validation";
+}
+
+const char* IlcSplit(const std::string& floor) {
+  for (const char* dev : {"B1", "F1", "F2"})
+    if (floor == dev) return "development";
+  return "validation";
+}
+
 std::string ToJson(const EvalReport& r) {
   std::ostringstream s;
   s.precision(6);
   s << "{\"method\": \"" << r.method << "\", \"scenario\": \"" << r.scenario << "\", \"plan\": \""
-    << r.plan_id << "\", \"seed\": " << r.seed << ", \"mean_error_m\": " << r.mean_error_m
+    << r.plan_id << "\", \"seed\": " << r.seed << ", \"split\": \"" << r.split
+    << "\", \"cpu_s\": " << r.cpu_s << ", \"mean_error_m\": " << r.mean_error_m
     << ", \"p95_error_m\": " << r.p95_error_m << ", \"max_error_m\": " << r.max_error_m
     << ", \"final_error_m\": " << r.final_error_m
     << ", \"marker_mean_error_m\": " << r.marker_mean_error_m

@@ -39,10 +39,21 @@ struct EvalPose {
   bool registered = false;  // the alignment in use came from a registration
 };
 
+// Issue 41's split of the evaluation data. Settings may be tuned on development runs; a
+// setting is kept only if it does not lose on validation runs, on which nothing is tuned.
+// Simulated seeds 11 and up, CARMEN aces, csail, freiburg-101 and orebro, and ILC floors
+// B1, F1 and F2 are development; everything else (seeds 1-10, the other logs and floors,
+// and any data of a user's) is validation.
+const char* SimulatedSplit(uint64_t seed);
+const char* CarmenSplit(const std::string& log);
+const char* IlcSplit(const std::string& floor);
+
 struct EvalReport {
   std::string method;
   std::string scenario, plan_id;
   uint64_t seed = 0;
+  std::string split;           // "development" or "validation"
+  double cpu_s = 0;            // CPU seconds the evaluation took (eval-suite)
   size_t poses = 0;            // scored: aligned plan poses with ground truth
   size_t unaligned_poses = 0;  // before the first alignment: not scored
   double mean_error_m = 0, p95_error_m = 0, max_error_m = 0, final_error_m = 0;

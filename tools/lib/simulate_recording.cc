@@ -3,13 +3,16 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <sstream>
 
 #include "platform/floor_plan_io.h"
 #include "platform/recording.h"
 #include "tools/lib/headset_messages.h"
+#include "tools/lib/plan_import.h"
 
 namespace floorpose::tools {
 namespace {
@@ -135,6 +138,23 @@ bool SimulateToRecording(const FloorPlan& plan, const sim::SimulatorOptions& opt
   return true;
 }
 
+bool PlanDiffersFromInput(const sim::Simulation& simulation, const FloorPlan& input) {
+  return simulation.plan.segments.size() != input.segments.size() ||
+         !simulation.plan_from_reality.isIdentity();
+}
+
+bool WriteDrawnPlan(const sim::Simulation& simulation, const std::string& path,
+                    std::string* error) {
+  std::ofstream out(path);
+  out << ToGeoJson(simulation.plan, "floorpose simulate: the plan as drawn");
+  out.close();
+  if (!out) {
+    *error = path + ": write failed";
+    return false;
+  }
+  return true;
+}
+
 bool ParseTumTrajectory(std::string_view text, std::vector<sim::TimedPose>* out,
                         std::string* error) {
   std::istringstream in{std::string(text)};
@@ -179,6 +199,63 @@ bool ReadTumTrajectory(const std::string& path, std::vector<sim::TimedPose>* out
   std::string text;
   if (!platform::ReadFile(path, 256 << 20, &text, error)) return false;
   if (ParseTumTrajectory(text, out, error)) return true;
+  *error = path + ": " + *error;
+  return false;
+}
+
+bool ParseWaypoints(std::string_view text, WaypointWalks* out, std::string* error) {
+  std::istringstream in{std::string(text)};
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || (n == 1 && line.rfind("walk,", 0) == 0)) continue;
+    std::istringstream fields(line);
+    std::string id, t, x, y, rest;
+    char* end[3] = {nullptr, nullptr, nullptr};
+    double v[3] = {0, 0, 0};
+    const bool split = std::getline(fields, id, ',') && std::getline(fields, t, ',') &&
+                       std::getline(fields, x, ',') && std::getline(fields, y, ',') &&
+                       !std::getline(fields, rest, ',');
+    if (split) {
+      v[0] = std::strtod(t.c_str(), &end[0]);
+      v[1] = std::strtod(x.c_str(), &end[1]);
+      v[2] = std::strtod(y.c_str(), &end[2]);
+    }
+    bool ok = split && !id.empty();
+    for (int i = 0; ok && i < 3; ++i) ok = end[i] && *end[i] == '\0' && std::isfinite(v[i]);
+    if (!ok) {
+      *error = "line " + std::to_string(n) + ": expected 'walk,t_ms,x_m,y_m'";
+      return false;
+    }
+    auto [it, fresh] = out->walks.try_emplace(id);
+    if (fresh) out->ids.push_back(id);
+    std::vector<sim::TimedPose>& walk = it->second;
+    sim::TimedPose p;
+    p.t_s = v[0] * 1e-3;
+    p.position = {v[1], v[2]};
+    if (!walk.empty() && p.t_s < walk.back().t_s) {
+      *error = "line " + std::to_string(n) + ": walk " + id + " goes back in time";
+      return false;
+    }
+    if (!walk.empty() && p.t_s == walk.back().t_s) {
+      ++out->repeated;
+      continue;
+    }
+    walk.push_back(p);
+  }
+  if (out->walks.empty()) {
+    *error = "no waypoints";
+    return false;
+  }
+  return true;
+}
+
+bool ReadWaypoints(const std::string& path, WaypointWalks* out, std::string* error) {
+  std::string text;
+  if (!platform::ReadFile(path, 256 << 20, &text, error)) return false;
+  if (ParseWaypoints(text, out, error)) return true;
   *error = path + ": " + *error;
   return false;
 }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -54,6 +55,12 @@ bool SimulateToRecording(const FloorPlan& plan, const sim::SimulatorOptions& opt
                          const SimulateRecordingOptions& recording, const std::string& path,
                          SimulateRecordingResult* result, std::string* error);
 
+// Whether the simulation's plan as drawn is not the plan it was given (scenarios doors,
+// scaled): the daemon must then be given the drawn one, which WriteDrawnPlan writes as
+// GeoJSON in metres.
+bool PlanDiffersFromInput(const sim::Simulation& simulation, const FloorPlan& input);
+bool WriteDrawnPlan(const sim::Simulation& simulation, const std::string& path, std::string* error);
+
 // A TUM trajectory on the plan: `timestamp x y z qx qy qz qw` per line (seconds, metres;
 // '#' starts a comment), times increasing. The viewing direction is the rotated x axis
 // (heading and pitch from it); z is not used (the simulator's eye height applies).
@@ -63,6 +70,18 @@ bool ParseTumTrajectory(std::string_view text, std::vector<sim::TimedPose>* out,
 // The same from a file (at most 256 MB); the error names the file.
 bool ReadTumTrajectory(const std::string& path, std::vector<sim::TimedPose>* out,
                        std::string* error);
+
+// Walks given as waypoints: `walk,t_ms,x_m,y_m` per line (walk id, milliseconds, plan
+// frame metres), a header line first; a walk's lines in time order, walks in any order.
+// A waypoint at the same time as the one before it is dropped (counted in `repeated`).
+struct WaypointWalks {
+  std::vector<std::string> ids;  // in the order first seen
+  std::map<std::string, std::vector<sim::TimedPose>> walks;
+  size_t repeated = 0;
+};
+bool ParseWaypoints(std::string_view text, WaypointWalks* out, std::string* error);
+// The same from a file (at most 256 MB); the error names the file.
+bool ReadWaypoints(const std::string& path, WaypointWalks* out, std::string* error);
 
 // Re-times a trajectory whose clock is not seconds (a log's line numbers): each step
 // takes as long as walking it at pace_mps or turning it at turn_rad_s, whichever is
