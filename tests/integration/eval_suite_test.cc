@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -35,10 +36,12 @@ std::vector<std::string> Cells(const std::string& row) {
 // Runs `floorpose eval-suite` on the bundled plan with `args`, into a fresh directory
 // named after `name`; empty when it failed (a test failure says why).
 fs::path RunSuite(const std::string& name, std::vector<std::string> args,
-                  std::chrono::seconds timeout) {
+                  std::chrono::seconds timeout,
+                  std::vector<std::string> input = {"--plans", FLOORPOSE_DEMO_PLAN}) {
   const fs::path dir = fs::path(::testing::TempDir()) / (name + "-" + std::to_string(getpid()));
   fs::remove_all(dir);
-  args.insert(args.begin(), {FLOORPOSE_PATH, "eval-suite", "--plans", FLOORPOSE_DEMO_PLAN});
+  args.insert(args.begin(), input.begin(), input.end());
+  args.insert(args.begin(), {FLOORPOSE_PATH, "eval-suite"});
   args.insert(args.end(), {"--out", dir.string()});
   tools::ChildProcess suite(args, dir.string() + ".log");
   if (!suite.started() || suite.Wait(timeout) != 0) {
@@ -71,11 +74,15 @@ TEST(EvalSuiteTest, WritesResultsAndTheTrackingTargets) {
                std::chrono::seconds(60));
   ASSERT_FALSE(dir.empty());
 
-  // One JSON line per run: 5 scenarios x 2 methods on one plan and seed.
+  // One JSON line per run: 9 scenarios x 2 methods on one plan and seed, validation runs.
   std::ifstream json(dir / "results.json");
   int lines = 0;
-  for (std::string line; std::getline(json, line);) lines += !line.empty();
-  EXPECT_EQ(lines, 10);
+  for (std::string line; std::getline(json, line);) {
+    if (line.empty()) continue;
+    ++lines;
+    EXPECT_NE(line.find("\"split\": \"validation\""), std::string::npos) << line;
+  }
+  EXPECT_EQ(lines, 18);
   EXPECT_GT(fs::file_size(dir / "calibration.csv"), 100u);
 
   // Per cell means (first table), then the targets table, which must agree with them.
@@ -92,7 +99,8 @@ TEST(EvalSuiteTest, WritesResultsAndTheTrackingTargets) {
     if (c.size() == 4 && c[0] == "office" && !in_targets) cell_mean[c[1]] = c[2];
     if (c.size() == 8 && in_targets && c[0] != "scenario" && c[0][0] != '-') target_row[c[0]] = c;
   }
-  for (const char* scenario : {"corridor", "office", "glass", "hall", "mismatch"}) {
+  for (const char* scenario : {"corridor", "office", "glass", "hall", "mismatch", "doors", "stale",
+                               "scaled", "relocalize"}) {
     SCOPED_TRACE(scenario);
     ASSERT_EQ(target_row.count(scenario), 1u) << md;
     const std::vector<std::string>& c = target_row[scenario];
@@ -139,7 +147,7 @@ TEST(EvalSuiteTest, TheKidnapTableCountsTheRunsOfResultsJson) {
     const bool f = unreliable >= 0 && unreliable <= 5, r = recovery >= 0 && recovery <= 60;
     flagged += f, recovered += r, both += f && r;
   }
-  ASSERT_EQ(runs, 5);  // 5 scenarios on one plan, one seed, one method
+  ASSERT_EQ(runs, 9);  // 9 scenarios on one plan, one seed, one method
 
   const std::string md = testing::ReadText(dir / "results.md");
   ExpectTablesWellFormed(md);
@@ -152,7 +160,7 @@ TEST(EvalSuiteTest, TheKidnapTableCountsTheRunsOfResultsJson) {
     if (in_kidnap && c.size() == 9 && c[0] == "all") all = c;
   }
   ASSERT_EQ(all.size(), 9u) << md;
-  EXPECT_EQ(all[1], "5");
+  EXPECT_EQ(all[1], "9");
   auto count = [](const std::string& cell) { return std::stoi(cell.substr(0, cell.find(' '))); };
   EXPECT_EQ(count(all[2]), flagged) << all[2];
   EXPECT_EQ(count(all[3]), recovered) << all[3];
@@ -161,6 +169,114 @@ TEST(EvalSuiteTest, TheKidnapTableCountsTheRunsOfResultsJson) {
   EXPECT_EQ(count(all[7]), trusted_wrong) << all[7];
   EXPECT_EQ(count(all[8]), false_reliable) << all[8];
   RemoveSuite(dir);
+}
+
+// The rows of results.md whose first cell is `first`, per table, in order.
+std::vector<std::vector<std::string>> RowsStartingWith(const std::string& md,
+                                                       const std::string& first) {
+  std::vector<std::vector<std::string>> out;
+  std::stringstream rows(md);
+  for (std::string row; std::getline(rows, row);) {
+    const std::vector<std::string> c = Cells(row);
+    if (!c.empty() && c[0] == first) out.push_back(c);
+  }
+  return out;
+}
+
+// A building in WGS84 longitude/latitude at 47 N (two rooms of 10 x 8 m, a 1.2 m door
+// between them) and one walk through the door, as a floor folder of a waypoint suite.
+void WriteWaypointFloor(const fs::path& dir, const std::string& walk) {
+  fs::create_directories(dir);
+  // Metres to degrees about (8 E, 47 N): the suite projects them back.
+  const double m_per_deg_lat = 111180.0, m_per_deg_lon = 111180.0 * std::cos(47.0 * M_PI / 180);
+  auto ll = [&](double x, double y) {
+    std::ostringstream p;
+    p.precision(12);
+    p << "[" << 8.0 + x / m_per_deg_lon << ", " << 47.0 + y / m_per_deg_lat << "]";
+    return p.str();
+  };
+  auto line = [&](double x0, double y0, double x1, double y1) {
+    return R"({"type": "Feature", "properties": {}, "geometry": {"type": "LineString", "coordinates": [)" +
+           ll(x0, y0) + ", " + ll(x1, y1) + "]}}";
+  };
+  std::ofstream(dir / "plan.geojson")
+      << R"({"type": "FeatureCollection", "properties": {"origin": )" << ll(0, 0)
+      << R"(}, "features": [)" << line(0, 0, 20, 0) << "," << line(20, 0, 20, 8) << ","
+      << line(20, 8, 0, 8) << "," << line(0, 8, 0, 0) << "," << line(10, 0, 10, 3.4) << ","
+      << line(10, 4.6, 10, 8) << "," << line(3, 2, 5, 2) << "," << line(14, 6, 17, 6) << "]}";
+  std::ofstream csv(dir / "waypoints.csv");
+  csv << "walk,t_ms,x_m,y_m\n";
+  const double path[][2] = {{2, 4},  {6, 5}, {8, 4}, {12, 4}, {16, 3}, {18, 5}, {15, 7},
+                            {12, 5}, {8, 4}, {5, 6}, {2, 6},  {3, 3},  {6, 3}};
+  int64_t t = 1574000000000;
+  for (const auto& p : path) {
+    csv << walk << "," << t << "," << p[0] << "," << p[1] << "\n";
+    t += 4000;
+  }
+}
+
+TEST(EvalSuiteTest, WaypointFloorsAreWalkedWithAndWithoutThePickDevelopmentAndValidationApart) {
+  const fs::path floors =
+      fs::path(::testing::TempDir()) / ("waypoint-floors-" + std::to_string(getpid()));
+  fs::remove_all(floors);
+  WriteWaypointFloor(floors / "F1", "walk-a");  // a development floor
+  WriteWaypointFloor(floors / "F3", "walk-b");  // a validation floor
+  const fs::path dir = RunSuite("waypoints", {"--jobs", "2"}, std::chrono::seconds(120),
+                                {"--waypoints", floors.string()});
+  ASSERT_FALSE(dir.empty());
+  const std::string md = testing::ReadText(dir / "results.md");
+  ExpectTablesWellFormed(md);
+  // Per floor and start (pick, no pick), then "all" of each split.
+  const auto f1 = RowsStartingWith(md, "F1"), f3 = RowsStartingWith(md, "F3");
+  ASSERT_EQ(f1.size(), 2u) << md;
+  ASSERT_EQ(f3.size(), 2u) << md;
+  EXPECT_EQ(f1[0][1], "development");
+  EXPECT_EQ(f3[0][1], "validation");
+  EXPECT_EQ(f1[0][2], "pick");
+  EXPECT_EQ(f1[1][2], "no pick");
+  EXPECT_EQ(f1[0][3], "1");  // one walk
+  EXPECT_GT(std::stoi(f1[0][4]), 100) << "poses of a 48 s walk";
+  EXPECT_LT(md.find("Development floors"), md.find("Validation floors"));
+  // With the pick the walk is tracked on the projected plan: the waypoints and the plan
+  // share the metres the suite made of the longitude/latitude.
+  EXPECT_LT(std::stod(f1[0][5]), 1.0) << md;
+  EXPECT_EQ(RowsStartingWith(md, "all").size(), 4u);
+  std::ifstream json(dir / "results.json");
+  int lines = 0;
+  for (std::string l; std::getline(json, l);) lines += !l.empty();
+  EXPECT_EQ(lines, 4);  // two walks, each with and without the pick
+  RemoveSuite(dir);
+  fs::remove_all(floors);
+}
+
+TEST(EvalSuiteTest, CarmenLogsOneRowEachDevelopmentAndValidationApart) {
+  const auto data = testing::DataDir();
+  if (!data) GTEST_SKIP() << testing::kNoDataMessage;
+  // Two of the real logs, one of each split, linked into a directory of their own.
+  const fs::path logs =
+      fs::path(::testing::TempDir()) / ("carmen-logs-" + std::to_string(getpid()));
+  fs::remove_all(logs);
+  fs::create_directories(logs);
+  for (const std::string name : {"orebro", "seattle"})
+    for (const std::string suffix :
+         {"-corrected.log.gz", "_gt.tum", "_odom.tum", "_plan.yaml", "_plan.png"})
+      if (fs::exists(*data / "carmen" / (name + suffix)))
+        fs::create_symlink(*data / "carmen" / (name + suffix), logs / (name + suffix));
+  const fs::path dir =
+      RunSuite("carmen", {"--jobs", "2"}, std::chrono::seconds(300), {"--carmen", logs.string()});
+  ASSERT_FALSE(dir.empty());
+  const std::string md = testing::ReadText(dir / "results.md");
+  ExpectTablesWellFormed(md);
+  const auto orebro = RowsStartingWith(md, "orebro"), seattle = RowsStartingWith(md, "seattle");
+  ASSERT_EQ(orebro.size(), 1u) << md;
+  ASSERT_EQ(seattle.size(), 1u) << md;
+  EXPECT_EQ(orebro[0][1], "development");
+  EXPECT_EQ(seattle[0][1], "validation");
+  EXPECT_NE(orebro[0][2].find("no odometry"), std::string::npos);  // orebro has none
+  EXPECT_EQ(seattle[0].size(), 12u);
+  EXPECT_LT(std::stod(orebro[0][3]), 0.5) << "mean error on the log's own plan";
+  RemoveSuite(dir);
+  fs::remove_all(logs);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 
 #include "tools/floorpose/commands.h"
 #include "tools/lib/carmen.h"
+#include "tools/lib/progress.h"
 #include "tools/lib/simulate_recording.h"
 
 namespace floorpose::tools {
@@ -22,6 +23,8 @@ struct ImportCarmenOptions {
 };
 
 int RunImportCarmen(ImportCarmenOptions o) {
+  // Three steps: read the log and the tracks, build the walk, write the recording.
+  Progress progress("import-carmen", 3, "steps");
   CarmenLog log;
   std::string error;
   if (!ReadCarmenLog(o.log, &log, &error)) {
@@ -33,6 +36,7 @@ int RunImportCarmen(ImportCarmenOptions o) {
     spdlog::error("{}", error);
     return 1;
   }
+  progress.Update(1);
   std::string name = std::filesystem::path(o.log).filename().string();
   for (const char* suffix : {".gz", ".log", "-corrected"})
     if (name.size() > std::strlen(suffix) && name.ends_with(suffix))
@@ -44,6 +48,7 @@ int RunImportCarmen(ImportCarmenOptions o) {
     spdlog::error("{}: {}", o.log, error);
     return 1;
   }
+  progress.Update(2);
   o.recording.frame = *ParseHeadsetFrame(o.frame);  // checked by CLI11
   o.recording.odometry = v1::HeadsetPose::WHEEL;    // the daemon tracks it as a robot
   size_t records = 0;
@@ -52,6 +57,8 @@ int RunImportCarmen(ImportCarmenOptions o) {
     spdlog::error("{}", error);
     return 1;
   }
+  progress.Update(3);
+  progress.Clear();
   std::printf("floorpose import-carmen: %s -> %s\n", o.log.c_str(), o.out.c_str());
   std::printf("  %s\n", walk.description.c_str());
   std::printf("  walk                    %.0f m in %.0f s, %zu poses%s\n", report.length_m,

@@ -1,6 +1,7 @@
 // `floorpose record`: every floorpose topic, as received, into a recording file.
 #include <spdlog/spdlog.h>
 
+#include <cmath>
 #include <csignal>
 #include <memory>
 #include <vector>
@@ -9,6 +10,7 @@
 #include "platform/recording.h"
 #include "tools/floorpose/commands.h"
 #include "tools/floorpose/dds_options.h"
+#include "tools/lib/progress.h"
 
 namespace floorpose::tools {
 namespace {
@@ -51,6 +53,9 @@ int RunRecord(const RecordOptions& o) {
   spdlog::info("recording domain {} to {}", o.dds.domain_id, o.out);
   const int64_t start = platform::MonotonicNs();
   size_t records = 0;
+  // With a duration: seconds of it; else records so far.
+  Progress progress("record", static_cast<size_t>(std::ceil(o.duration_s)),
+                    o.duration_s > 0 ? "s" : "records");
   while (true) {
     waiter->Wait(std::chrono::milliseconds(100));
     const int64_t now = platform::MonotonicNs();
@@ -66,6 +71,8 @@ int RunRecord(const RecordOptions& o) {
     timespec zero{0, 0};
     if (sigtimedwait(&signals, nullptr, &zero) > 0) break;
     if (o.duration_s > 0 && static_cast<double>(now - start) * 1e-9 >= o.duration_s) break;
+    progress.Update(o.duration_s > 0 ? static_cast<size_t>(static_cast<double>(now - start) * 1e-9)
+                                     : records);
   }
   writer.Flush();
   spdlog::info("wrote {} records to {}", records, o.out);

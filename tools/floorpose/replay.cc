@@ -11,6 +11,7 @@
 #include "platform/recording.h"
 #include "tools/floorpose/commands.h"
 #include "tools/floorpose/dds_options.h"
+#include "tools/lib/progress.h"
 
 namespace floorpose::tools {
 namespace {
@@ -58,6 +59,10 @@ int RunReplay(const ReplayOptions& o) {
     spdlog::warn("no subscriber matched within {:.0f} s; publishing anyway", o.wait_s);
 
   v1::RecordingRecord record;
+  size_t total = 0;  // on a terminal: the records, counted first, for the progress line
+  if (Progress::OnTerminal())
+    for (platform::RecordingReader count(o.recording); count.Next(&record);) ++total;
+  Progress progress("replay", total, "records");
   int64_t first_stamp = 0;
   const auto start = std::chrono::steady_clock::now();
   size_t sent = 0, skipped = 0;
@@ -78,6 +83,7 @@ int RunReplay(const ReplayOptions& o) {
     if (!it->second->Write(platform::FromProto(record.envelope()), &error))
       spdlog::warn("record {}: publish failed: {}", reader.records_read(), error);
     ++sent;
+    progress.Update(reader.records_read());
   }
   if (!reader.error().empty()) {
     spdlog::error("{}: {}; {} records published before it", o.recording, reader.error(), sent);

@@ -23,10 +23,13 @@ std::string Duration(double s) {
 
 }  // namespace
 
-Progress::Progress(std::string label, size_t total)
+bool Progress::OnTerminal() { return isatty(STDERR_FILENO) == 1; }
+
+Progress::Progress(std::string label, size_t total, std::string unit)
     : label_(std::move(label)),
       total_(total),
-      terminal_(isatty(STDERR_FILENO) == 1),
+      unit_(unit.empty() ? std::string() : " " + std::move(unit)),
+      terminal_(OnTerminal()),
       start_(std::chrono::steady_clock::now()),
       last_(start_) {}
 
@@ -42,7 +45,8 @@ void Progress::Update(size_t done) {
   done_ = done;
   if (!terminal_) return;
   const auto now = std::chrono::steady_clock::now();
-  if (drawn_ && now - last_ < std::chrono::milliseconds(500) && done < total_) return;
+  if (drawn_ && now - last_ < std::chrono::milliseconds(500) && (total_ == 0 || done < total_))
+    return;
   last_ = now;
   Draw(done);
 }
@@ -57,8 +61,9 @@ void Progress::Clear() {
 void Progress::Draw(size_t done) {
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  std::string text = "\r\033[K" + label_ + ": " + std::to_string(done) + " / " +
-                     std::to_string(total_) + ", " + Duration(elapsed);
+  std::string text = "\r\033[K" + label_ + ": " + std::to_string(done) +
+                     (total_ ? " / " + std::to_string(total_) : std::string()) + unit_ + ", " +
+                     Duration(elapsed);
   if (done > 0 && done < total_)
     text += ", about " +
             Duration(elapsed / static_cast<double>(done) * static_cast<double>(total_ - done)) +

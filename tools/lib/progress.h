@@ -13,7 +13,9 @@ namespace floorpose::tools {
 
 class Progress {
  public:
-  Progress(std::string label, size_t total);
+  // total 0: not known beforehand (then only the count and the time are shown).
+  Progress(std::string label, size_t total, std::string unit = {});
+  static bool OnTerminal();
   ~Progress();  // ends the line it drew
   Progress(const Progress&) = delete;
   Progress& operator=(const Progress&) = delete;
@@ -29,6 +31,7 @@ class Progress {
 
   std::string label_;
   size_t total_;
+  std::string unit_;
   bool terminal_;
   std::chrono::steady_clock::time_point start_, last_;
   size_t done_ = 0;
