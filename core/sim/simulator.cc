@@ -313,7 +313,12 @@ class RealityBuilder {
   // Puts an object (or wall) not on the plan on the floor, unless it would stand in a plan
   // wall or another object, on the given trajectory, or cut the walkable region apart.
   bool Place(std::vector<Eigen::Vector2d> footprint, double height, const char* kind) {
-    for (const Segment& s : StandingWalls(plan_, reality)) {
+    std::vector<Segment> walls = plan_.segments;  // as drawn, and where moved walls stand
+    for (size_t i = 0; i < plan_.segments.size(); ++i)
+      if (!reality.plan_wall_offset[i].isZero())
+        walls.push_back({plan_.segments[i].a + reality.plan_wall_offset[i],
+                         plan_.segments[i].b + reality.plan_wall_offset[i]});
+    for (const Segment& s : walls) {
       if (InsidePolygon(footprint, s.a) || InsidePolygon(footprint, s.b)) return false;
       for (size_t i = 0, j = footprint.size() - 1; i < footprint.size(); j = i++)
         if (SegmentsIntersect(footprint[j], footprint[i], s.a, s.b)) return false;
@@ -741,9 +746,9 @@ Simulation Simulate(const FloorPlan& input, const SimulatorOptions& o,
     const std::vector<Segment> doors = DoorLines(input, o.max_door_m);
     sim.plan.segments.insert(sim.plan.segments.end(), doors.begin(), doors.end());
     drawn_text = Format(
-        "doors: the plan draws %.0f openings of 0.6-%.1f m closed (one line per "
+        "doors: the plan draws the openings of 0.6-%.1f m closed (%.0f lines, one per "
         "face of a wall); reality has them open",
-        static_cast<double>(doors.size()), o.max_door_m);
+        o.max_door_m, static_cast<double>(doors.size()));
   }
   Reality initial;
   initial.plan_wall_present.assign(plan.segments.size(), 1);

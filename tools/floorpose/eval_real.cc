@@ -29,7 +29,10 @@ double ThreadCpuSeconds() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
+// The configuration every run starts from; only problems are logged (thousands of
+// registrations).
 bool LoadBaseConfig(const RealSuiteOptions& o, v1::FloorposedConfig* config) {
+  spdlog::set_level(spdlog::level::warn);
   std::string error;
   if (!platform::LoadConfig(o.config, config, &error)) {
     spdlog::error("{}", error);
@@ -39,9 +42,13 @@ bool LoadBaseConfig(const RealSuiteOptions& o, v1::FloorposedConfig* config) {
   return true;
 }
 
-void WriteJson(const fs::path& out, const std::vector<EvalReport>& reports) {
+// results.json (one report a line) and results.md, which is printed too.
+void WriteResults(const fs::path& out, const std::vector<EvalReport>& reports,
+                  const std::string& md) {
   std::ofstream json(out / "results.json");
   for (const EvalReport& r : reports) json << ToJson(r) << "\n";
+  std::ofstream(out / "results.md") << md;
+  std::fputs(md.c_str(), stdout);
 }
 
 // "12.3%" of a fraction, or "-" when there is nothing to take a share of.
@@ -143,7 +150,6 @@ constexpr char kCarmenHeader[] =
 }  // namespace
 
 int RunCarmenSuite(const RealSuiteOptions& o) {
-  spdlog::set_level(spdlog::level::warn);
   v1::FloorposedConfig base;
   if (!LoadBaseConfig(o, &base)) return 2;
   std::vector<CarmenRun> runs = FindCarmenLogs(o.dir);
@@ -186,9 +192,7 @@ int RunCarmenSuite(const RealSuiteOptions& o) {
     failed += !r.ok;
     if (r.ok) reports.push_back(r.report);
   }
-  WriteJson(o.out, reports);
-  std::ofstream(fs::path(o.out) / "results.md") << md.str();
-  std::fputs(md.str().c_str(), stdout);
+  WriteResults(o.out, reports, md.str());
   return failed ? 1 : 0;
 }
 
@@ -307,7 +311,6 @@ constexpr char kWalkHeader[] =
 }  // namespace
 
 int RunWaypointSuite(const RealSuiteOptions& o) {
-  spdlog::set_level(spdlog::level::warn);
   v1::FloorposedConfig base;
   if (!LoadBaseConfig(o, &base)) return 2;
   std::string error;
@@ -317,9 +320,12 @@ int RunWaypointSuite(const RealSuiteOptions& o) {
     return 2;
   }
   std::vector<WalkRun> runs;
-  for (const Floor& f : floors)
+  for (const Floor& f : floors) {
+    size_t taken = 0;
     for (const std::string& id : f.walks.ids)
-      if (f.walks.walks.at(id).size() >= 2) runs.push_back({&f, id, {}, {}, false});
+      if (f.walks.walks.at(id).size() >= 2 && (o.walks == 0 || taken++ < o.walks))
+        runs.push_back({&f, id, {}, {}, false});
+  }
   const fs::path recordings = fs::path(o.out) / "recordings";
   fs::create_directories(recordings);
   std::mutex mu;
@@ -370,9 +376,7 @@ int RunWaypointSuite(const RealSuiteOptions& o) {
   }
   for (const WalkRun& r : runs)
     if (r.ok) reports.push_back(r.with_pick), reports.push_back(r.without_pick);
-  WriteJson(o.out, reports);
-  std::ofstream(fs::path(o.out) / "results.md") << md.str();
-  std::fputs(md.str().c_str(), stdout);
+  WriteResults(o.out, reports, md.str());
   return failed ? 1 : 0;
 }
 

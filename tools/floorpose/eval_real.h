@@ -14,6 +14,7 @@ struct RealSuiteOptions {
   std::string out;     // results.md, results.json, recordings/
   std::string config;  // floorposed configuration (empty: the shipped defaults)
   int jobs = 0;        // parallel runs (0: one per core)
+  size_t walks = 0;    // waypoints: the first this many walks of each floor (0: all)
 };
 
 int RunCarmenSuite(const RealSuiteOptions& options);

@@ -485,6 +485,10 @@ Run AddEvalSuiteCommand(CLI::App& app) {
                  "without")
       ->excludes(plans)
       ->excludes(carmen);
+  app.add_option("--walks", o->waypoints.walks,
+                 "with --waypoints: the first this many walks of each floor (0: all; a walk "
+                 "without a pick searches the whole plan, seconds a search on a mall)")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--seeds", o->seeds, "seeds per plan and scenario")->capture_default_str();
   app.add_option("--out", o->out, "output directory")->required();
   app.add_option("--scenarios", o->scenarios, "scenarios (simulate --help describes them)")
