@@ -120,11 +120,17 @@ std::string ProjectLonLat(const Json& doc, std::vector<Segment>* raw, std::strin
       return "properties.origin is not [longitude, latitude]";
     which = "properties.origin";
   }
+  // Non-finite points stay as they are: MakeFloorPlan drops their segments and counts them.
   std::vector<Eigen::Vector2d> points;
-  for (const Segment& s : *raw) points.push_back(s.a), points.push_back(s.b);
+  for (const Segment& s : *raw)
+    for (const Eigen::Vector2d& p : {s.a, s.b})
+      if (p.allFinite()) points.push_back(p);
   std::string error;
   if (!ProjectToLocalMetres(origin, &points, &error)) return error;
-  for (size_t i = 0; i < raw->size(); ++i) (*raw)[i] = {points[2 * i], points[2 * i + 1]};
+  size_t next = 0;
+  for (Segment& s : *raw)
+    for (Eigen::Vector2d* p : {&s.a, &s.b})
+      if (p->allFinite()) *p = points[next++];
   char text[200];
   std::snprintf(text, sizeof(text),
                 "WGS84 longitude/latitude, projected to local metres (azimuthal equidistant, "

@@ -278,7 +278,7 @@ std::string WalkRow(const std::string& name, const std::string& split, const cha
     reliable_ok += static_cast<size_t>(std::llround(r->reliable_precision_1m * rel));
     mean += r->mean_error_m * static_cast<double>(r->poses);
     max = std::max(max, r->max_error_m);
-    p95.push_back(r->p95_error_m);
+    if (r->poses) p95.push_back(r->p95_error_m);  // a walk never placed has none
     false_poses += r->false_reliable_poses;
     false_runs += r->false_reliable_poses > 0;
     diverged += r->divergences > 0;
