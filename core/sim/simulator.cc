@@ -260,9 +260,9 @@ std::string MarkStale(const FloorPlan& plan, const SimulatorOptions& o, SplitMix
       for (size_t j : group) reality->plan_wall_present[j] = 0;
       gone += length;
     } else if (moved < o.stale_moved_share * total) {
-      const Eigen::Vector2d offset = rng.Uniform(o.min_move_m, o.max_move_m) *
-                                     (rng.Next() % 2 ? 1.0 : -1.0) *
-                                     plan.segments[group.front()].Normal();
+      const double distance = rng.Uniform(o.min_move_m, o.max_move_m);
+      const double side = rng.Next() % 2 ? 1.0 : -1.0;
+      const Eigen::Vector2d offset = distance * side * plan.segments[group.front()].Normal();
       for (size_t j : group) reality->plan_wall_offset[j] = offset;
       moved += length;
     }
@@ -477,6 +477,87 @@ std::vector<Surface> RealSurfaces(const FloorPlan& plan, const Reality& reality,
                                 {f[3].x() - f[0].x(), f[3].y() - f[0].y(), 0.0}, patch_m));
   }
   return out;
+}
+
+// A loss of tracking (relocalize): the steps [from, to) send nothing, and the SLAM frame
+// jumps at step `to` by `angle` and `offset` about where the headset is.
+struct Loss {
+  size_t from = 0, to = 0;
+  double angle = 0.0;
+  Eigen::Vector2d offset = Eigen::Vector2d::Zero();
+};
+
+// min_losses..max_losses losses over a walk of n steps, after the wall pick: one in each
+// of that many equal slots, none where a slot is too short to hold one.
+std::vector<Loss> DrawLosses(size_t n, const SimulatorOptions& o, SplitMix64& rng) {
+  std::vector<Loss> losses;
+  const double dt = o.pose_period_s;
+  const int count = o.min_losses + static_cast<int>(rng.Next() % (o.max_losses - o.min_losses + 1));
+  const double begin_s = o.pick_time_s + 10.0, end_s = (n - 1) * dt - 5.0;
+  const double slot = (end_s - begin_s) / count;
+  for (int k = 0; k < count && slot >= o.min_loss_s + 1.0; ++k) {
+    const double duration = std::min(rng.Uniform(o.min_loss_s, o.max_loss_s), slot - 1.0);
+    const double start = begin_s + k * slot + rng.Uniform(0.0, slot - duration);
+    Loss loss;
+    loss.from = static_cast<size_t>(std::ceil(start / dt));
+    loss.to = std::min(n - 1, loss.from + static_cast<size_t>(std::llround(duration / dt)));
+    loss.angle = rng.Uniform(-o.max_jump_rad, o.max_jump_rad);
+    const double direction = rng.Uniform(-M_PI, M_PI);
+    loss.offset =
+        rng.Uniform(0.0, o.max_jump_m) * Eigen::Vector2d(std::cos(direction), std::sin(direction));
+    losses.push_back(loss);
+  }
+  return losses;
+}
+
+// The steps sent while tracking was lost go; the pick keeps its step.
+void DropLostSteps(const std::vector<uint8_t>& lost, Simulation* sim) {
+  std::vector<SimulatedStep> kept;
+  size_t pick_step = 0;
+  for (size_t i = 0; i < sim->steps.size(); ++i) {
+    if (lost[i]) continue;
+    if (i == sim->pick_step) pick_step = kept.size();
+    kept.push_back(std::move(sim->steps[i]));
+  }
+  sim->steps = std::move(kept);
+  sim->pick_step = pick_step;
+}
+
+// The plan scanned from paper (scaled): the drawn plan, the truth and the pick's plan side
+// scaled 1-2% per axis and skewed about the input's centre, as a commander reads them off
+// that plan. Returns the description.
+std::string ScaleAndSkew(const FloorPlan& input, const SimulatorOptions& o, SplitMix64& rng,
+                         Simulation* sim) {
+  auto error = [&] {  // the sign, then the size (in this order, for every compiler)
+    const double sign = rng.Next() % 2 ? 1.0 : -1.0;
+    return sign * rng.Uniform(o.min_scale_error, o.max_scale_error);
+  };
+  const double sx = 1.0 + error(), sy = 1.0 + error();
+  const double skew = rng.Uniform(-o.max_skew_rad, o.max_skew_rad);
+  Eigen::Matrix2d A;
+  A << sx, sx * std::tan(skew), 0.0, sy;
+  sim->plan_from_reality = A;
+  const Eigen::Vector2d c = 0.5 * (input.min + input.max);
+  auto to_plan = [&](const Eigen::Vector2d& p) -> Eigen::Vector2d { return c + A * (p - c); };
+  FloorPlan& plan = sim->plan;
+  plan.min = plan.max = to_plan(input.segments.front().a);
+  for (Segment& seg : plan.segments) {
+    seg = {to_plan(seg.a), to_plan(seg.b)};
+    plan.min = plan.min.cwiseMin(seg.a).cwiseMin(seg.b);
+    plan.max = plan.max.cwiseMax(seg.a).cwiseMax(seg.b);
+  }
+  for (SimulatedStep& step : sim->steps) {
+    const double h = step.true_plan.heading;
+    const Eigen::Vector2d d = A * Eigen::Vector2d(std::cos(h), std::sin(h));
+    step.true_plan.position = to_plan(step.true_plan.position);
+    step.true_plan.heading = std::atan2(d.y(), d.x());
+  }
+  sim->pick.plan_point = to_plan(sim->pick.plan_point);
+  sim->pick.plan_normal = (A.inverse().transpose() * sim->pick.plan_normal).normalized();
+  return Format(
+      "The plan is scaled %+.2f%% along x and %+.2f%% along y and skewed %.2f deg about its "
+      "centre. ",
+      100.0 * (sx - 1.0), 100.0 * (sy - 1.0), skew / kDeg);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -838,34 +919,11 @@ Simulation Simulate(const FloorPlan& input, const SimulatorOptions& o,
   }
   const size_t n = head.size();
 
-  // Losses of tracking (relocalize): count of them spread over the walk after the wall
-  // pick, one in each of count equal slots; no poses and no meshes while lost (lost[i]).
-  struct Loss {
-    size_t from = 0, to = 0;  // the lost steps, [from, to)
-    double angle = 0.0;
-    Eigen::Vector2d offset = Eigen::Vector2d::Zero();
-  };
-  std::vector<Loss> losses;
-  std::vector<uint8_t> lost(n, 0);
-  if (o.scenario == Scenario::kRelocalize) {
-    const int count =
-        o.min_losses + static_cast<int>(loss_rng.Next() % (o.max_losses - o.min_losses + 1));
-    const double begin_s = o.pick_time_s + 10.0, end_s = (n - 1) * dt - 5.0;
-    const double slot = (end_s - begin_s) / count;
-    for (int k = 0; k < count && slot >= o.min_loss_s + 1.0; ++k) {
-      const double duration = std::min(loss_rng.Uniform(o.min_loss_s, o.max_loss_s), slot - 1.0);
-      const double start = begin_s + k * slot + loss_rng.Uniform(0.0, slot - duration);
-      Loss loss;
-      loss.from = static_cast<size_t>(std::ceil(start / dt));
-      loss.to = std::min(n - 1, loss.from + static_cast<size_t>(std::llround(duration / dt)));
-      loss.angle = loss_rng.Uniform(-o.max_jump_rad, o.max_jump_rad);
-      const double direction = loss_rng.Uniform(-M_PI, M_PI);
-      loss.offset = loss_rng.Uniform(0.0, o.max_jump_m) *
-                    Eigen::Vector2d(std::cos(direction), std::sin(direction));
-      for (size_t i = loss.from; i < loss.to; ++i) lost[i] = 1;
-      losses.push_back(loss);
-    }
-  }
+  const std::vector<Loss> losses =
+      o.scenario == Scenario::kRelocalize ? DrawLosses(n, o, loss_rng) : std::vector<Loss>{};
+  std::vector<uint8_t> lost(n, 0);  // no poses and no meshes while lost
+  for (const Loss& loss : losses)
+    for (size_t i = loss.from; i < loss.to; ++i) lost[i] = 1;
 
   // Ground truth and the SLAM drift: the true motion between poses, integrated with a scale
   // error, a heading bias and random walks. The SLAM frame starts at the head, looking
@@ -1136,53 +1194,10 @@ Simulation Simulate(const FloorPlan& input, const SimulatorOptions& o,
     sim.pick_height_m = o.pick_height_m - eye;
   }
 
-  // While tracking is lost the headset sends nothing: those steps go.
-  if (!losses.empty()) {
-    std::vector<SimulatedStep> kept;
-    size_t pick_step = 0;
-    for (size_t i = 0; i < n; ++i) {
-      if (lost[i]) continue;
-      if (i == sim.pick_step) pick_step = kept.size();
-      kept.push_back(std::move(sim.steps[i]));
-    }
-    sim.steps = std::move(kept);
-    sim.pick_step = pick_step;
-  }
+  if (!losses.empty()) DropLostSteps(lost, &sim);  // while lost, the headset sends nothing
 
-  // The plan scanned from paper: scaled and skewed about its centre; the truth and the
-  // pick's plan side move with it, as a commander reads them off that plan.
-  std::string scaled_text;
-  if (o.scenario == Scenario::kScaled) {
-    auto error = [&] {
-      return (reality_rng.Next() % 2 ? 1.0 : -1.0) *
-             reality_rng.Uniform(o.min_scale_error, o.max_scale_error);
-    };
-    const double sx = 1.0 + error(), sy = 1.0 + error();
-    const double skew = reality_rng.Uniform(-o.max_skew_rad, o.max_skew_rad);
-    Eigen::Matrix2d A;
-    A << sx, sx * std::tan(skew), 0.0, sy;
-    sim.plan_from_reality = A;
-    const Eigen::Vector2d c = 0.5 * (input.min + input.max);
-    auto to_plan = [&](const Eigen::Vector2d& p) -> Eigen::Vector2d { return c + A * (p - c); };
-    for (Segment& seg : sim.plan.segments) seg = {to_plan(seg.a), to_plan(seg.b)};
-    sim.plan.min = to_plan(input.min).cwiseMin(to_plan(input.max));
-    sim.plan.max = to_plan(input.min).cwiseMax(to_plan(input.max));
-    for (const Segment& seg : sim.plan.segments)
-      sim.plan.min = sim.plan.min.cwiseMin(seg.a).cwiseMin(seg.b),
-      sim.plan.max = sim.plan.max.cwiseMax(seg.a).cwiseMax(seg.b);
-    for (SimulatedStep& step : sim.steps) {
-      const double h = step.true_plan.heading;
-      const Eigen::Vector2d d = A * Eigen::Vector2d(std::cos(h), std::sin(h));
-      step.true_plan.position = to_plan(step.true_plan.position);
-      step.true_plan.heading = std::atan2(d.y(), d.x());
-    }
-    sim.pick.plan_point = to_plan(sim.pick.plan_point);
-    sim.pick.plan_normal = (A.inverse().transpose() * sim.pick.plan_normal).normalized();
-    scaled_text = Format(
-        "The plan is scaled %+.2f%% along x and %+.2f%% along y and skewed %.2f deg about its "
-        "centre. ",
-        100.0 * (sx - 1.0), 100.0 * (sy - 1.0), skew / kDeg);
-  }
+  const std::string scaled_text =
+      o.scenario == Scenario::kScaled ? ScaleAndSkew(input, o, reality_rng, &sim) : std::string();
 
   // Ten markers at equal distances along the walk, the first at the start and the last at
   // the end (thesis section 5.1), each on the nearest pose.
