@@ -197,5 +197,42 @@ TEST(TumTrajectoryTest, RefusesBrokenInput) {
   EXPECT_THAT(error, HasSubstr("two poses"));
 }
 
+TEST(WaypointsTest, ReadsWalksInFileOrderAndDropsRepeatedTimes) {
+  WaypointWalks walks;
+  std::string error;
+  ASSERT_TRUE(
+      ParseWaypoints("walk,t_ms,x_m,y_m\r\nb,1000,1.5,2\r\na,500,0,0\r\nb,2000,3,2\r\n"
+                     "b,2000,9,9\r\na,1500,0,4\r\n",
+                     &walks, &error))
+      << error;
+  ASSERT_EQ(walks.ids, (std::vector<std::string>{"b", "a"}));
+  ASSERT_EQ(walks.walks["b"].size(), 2u);  // the second waypoint at 2000 ms went
+  EXPECT_EQ(walks.repeated, 1u);
+  EXPECT_DOUBLE_EQ(walks.walks["b"][0].t_s, 1.0);
+  EXPECT_EQ(walks.walks["b"][1].position, Eigen::Vector2d(3, 2));
+  EXPECT_EQ(walks.walks["a"][1].position, Eigen::Vector2d(0, 4));
+}
+
+TEST(WaypointsTest, RefusesBrokenInputNamingTheLine) {
+  const char* broken[] = {
+      "walk,t_ms,x_m,y_m\na,1,2\n",              // too few fields
+      "walk,t_ms,x_m,y_m\na,1,2,3,4\n",          // too many
+      "walk,t_ms,x_m,y_m\na,1,2,north\n",        // not a number
+      "walk,t_ms,x_m,y_m\na,1,nan,3\n",          // not finite
+      "walk,t_ms,x_m,y_m\n,1,2,3\n",             // no walk id
+      "walk,t_ms,x_m,y_m\na,10,0,0\na,5,1,1\n",  // back in time
+  };
+  for (const char* text : broken) {
+    WaypointWalks walks;
+    std::string error;
+    EXPECT_FALSE(ParseWaypoints(text, &walks, &error)) << text;
+    EXPECT_THAT(error, HasSubstr("line ")) << text;
+  }
+  WaypointWalks none;
+  std::string error;
+  EXPECT_FALSE(ParseWaypoints("walk,t_ms,x_m,y_m\n", &none, &error));
+  EXPECT_THAT(error, HasSubstr("no waypoints"));
+}
+
 }  // namespace
 }  // namespace floorpose::tools
