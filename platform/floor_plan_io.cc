@@ -11,6 +11,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <utility>
 
 #include "platform/raster_plan_io.h"
 #include "platform/wgs84.h"
@@ -88,6 +89,15 @@ std::string AddGeometry(const Json& g, std::vector<Segment>* out, int depth) {
 // A GeoJSON in longitude/latitude (RFC 7946) has no `crs` member or names CRS84 / EPSG:4326
 // in it, does not say `"units": "m"`, and has coordinates that can be longitude/latitude
 // of one building. Anything else is metres in a local frame, as written.
+// The bounding box of the finite end points; empty (min > max) when there are none.
+std::pair<Eigen::Vector2d, Eigen::Vector2d> FiniteBounds(const std::vector<Segment>& raw) {
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(1e300), hi = -lo;
+  for (const Segment& s : raw)
+    for (const Eigen::Vector2d& p : {s.a, s.b})
+      if (p.allFinite()) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  return {lo, hi};
+}
+
 bool IsLonLat(const Json& doc, const std::vector<Segment>& raw) {
   if (doc.contains("properties") && doc["properties"].is_object() &&
       doc["properties"].contains("units") && doc["properties"]["units"] == "m")
@@ -97,10 +107,7 @@ bool IsLonLat(const Json& doc, const std::vector<Segment>& raw) {
     if (crs.find("CRS84") == std::string::npos && crs.find("4326") == std::string::npos)
       return false;
   }
-  Eigen::Vector2d lo = Eigen::Vector2d::Constant(1e300), hi = -lo;
-  for (const Segment& s : raw)
-    for (const Eigen::Vector2d& p : {s.a, s.b})
-      if (p.allFinite()) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  const auto [lo, hi] = FiniteBounds(raw);
   return (hi - lo).minCoeff() >= 0 && CouldBeLonLat(lo, hi);
 }
 
@@ -108,10 +115,7 @@ bool IsLonLat(const Json& doc, const std::vector<Segment>& raw) {
 // or else the south-west corner of the bounding box. Returns an error or empty; `frame`
 // says the projection and origin.
 std::string ProjectLonLat(const Json& doc, std::vector<Segment>* raw, std::string* frame) {
-  Eigen::Vector2d origin = Eigen::Vector2d::Constant(1e300);
-  for (const Segment& s : *raw)
-    for (const Eigen::Vector2d& p : {s.a, s.b})
-      if (p.allFinite()) origin = origin.cwiseMin(p);
+  Eigen::Vector2d origin = FiniteBounds(*raw).first;
   const char* which = "the south-west corner of its bounding box";
   if (doc.contains("properties") && doc["properties"].is_object() &&
       doc["properties"].contains("origin")) {

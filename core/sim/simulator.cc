@@ -313,15 +313,17 @@ class RealityBuilder {
   // Puts an object (or wall) not on the plan on the floor, unless it would stand in a plan
   // wall or another object, on the given trajectory, or cut the walkable region apart.
   bool Place(std::vector<Eigen::Vector2d> footprint, double height, const char* kind) {
-    std::vector<Segment> walls = plan_.segments;  // as drawn, and where moved walls stand
-    for (size_t i = 0; i < plan_.segments.size(); ++i)
-      if (!reality.plan_wall_offset[i].isZero())
-        walls.push_back({plan_.segments[i].a + reality.plan_wall_offset[i],
-                         plan_.segments[i].b + reality.plan_wall_offset[i]});
-    for (const Segment& s : walls) {
-      if (InsidePolygon(footprint, s.a) || InsidePolygon(footprint, s.b)) return false;
+    // Walls as drawn, and where moved walls stand.
+    auto blocks = [&](const Segment& s) {
+      if (InsidePolygon(footprint, s.a) || InsidePolygon(footprint, s.b)) return true;
       for (size_t i = 0, j = footprint.size() - 1; i < footprint.size(); j = i++)
-        if (SegmentsIntersect(footprint[j], footprint[i], s.a, s.b)) return false;
+        if (SegmentsIntersect(footprint[j], footprint[i], s.a, s.b)) return true;
+      return false;
+    };
+    for (size_t i = 0; i < plan_.segments.size(); ++i) {
+      const Segment& s = plan_.segments[i];
+      const Eigen::Vector2d& offset = reality.plan_wall_offset[i];
+      if (blocks(s) || (!offset.isZero() && blocks({s.a + offset, s.b + offset}))) return false;
     }
     for (const Reality::Prism& e : reality.extras)
       if (PolygonsOverlap(footprint, e.footprint)) return false;

@@ -457,11 +457,10 @@ int RunSuite(const SuiteOptions& o) {
       for (const SuiteRun& run : runs) {
         if (run.plan_id != r->plan_id || run.scenario != r->scenario || run.seed != r->seed)
           continue;
-        const FloorPlanParse drawn = run.drawn_plan.empty()
-                                         ? FloorPlanParse{loaded[run.plan_path], {}, 0, {}}
-                                         : platform::LoadFloorPlan(run.drawn_plan);
-        std::ofstream(fs::path(o.out) / "svg" / (std::string(name) + ".svg"))
-            << ToSvg(drawn.plan, *r);
+        const FloorPlan drawn = run.drawn_plan.empty()
+                                    ? loaded[run.plan_path]
+                                    : platform::LoadFloorPlan(run.drawn_plan).plan;
+        std::ofstream(fs::path(o.out) / "svg" / (std::string(name) + ".svg")) << ToSvg(drawn, *r);
       }
     }
   }
