@@ -21,7 +21,8 @@ enum class Refusal {
   kNonFinite,
   kOutOfRange,
   kOverLimits,
-  kInconsistent
+  kInconsistent,
+  kFuture  // stamped too far ahead of the newest stamp taken (DeviceClock)
 };
 
 struct DecodedMesh {

@@ -1,5 +1,6 @@
 #include "platform/engine.h"
 
+#include <spdlog/fmt/fmt.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -101,7 +102,9 @@ Engine::Engine(v1::FloorposedConfig config, Publish publish, std::function<int64
       wall_options_(ToWallExtractionOptions(config_)),
       tracker_(ToTrackerOptions(config_)),
       store_(config_.tracking().snapshot_voxel_m()),
-      floor_(config_.floor()) {}
+      floor_(config_.floor()),
+      clock_({static_cast<int64_t>(config_.limits().max_future_s() * 1e9),
+              static_cast<int64_t>(config_.limits().restart_gap_s() * 1e9)}) {}
 
 std::string Engine::Start() {
   if (config_.plan_path().empty()) return {};
@@ -392,8 +395,33 @@ void Engine::Reject(Refusal kind, const std::string& why) {
     case Refusal::kOutOfRange: c.set_out_of_range(c.out_of_range() + 1); break;
     case Refusal::kOverLimits: c.set_over_limits(c.over_limits() + 1); break;
     case Refusal::kInconsistent: c.set_inconsistent(c.inconsistent() + 1); break;
+    case Refusal::kFuture: c.set_future_stamps(c.future_stamps() + 1); break;
   }
   Warn("rejected " + std::to_string(static_cast<int>(kind)), "rejected: " + why);
+}
+
+bool Engine::TakeStamp(const std::string& what, int64_t* stamp_ns) {
+  const DeviceClock::Mapped m = clock_.Take(*stamp_ns, now_ns_());
+  switch (m.verdict) {
+    case DeviceClock::Verdict::kFuture:
+      Reject(Refusal::kFuture,
+             fmt::format("{} of {} ns is more than limits.max_future_s ({} s) ahead of the newest "
+                         "stamp taken: from the future",
+                         what, *stamp_ns, config_.limits().max_future_s()));
+      return false;
+    case DeviceClock::Verdict::kRestarted:
+      counters_.set_clock_restarts(counters_.clock_restarts() + 1);
+      Warn("clock restart",
+           fmt::format("{} of {} ns is {:.1f} s off the headset's clock: the clock started again "
+                       "(app restarted); ordering starts again, alignment and walls kept",
+                       what, *stamp_ns, -1e-9 * static_cast<double>(m.fell_back_ns)));
+      recent_.clear();  // its source stamps are of the old clock
+      break;
+    case DeviceClock::Verdict::kTaken: break;
+  }
+  *stamp_ns = m.timeline_ns;
+  latest_stamp_ns_ = std::max(latest_stamp_ns_, m.timeline_ns);
+  return true;
 }
 
 void Engine::OnMeshDelta(const Envelope& e) {
@@ -403,7 +431,7 @@ void Engine::OnMeshDelta(const Envelope& e) {
   Refusal kind{};
   const std::string error = DecodeMeshDelta(e.payload, frame_, config_.limits(), &mesh, &kind);
   if (!error.empty()) return Reject(kind, error);
-  latest_stamp_ns_ = std::max(latest_stamp_ns_, mesh.stamp_ns);
+  if (!TakeStamp("mesh " + std::to_string(mesh.mesh_id), &mesh.stamp_ns)) return;
   if (mesh.change == v1::MeshDelta::REMOVED) {
     if (store_.Remove(mesh.mesh_id)) {
       counters_.set_meshes_removed(counters_.meshes_removed() + 1);
@@ -485,10 +513,12 @@ void Engine::OnHeadsetPose(const Envelope& e) {
   Refusal kind{};
   const std::string error = DecodeHeadsetPose(e.payload, frame_, config_.limits(), &pose, &kind);
   if (!error.empty()) return Reject(kind, error);
+  const int64_t source_stamp_ns = pose.stamp_ns;  // as the headset stamped it
+  if (!TakeStamp("pose", &pose.stamp_ns)) return;
   if (last_pose_stamp_ns_ && pose.stamp_ns == *last_pose_stamp_ns_) {
     counters_.set_duplicate_stamps(counters_.duplicate_stamps() + 1);
     Warn("duplicate pose",
-         "pose of " + std::to_string(pose.stamp_ns) + " ns again: dropped (answered already)");
+         "pose of " + std::to_string(source_stamp_ns) + " ns again: dropped (answered already)");
     return;
   }
   if (pose.odometry != odometry_) UseOdometry(pose.odometry);
@@ -496,13 +526,14 @@ void Engine::OnHeadsetPose(const Envelope& e) {
   if (last_pose_stamp_ns_ && pose.stamp_ns < *last_pose_stamp_ns_) {
     // Late: answered under the alignment in use, but the walk is not walked backwards.
     counters_.set_stale_stamps(counters_.stale_stamps() + 1);
-    Warn("stale pose", "pose of " + std::to_string(pose.stamp_ns) +
-                           " ns is older than the newest taken (" +
-                           std::to_string(*last_pose_stamp_ns_) + " ns): not tracked");
+    Warn("stale pose",
+         fmt::format("pose of {} ns is {:.3f} s older than the newest taken: not "
+                     "tracked",
+                     source_stamp_ns,
+                     1e-9 * static_cast<double>(*last_pose_stamp_ns_ - pose.stamp_ns)));
     est = tracker_.Project(pose.pose_slam);
   } else {
     last_pose_stamp_ns_ = pose.stamp_ns;
-    latest_stamp_ns_ = std::max(latest_stamp_ns_, pose.stamp_ns);
     eye_z_ = pose.pose_slam.z;
     FollowFloors(pose);
     est = tracker_.Correct(pose.pose_slam);
@@ -519,7 +550,7 @@ void Engine::OnHeadsetPose(const Envelope& e) {
     est.reliability.probability = 0.0;
     est.reliability.reason = "headset tracking lost";
   }
-  const v1::PlanPose out = ToPlanPose(est, pose.stamp_ns);
+  const v1::PlanPose out = ToPlanPose(est, source_stamp_ns);
   if (pose.pose_slam.position.allFinite()) {
     if (path_.empty() || (pose.pose_slam.position - path_.back().second).norm() >= 0.25)
       path_.emplace_back(pose.stamp_ns, pose.pose_slam.position);
@@ -535,7 +566,7 @@ void Engine::OnHeadsetPose(const Envelope& e) {
   if (config_.tracking().track_history_s() > 0) {
     recent_.emplace_back(pose.pose_slam, out);
     const auto horizon = static_cast<int64_t>(config_.tracking().track_history_s() * 1e9);
-    while (!recent_.empty() && recent_.front().second.source_stamp_ns() < pose.stamp_ns - horizon)
+    while (!recent_.empty() && recent_.front().second.source_stamp_ns() < source_stamp_ns - horizon)
       recent_.pop_front();
   }
   publish_(Topic::kPlanPose, out);
@@ -663,7 +694,8 @@ void Engine::OnCommand(const Envelope& e) {
       case v1::Command::kReset:
         tracker_.Reset();
         store_.Clear();
-        done = "reset: alignment and wall store cleared";
+        clock_.Reset();
+        done = "reset: alignment, wall store and the headset's clock cleared";
         break;
       case v1::Command::kGetState:
         for (std::string& id : ListPlanIds(config_.plan_dir())) reply.add_plans(std::move(id));
@@ -884,6 +916,7 @@ v1::StateSnapshot Engine::SaveState() const {
   s.set_plan_digest(plan_.digest);
   s.set_floor(floor_);
   s.set_latest_stamp_ns(latest_stamp_ns_);
+  s.set_stamp_offset_ns(clock_.offset_ns());
   const TrackerState t = tracker_.SaveState();
   *s.mutable_alignment() = ToProto(t.alignment, floor_);
   s.set_next_version(t.next_version);
@@ -1000,6 +1033,7 @@ std::string Engine::RestoreState(const v1::StateSnapshot& s) {
   for (auto& [m, points] : meshes) store_.Upsert(m->mesh_id(), std::move(points), m->stamp_ns());
   store_.TakeNewPoints();
   latest_stamp_ns_ = std::max(latest_stamp_ns_, s.latest_stamp_ns());
+  clock_.Restore(latest_stamp_ns_, s.stamp_offset_ns(), now_ns_());
   return {};
 }
 

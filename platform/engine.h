@@ -27,6 +27,7 @@
 #include "floorpose/v1/floorpose.pb.h"
 #include "platform/codec.h"
 #include "platform/dds.h"
+#include "platform/device_clock.h"
 #include "platform/floor_plan_io.h"
 
 namespace floorpose::platform {
@@ -159,6 +160,8 @@ class Engine {
   // The recent trajectory under the alignment in use (PlanTrack).
   void PublishTrack();
   v1::PlanPose ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) const;
+  // Maps an input's stamp onto the device's timeline (clock_), in place; false: refused.
+  bool TakeStamp(const std::string& what, int64_t* stamp_ns);
   // A refused input: counted by kind (DaemonStatus.Counters) and logged through Warn.
   void Reject(Refusal kind, const std::string& why);
   // A warning, at most one line a second per topic (the next one says how many were held
@@ -220,6 +223,9 @@ class Engine {
     std::string why;
   };
   std::optional<LastRegistration> last_registration_;
+  // The device's stamps as one forward timeline; every stamp below is on it, except the
+  // source stamps of published poses.
+  DeviceClock clock_;
   int64_t latest_stamp_ns_ = 0;                // newest headset stamp seen: the scheduling clock
   std::optional<int64_t> last_pose_stamp_ns_;  // of the newest pose taken
   struct Throttle {

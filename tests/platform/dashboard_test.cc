@@ -105,6 +105,21 @@ TEST(DashboardStateTest, ALatePoseIsHistoryAndABadOneIsDropped) {
   EXPECT_EQ(a["trail"]["points"].size(), 1u);
 }
 
+TEST(DashboardStateTest, AHeadsetWhoseClockStartsAgainIsFollowed) {
+  DashboardState state({});
+  const auto t0 = Clock::now();
+  state.OnPlanPose("hl-a", Pose(5, 5, 900'000'000'000), t0);
+  state.OnPlanPose("hl-a", Pose(6, 5, 900'300'000'000), t0);
+  // The app restarted: its stamps begin again near 0.
+  state.OnPlanPose("hl-a", Pose(7, 5, 300'000'000), t0);
+  state.OnPlanPose("hl-a", Pose(8, 5, 600'000'000), t0);
+  DashboardState::Cursor c;
+  const json f = FrameOf(state, &c, t0);
+  const json& a = *Device(f, "hl-a");
+  EXPECT_EQ(a["pose"]["x"], 8.0);
+  ASSERT_EQ(a["trail"]["points"].size(), 2u);
+}
+
 TEST(DashboardStateTest, ANewTrackReplacesTheTrailAndKeepsWhatCameAfterIt) {
   DashboardState state({});
   const auto t0 = Clock::now();

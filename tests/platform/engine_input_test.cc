@@ -292,6 +292,7 @@ TEST_F(EngineInputTest, ACheckWithTooFewWallsInItsWindowIsTriedAgainOnTheNextWal
   engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::ADDED, 1 * s)));
   ASSERT_GE(engine_->store().points(), engine_->tracker().MinPoints());
   // 20 s on, the wall is still in the store but 19 s old: out of the 10 s window.
+  clock_ns_ += 19 * s;
   engine_->OnHeadsetPose(Wrap(Pose(20 * s)));
   EXPECT_FALSE(engine_->TakeDueJob());
   // Scanned again 0.3 s later, well within max_interval_s of that attempt.

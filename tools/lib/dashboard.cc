@@ -84,7 +84,15 @@ void DashboardState::OnPlanPose(const std::string& device, const v1::PlanPose& p
     if (!found) return;
     Device& d = *found;
     d.last_pose = now;
-    // A late pose (older than the one shown) is history, not where the wearer is.
+    // A late pose (older than the one shown) is history, not where the wearer is; one far
+    // older is from a headset whose clock started again.
+    const auto gap = static_cast<int64_t>(options_.restart_gap_s * 1e9);
+    if (d.pose && pose.source_stamp_ns() < d.pose->source_stamp_ns() - gap) {
+      d.trail.clear();
+      ++d.trail_epoch;
+      d.trail_first_seq = 0;
+      d.pose.reset();
+    }
     if (!d.pose || pose.source_stamp_ns() >= d.pose->source_stamp_ns()) d.pose = pose;
     Append(d, pose);
   }

@@ -29,6 +29,10 @@ struct DashboardOptions {
   double frame_period_s = 0.1;  // pushes to a browser are coalesced to at most this rate
   std::map<std::string, std::string> names;  // device id -> name shown; default: the id
   size_t max_devices = 256;  // more device ids than a team has: the rest are ignored, logged
+  // A plan pose stamped this much before the one shown is a headset whose clock started
+  // again (its app restarted; floorposed's limits.restart_gap_s): it is shown, and its
+  // trail starts again.
+  double restart_gap_s = 5.0;
 };
 
 class DashboardState {

@@ -1,0 +1,141 @@
+// Hostile input and broken state (label hostile): a real floorposed process attacked over
+// loopback DDS by a participant of the attacker's own, and fed broken files. Each test is
+// one row of docs/robustness.md.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <functional>
+#include <iterator>
+
+#include "tests/integration/daemon_fixture.h"
+
+namespace floorpose {
+namespace {
+
+constexpr int64_t kPoisonNs = (int64_t{1} << 62) - 1;  // inside the documented +-2^62
+
+class HostileTest : public DaemonTest {
+ protected:
+  std::string Log() const {
+    std::ifstream in(log_path_);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  }
+  // A participant of the attacker's own that publishes as the wearer's device.
+  tools::HeadsetLink& Attacker() {
+    if (!attacker_) {
+      attacker_ = std::make_unique<tools::HeadsetLink>(domain_, platform::LoopbackCycloneConfig(),
+                                                       "hl-test");
+      EXPECT_TRUE(attacker_->WaitForDaemon(seconds(15)));
+    }
+    return *attacker_;
+  }
+  // Starts a fresh floorposed (a new process, nothing kept) and forgets the outputs seen.
+  void FreshDaemon() {
+    if (daemon_ && daemon_->Running()) {
+      ASSERT_EQ(daemon_->Terminate(seconds(2)), 0);
+    }
+    link_->plan_poses.clear();
+    link_->alignments.clear();
+    link_->status.reset();
+    LaunchDaemon();
+    ASSERT_TRUE(link_->WaitForDaemon(seconds(15))) << "floorposed did not come back";
+  }
+  // Walks `walk` after its wall pick, its stamps mapped by `stamp`, running before(k)
+  // before step k; returns the RELIABLE share of the plan poses from step `from` on.
+  double Walk(
+      const sim::DemoWalk& walk, size_t from, const std::function<int64_t(int64_t)>& stamp,
+      const std::function<void(size_t)>& before = [](size_t) {}) {
+    link_->Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
+    EXPECT_TRUE(link_->WaitUntil([&] { return !link_->alignments.empty(); }, seconds(10)));
+    for (size_t k = 0; k < walk.steps.size(); ++k) {
+      before(k);
+      const sim::SimStep& step = walk.steps[k];
+      const int64_t t = stamp(step.stamp_ns);
+      for (const sim::SimMesh& m : step.meshes)
+        link_->Send(Topic::kMeshDelta, tools::ToMeshDelta(m, kFrame, t), t);
+      link_->Send(Topic::kHeadsetPose, tools::ToHeadsetPose(step.slam, kFrame, t), t);
+      link_->WaitUntil([] { return false; }, std::chrono::milliseconds(15));
+    }
+    EXPECT_TRUE(link_->WaitUntil([&] { return link_->plan_poses.size() >= walk.steps.size(); },
+                                 seconds(10)))
+        << link_->plan_poses.size() << " plan poses of " << walk.steps.size();
+    size_t reliable = 0, all = 0;
+    for (size_t k = from; k < link_->plan_poses.size(); ++k, ++all)
+      reliable += link_->plan_poses[k].reliability().flag() == v1::Reliability::RELIABLE;
+    return all ? 100.0 * static_cast<double>(reliable) / static_cast<double>(all) : 0.0;
+  }
+  static int64_t Same(int64_t t) { return t; }
+  uint64_t Registrations() {
+    link_->WaitUntil([] { return false; }, std::chrono::milliseconds(300));
+    return link_->status ? link_->status->counters().registrations() : 0;
+  }
+
+  std::unique_ptr<tools::HeadsetLink> attacker_;
+};
+
+// 1. One pose and one mesh delta stamped 2^62-1 used to make every later message "older
+// than the newest taken": no registration ran again, and reset did not help.
+TEST_F(HostileTest, StampsFromTheFarFutureAreRefusedAndTheWalkGoesOn) {
+  StartDaemon();
+  const sim::DemoWalk walk = DaemonTest::Walk(/*pick_error_m=*/0.3, 5);
+  const size_t third = walk.steps.size() / 3;
+  const double clean = Walk(walk, third, Same);
+
+  ASSERT_NO_FATAL_FAILURE(FreshDaemon());
+  uint64_t registrations_at_attack = 0;
+  // The poisoned pose before step `third`, the poisoned mesh before the next one.
+  const double attacked = Walk(walk, third, Same, [&](size_t k) {
+    if (k != third && k != third + 1) return;
+    if (k == third) registrations_at_attack = Registrations();
+    const sim::SimStep& step = walk.steps[k];
+    tools::HeadsetLink& a = Attacker();
+    if (k == third) {
+      a.Send(Topic::kHeadsetPose, tools::ToHeadsetPose(step.slam, kFrame, kPoisonNs), kPoisonNs);
+    } else {
+      sim::SimMesh mesh;  // the latest scan, as a new mesh
+      for (size_t j = 0; j < k; ++j)
+        if (!walk.steps[j].meshes.empty()) mesh = walk.steps[j].meshes.back();
+      ASSERT_FALSE(mesh.vertices_slam.empty());
+      mesh.id += 1'000'000;
+      a.Send(Topic::kMeshDelta, tools::ToMeshDelta(mesh, kFrame, kPoisonNs), kPoisonNs);
+    }
+    a.WaitUntil([] { return false; }, std::chrono::milliseconds(100));
+  });
+  std::printf("RELIABLE after step %zu: %.1f%% clean, %.1f%% with the poisoned stamps\n", third,
+              clean, attacked);
+  EXPECT_NEAR(attacked, clean, 2.0);
+  EXPECT_GT(Registrations(), registrations_at_attack) << "no registration after the attack";
+  ASSERT_TRUE(link_->status);
+  EXPECT_EQ(link_->status->counters().future_stamps(), 2u);
+  EXPECT_EQ(link_->status->counters().clock_restarts(), 0u);
+  EXPECT_NE(Log().find("from the future"), std::string::npos);
+}
+
+// 2. A headset whose app restarted (stamps begin again at 0) used to be dropped as
+// "older than the newest taken" for the rest of the walk.
+TEST_F(HostileTest, AHeadsetWhoseClockStartsAgainIsTrackedAsBefore) {
+  StartDaemon();
+  const sim::DemoWalk walk = DaemonTest::Walk(/*pick_error_m=*/0.3, 6);
+  const size_t half = walk.steps.size() / 2;
+  const int64_t restart_ns = walk.steps[half].stamp_ns;
+  const double clean = Walk(walk, half, Same);
+
+  ASSERT_NO_FATAL_FAILURE(FreshDaemon());
+  uint64_t registrations_at_restart = 0;
+  const double restarted = Walk(
+      walk, half, [&](int64_t t) { return t < restart_ns ? t : t - restart_ns + 20'000'000; },
+      [&](size_t k) {
+        if (k == half) registrations_at_restart = Registrations();
+      });
+  std::printf("RELIABLE after the restart: %.1f%% clean, %.1f%% restarted\n", clean, restarted);
+  EXPECT_NEAR(restarted, clean, 2.0);
+  EXPECT_GT(Registrations(), registrations_at_restart) << "no registration after the restart";
+  EXPECT_EQ(link_->status->counters().clock_restarts(), 1u);
+  EXPECT_NE(Log().find("the clock started again"), std::string::npos);
+  // The poses after the restart carry the headset's new stamps.
+  EXPECT_EQ(link_->plan_poses.back().source_stamp_ns(),
+            walk.steps.back().stamp_ns - restart_ns + 20'000'000);
+}
+
+}  // namespace
+}  // namespace floorpose
