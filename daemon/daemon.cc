@@ -250,7 +250,8 @@ void Daemon::Publish(Topic topic, const google::protobuf::Message& msg) {
 void Daemon::ResumeFromSnapshot() {
   v1::StateSnapshot snapshot;
   std::string error;
-  switch (platform::ReadStateFile(snapshot_path_, &snapshot, &error)) {
+  const uint64_t max_bytes = uint64_t{config_.limits().max_snapshot_mb()} << 20;
+  switch (platform::ReadStateFile(snapshot_path_, &snapshot, &error, max_bytes)) {
     case platform::StateRead::kMissing:
       spdlog::info("no snapshot at {}: starting clean", snapshot_path_);
       return;

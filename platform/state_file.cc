@@ -1,6 +1,7 @@
 #include "platform/state_file.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <zlib.h>
 
@@ -10,8 +11,6 @@
 #include <cstring>
 #include <ctime>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 
 namespace floorpose::platform {
 namespace {
@@ -58,8 +57,10 @@ bool WriteStateFile(const std::string& path, const google::protobuf::MessageLite
   PutLe(Crc32(payload, 0), 4, &bytes);
   bytes += payload;
 
+  // A new file, never one someone left there (a link would write through it).
   const std::string tmp = path + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  ::unlink(tmp.c_str());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0600);
   if (fd < 0) {
     *error = Errno(tmp);
     return false;
@@ -97,15 +98,41 @@ bool WriteStateFile(const std::string& path, const google::protobuf::MessageLite
 }
 
 StateRead ReadStateFile(const std::string& path, google::protobuf::MessageLite* message,
-                        std::string* error) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) return StateRead::kMissing;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    *error = Errno("cannot open");
+                        std::string* error, uint64_t max_bytes) {
+  // Not following a link, and not waiting for a FIFO's writer.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    if (errno == ENOENT) return StateRead::kMissing;
+    *error = errno == ELOOP ? "a symbolic link, not followed" : Errno("cannot open");
     return StateRead::kBad;
   }
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  struct stat st {};
+  std::string bytes;
+  if (::fstat(fd, &st) != 0) {
+    *error = Errno("cannot stat");
+  } else if (!S_ISREG(st.st_mode)) {
+    *error = S_ISDIR(st.st_mode)    ? "a directory, not a file"
+             : S_ISFIFO(st.st_mode) ? "a FIFO, not a file"
+                                    : "not a regular file";
+  } else if (static_cast<uint64_t>(st.st_size) > max_bytes) {
+    *error = std::to_string(st.st_size >> 20) + " MB, over limits.max_snapshot_mb (" +
+             std::to_string(max_bytes >> 20) + " MB)";
+  } else {
+    // At most the size it had: a file that grows while read is cut there (and fails the
+    // length check).
+    bytes.resize(static_cast<size_t>(st.st_size));
+    size_t done = 0;
+    while (done < bytes.size()) {
+      const ssize_t n = ::read(fd, bytes.data() + done, bytes.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0) *error = Errno("cannot read");
+      if (n <= 0) break;
+      done += static_cast<size_t>(n);
+    }
+    bytes.resize(done);
+  }
+  ::close(fd);
+  if (!error->empty()) return StateRead::kBad;
   if (bytes.size() < kHeader || bytes.compare(0, sizeof kMagic, kMagic, sizeof kMagic) != 0) {
     *error = "not a floorposed snapshot (no FPSNAP1 header)";
     return StateRead::kBad;

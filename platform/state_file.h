@@ -6,6 +6,7 @@
 
 #include <google/protobuf/message_lite.h>
 
+#include <cstdint>
 #include <string>
 
 namespace floorpose::platform {
@@ -14,9 +15,11 @@ bool WriteStateFile(const std::string& path, const google::protobuf::MessageLite
                     std::string* error);
 
 enum class StateRead { kOk, kMissing, kBad };
-// kMissing: no file (a first start). kBad: *error says what is wrong with it.
+// kMissing: no file (a first start). kBad: *error says what is wrong with it. Only a
+// regular file of at most max_bytes is read: a link, a directory, a FIFO or a device is
+// refused without following, blocking on or reading it.
 StateRead ReadStateFile(const std::string& path, google::protobuf::MessageLite* message,
-                        std::string* error);
+                        std::string* error, uint64_t max_bytes = uint64_t{1} << 30);
 
 // Moves a file that must not be trusted out of the way, as <path>.bad-<unix seconds>, for
 // a person to look at. Returns its new name, or empty with *error.

@@ -3,10 +3,13 @@
 // one row of docs/robustness.md.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <cstdio>
 #include <functional>
 #include <iterator>
 
+#include "platform/state_file.h"
 #include "tests/integration/daemon_fixture.h"
 
 namespace floorpose {
@@ -136,6 +139,53 @@ TEST_F(HostileTest, AHeadsetWhoseClockStartsAgainIsTrackedAsBefore) {
   EXPECT_EQ(link_->plan_poses.back().source_stamp_ns(),
             walk.steps.back().stamp_ns - restart_ns + 20'000'000);
 }
+
+// 3. The snapshot reader trusted the file: a directory aborted floorposed, a FIFO hung it
+// in open() (SIGTERM ignored), /dev/urandom or a sparse 600 MB file grew its memory.
+class SnapshotPathTest : public HostileTest, public ::testing::WithParamInterface<std::string> {};
+
+TEST_P(SnapshotPathTest, StartsCleanWithinTwoSecondsAndStopsOnSigterm) {
+  const fs::path state = dir_ / "state";
+  fs::create_directories(state);
+  const std::string snapshot = platform::SnapshotPath(state.string(), "hl-test");
+  const std::string kind = GetParam();
+  if (kind == "directory") {
+    fs::create_directories(fs::path(snapshot) / "inside");
+  } else if (kind == "fifo") {
+    ASSERT_EQ(::mkfifo(snapshot.c_str(), 0600), 0);
+  } else if (kind == "urandom") {
+    fs::create_symlink("/dev/urandom", snapshot);
+  } else {
+    std::ofstream(snapshot) << "FPSNAP1\n";
+    fs::resize_file(snapshot, 600u << 20);  // sparse: a hole of 600 MB
+  }
+  WriteConfig("hl-test", "state_dir: \"" + state.string() + "\"\n", "floorposed.conf");
+  const auto launched = std::chrono::steady_clock::now();
+  LaunchDaemon();
+  link_ =
+      std::make_unique<tools::HeadsetLink>(domain_, platform::LoopbackCycloneConfig(), "hl-test");
+  ASSERT_TRUE(link_->WaitUntil(
+      [&] {
+        return link_->status && link_->status->state() == v1::DaemonStatus::WAITING_FOR_ALIGNMENT;
+      },
+      seconds(10)))
+      << "no clean start; log in " << dir_;
+  const double up_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - launched).count();
+  const tools::ProcSample sample = tools::SampleProcess(daemon_->pid());
+  std::printf("%s: first status %.2f s after the start, RSS %.1f MB (peak %.1f MB)\n", kind.c_str(),
+              up_s, sample.rss_mb, sample.hwm_mb);
+  EXPECT_LT(up_s, 2.0);
+  EXPECT_LT(sample.hwm_mb, 64.0);
+  EXPECT_NE(Log().find("snapshot " + snapshot + " not trusted"), std::string::npos) << Log();
+  EXPECT_FALSE(fs::exists(fs::symlink_status(snapshot))) << "not set aside";
+  const auto stop = std::chrono::steady_clock::now();
+  EXPECT_EQ(daemon_->Terminate(seconds(5)), 0);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - stop).count(), 2.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Kinds, SnapshotPathTest,
+                         ::testing::Values("directory", "fifo", "urandom", "sparse600mb"));
 
 }  // namespace
 }  // namespace floorpose
