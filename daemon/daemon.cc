@@ -26,6 +26,17 @@ Daemon::Daemon(v1::FloorposedConfig config)
 Daemon::~Daemon() { Stop(); }
 
 bool Daemon::Start(std::string* error) {
+  std::string state_dir = config_.state_dir();
+  if (const char* systemd_dir = std::getenv("STATE_DIRECTORY"); state_dir.empty() && systemd_dir)
+    state_dir = std::string(systemd_dir).substr(0, std::string(systemd_dir).find(':'));
+  if (!state_dir.empty()) {
+    // Before joining DDS: a second daemon on the same state must not publish at all.
+    std::error_code ec;
+    std::filesystem::create_directories(state_dir, ec);
+    if (ec) spdlog::warn("state directory {}: {}", state_dir, ec.message());
+    state_lock_ = platform::StateDirLock::Take(state_dir, error);
+    if (!state_lock_) return false;
+  }
   try {
     const std::optional<platform::DdsSecurity> security = platform::ToDdsSecurity(config_);
     participant_ = std::make_unique<platform::Participant>(
@@ -56,13 +67,7 @@ bool Daemon::Start(std::string* error) {
       config_, [this](Topic t, const google::protobuf::Message& m) { Publish(t, m); },
       platform::MonotonicNs);
   const std::string plan_error = engine_->Start();
-  std::string state_dir = config_.state_dir();
-  if (const char* systemd_dir = std::getenv("STATE_DIRECTORY"); state_dir.empty() && systemd_dir)
-    state_dir = std::string(systemd_dir).substr(0, std::string(systemd_dir).find(':'));
   if (!state_dir.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(state_dir, ec);
-    if (ec) spdlog::warn("state directory {}: {}", state_dir, ec.message());
     snapshot_path_ = platform::SnapshotPath(state_dir, config_.dds().device_id());
     ResumeFromSnapshot();
     snapshot_thread_ = std::thread([this] { SnapshotLoop(); });

@@ -14,6 +14,7 @@
 #include "floorpose/v1/config.pb.h"
 #include "platform/dds.h"
 #include "platform/engine.h"
+#include "platform/state_file.h"
 
 namespace floorpose {
 
@@ -65,6 +66,7 @@ class Daemon {
   bool stop_ = false;
 
   // Io thread -> snapshot thread: the latest snapshot to write (latest wins).
+  std::unique_ptr<platform::StateDirLock> state_lock_;  // held while the daemon runs
   std::string snapshot_path_;  // empty: no snapshots
   std::mutex snapshot_mu_;
   std::condition_variable snapshot_cv_;

@@ -1,6 +1,7 @@
 #include "platform/state_file.h"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -163,6 +164,31 @@ std::string SetAside(const std::string& path, std::string* error) {
   }
   return aside;
 }
+
+std::unique_ptr<StateDirLock> StateDirLock::Take(const std::string& dir, std::string* error) {
+  const std::string path = (std::filesystem::path(dir) / "floorposed.lock").string();
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0600);
+  if (fd < 0) {
+    *error = Errno("cannot open " + path);
+    return nullptr;
+  }
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    const bool held = errno == EWOULDBLOCK;
+    *error = held ? "state_dir " + dir + " is in use by another floorposed" : Errno("flock " + path);
+    char pid[32] = {};
+    if (held && ::pread(fd, pid, sizeof pid - 1, 0) > 0)
+      *error += " (pid " + std::string(pid, ::strcspn(pid, "\n")) + ")";
+    ::close(fd);
+    return nullptr;
+  }
+  const std::string pid = std::to_string(::getpid()) + "\n";
+  if (::ftruncate(fd, 0) != 0 || ::pwrite(fd, pid.data(), pid.size(), 0) < 0) {
+    // The lock holds without the pid in it.
+  }
+  return std::unique_ptr<StateDirLock>(new StateDirLock(fd));
+}
+
+StateDirLock::~StateDirLock() { ::close(fd_); }
 
 std::string SnapshotPath(const std::string& dir, const std::string& device_id) {
   std::string name;

@@ -7,6 +7,7 @@
 #include <google/protobuf/message_lite.h>
 
 #include <cstdint>
+#include <memory>
 #include <string>
 
 namespace floorpose::platform {
@@ -24,6 +25,21 @@ StateRead ReadStateFile(const std::string& path, google::protobuf::MessageLite* 
 // Moves a file that must not be trusted out of the way, as <path>.bad-<unix seconds>, for
 // a person to look at. Returns its new name, or empty with *error.
 std::string SetAside(const std::string& path, std::string* error);
+
+// One floorposed per state directory: an exclusive lock on <dir>/floorposed.lock, held
+// while this object lives (the kernel drops it when the process dies, even by SIGKILL).
+class StateDirLock {
+ public:
+  // Takes the lock; on failure *error says why, naming the holder's pid when it can.
+  static std::unique_ptr<StateDirLock> Take(const std::string& dir, std::string* error);
+  ~StateDirLock();
+  StateDirLock(const StateDirLock&) = delete;
+  StateDirLock& operator=(const StateDirLock&) = delete;
+
+ private:
+  explicit StateDirLock(int fd) : fd_(fd) {}
+  int fd_;
+};
 
 // <dir>/<device id>.snapshot, the device id reduced to [A-Za-z0-9._-].
 std::string SnapshotPath(const std::string& dir, const std::string& device_id);

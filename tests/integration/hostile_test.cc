@@ -140,6 +140,30 @@ TEST_F(HostileTest, AHeadsetWhoseClockStartsAgainIsTrackedAsBefore) {
             walk.steps.back().stamp_ns - restart_ns + 20'000'000);
 }
 
+// 8. A second floorposed on the same state_dir used to start, and the two overwrote each
+// other's snapshots.
+TEST_F(HostileTest, ASecondDaemonOnTheSameStateDirectoryExitsWithTheReason) {
+  const fs::path state = dir_ / "state";
+  StartDaemon("state_dir: \"" + state.string() + "\"\n");
+  const fs::path second_log = dir_ / "second.log";
+  tools::ChildProcess second({FLOORPOSED_PATH, "--config", (dir_ / "floorposed.conf").string()},
+                             second_log.string());
+  ASSERT_TRUE(second.started());
+  const std::optional<int> code = second.Wait(seconds(10));
+  ASSERT_TRUE(code.has_value()) << "the second floorposed did not exit";
+  EXPECT_NE(*code, 0);
+  std::ifstream in(second_log);
+  const std::string log{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  EXPECT_NE(log.find("state_dir " + state.string() + " is in use by another floorposed (pid " +
+                     std::to_string(daemon_->pid()) + ")"),
+            std::string::npos)
+      << log;
+  // The first one goes on.
+  EXPECT_TRUE(daemon_->Running());
+  link_->status.reset();
+  EXPECT_TRUE(link_->WaitUntil([&] { return link_->status.has_value(); }, seconds(5)));
+}
+
 // 3. The snapshot reader trusted the file: a directory aborted floorposed, a FIFO hung it
 // in open() (SIGTERM ignored), /dev/urandom or a sparse 600 MB file grew its memory.
 class SnapshotPathTest : public HostileTest, public ::testing::WithParamInterface<std::string> {};
