@@ -141,6 +141,10 @@ void Daemon::IoLoop() {
         for (auto& e : reader->Take(256)) batch.push_back({reader->topic(), std::move(e)});
       if (batch.size() == before) break;
     }
+    for (auto* reader : {pose_reader_.get(), mesh_reader_.get(), command_reader_.get()}) {
+      const platform::Reader::Losses l = reader->TakeLosses();
+      engine_->OnDdsLosses(reader->topic(), l.lost, l.rejected);
+    }
     std::stable_sort(batch.begin(), batch.end(), [](const Input& a, const Input& b) {
       return platform::InputBefore(a.topic, a.envelope.stamp_ns, b.topic, b.envelope.stamp_ns);
     });
@@ -153,6 +157,7 @@ void Daemon::IoLoop() {
     };
     if (deterministic_) {
       for (const Input& in : batch) {
+        if (!running_) break;
         handle(in);
         AfterInput();
       }
@@ -167,6 +172,7 @@ void Daemon::IoLoop() {
         if (in.topic != Topic::kMeshDelta) handle(in);
       for (const Input& in : batch) {
         if (in.topic != Topic::kMeshDelta) continue;
+        if (!running_) break;  // SIGTERM does not wait for a flood of meshes
         for (auto& e : pose_reader_->Take(256)) handle({Topic::kHeadsetPose, std::move(e)});
         handle(in);
       }

@@ -229,6 +229,18 @@ int Reader::MatchedWriters() const {
   return static_cast<int>(st.current_count);
 }
 
+Reader::Losses Reader::TakeLosses() {
+  // Reading a status resets its change counts.
+  Losses l;
+  dds_sample_lost_status_t lost{};
+  if (dds_get_sample_lost_status(reader_, &lost) == DDS_RETCODE_OK)
+    l.lost = static_cast<uint64_t>(std::max<int32_t>(0, lost.total_count_change));
+  dds_sample_rejected_status_t rejected{};
+  if (dds_get_sample_rejected_status(reader_, &rejected) == DDS_RETCODE_OK)
+    l.rejected = static_cast<uint64_t>(std::max<int32_t>(0, rejected.total_count_change));
+  return l;
+}
+
 Waiter::Waiter(const Participant& participant) {
   waitset_ = dds_create_waitset(participant.entity());
   Check(waitset_, "dds_create_waitset");

@@ -78,6 +78,13 @@ class Reader {
   // Takes up to max samples now available; invalid samples (disposals) are skipped.
   std::vector<Envelope> Take(size_t max = 64);
   int MatchedWriters() const;
+  // Samples DDS lost (never delivered whole: a gap in a writer's sequence, a sample too
+  // large to reassemble) or rejected (over this reader's resource limits) since the last
+  // call.
+  struct Losses {
+    uint64_t lost = 0, rejected = 0;
+  };
+  Losses TakeLosses();
   Topic topic() const { return topic_; }
   dds_entity_t entity() const { return reader_; }
 

@@ -400,6 +400,16 @@ void Engine::Reject(Refusal kind, const std::string& why) {
   Warn("rejected " + std::to_string(static_cast<int>(kind)), "rejected: " + why);
 }
 
+void Engine::OnDdsLosses(Topic topic, uint64_t lost, uint64_t rejected) {
+  if (lost + rejected == 0) return;
+  counters_.set_samples_lost(counters_.samples_lost() + lost);
+  counters_.set_samples_rejected(counters_.samples_rejected() + rejected);
+  Warn(std::string("dds ") + TopicName(topic),
+       fmt::format("DDS lost {} and rejected {} samples of {} before they reached floorposed "
+                   "(a sample too large or a reader over its limits)",
+                   lost, rejected, TopicName(topic)));
+}
+
 bool Engine::TakeStamp(const std::string& what, int64_t* stamp_ns) {
   const DeviceClock::Mapped m = clock_.Take(*stamp_ns, now_ns_());
   switch (m.verdict) {
@@ -723,7 +733,7 @@ void Engine::OnCommand(const Envelope& e) {
   reply.set_message(error.empty() ? done : error);
   if (!error.empty()) {
     counters_.set_commands_refused(counters_.commands_refused() + 1);
-    spdlog::warn("command refused: {}{}", prefix, error);
+    Warn("command refused", "command refused: " + prefix + error);
   } else if (cmd.command_case() != v1::Command::kGetState &&
              cmd.command_case() != v1::Command::kRoute) {
     spdlog::info("command: {}{}", prefix, done);

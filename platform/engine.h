@@ -112,6 +112,8 @@ class Engine {
   void OnMeshDelta(const Envelope& e);
   void OnHeadsetPose(const Envelope& e);
   void OnCommand(const Envelope& e);
+  // Samples of `topic` DDS lost or rejected before they reached us: counted and logged.
+  void OnDdsLosses(Topic topic, uint64_t lost, uint64_t rejected);
 
   // Registration: a job when one is due and none is running, and its result.
   std::optional<Job> TakeDueJob();

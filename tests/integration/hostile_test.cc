@@ -140,6 +140,91 @@ TEST_F(HostileTest, AHeadsetWhoseClockStartsAgainIsTrackedAsBefore) {
             walk.steps.back().stamp_ns - restart_ns + 20'000'000);
 }
 
+// 5. 200 malformed Commands gave 200 log lines.
+TEST_F(HostileTest, AFloodOfMalformedCommandsLogsOnceASecond) {
+  StartDaemon();
+  tools::HeadsetLink& a = Attacker();
+  platform::Writer raw(a.participant(), Topic::kCommand);
+  for (int i = 0; i < 200; ++i) {
+    platform::Envelope e;
+    e.device_id = "hl-test";
+    e.seq = raw.NextSeq();
+    e.payload = "\xff\xff not a Command " + std::to_string(i);
+    ASSERT_TRUE(raw.Write(e));
+  }
+  ASSERT_TRUE(WaitForStatus([](const v1::DaemonStatus& s) {
+    return s.counters().commands_refused() >= 200;
+  })) << link_->status->ShortDebugString();
+  // A second later, one more: its line says how many were held back.
+  link_->WaitUntil([] { return false; }, std::chrono::milliseconds(1100));
+  platform::Envelope e;
+  e.device_id = "hl-test";
+  e.seq = raw.NextSeq();
+  e.payload = "\xff";
+  ASSERT_TRUE(raw.Write(e));
+  ASSERT_TRUE(WaitForStatus(
+      [](const v1::DaemonStatus& s) { return s.counters().commands_refused() >= 201; }));
+  const std::string log = Log();
+  size_t lines = 0;
+  for (size_t at = log.find("command refused"); at != std::string::npos;
+       at = log.find("command refused", at + 1))
+    ++lines;
+  std::printf("201 malformed commands: %zu log lines\n", lines);
+  EXPECT_LE(lines, 3u) << log;
+  EXPECT_NE(log.find("more like it in the last second"), std::string::npos) << log;
+}
+
+// 6. A 5-million-vertex mesh delta (60 MB) was dropped by DDS without a trace. Over
+// loopback it arrives (and is refused, over the vertex limit); samples DDS rejects are
+// made by a flood that outruns the daemon's mesh reader (1024 samples deep).
+TEST_F(HostileTest, MeshesTooLargeOrTooManyLeaveACountAndALogLine) {
+  StartDaemon();
+  sim::SimMesh huge;
+  huge.id = 77;
+  huge.vertices_slam.resize(5'000'000);
+  for (size_t i = 0; i < huge.vertices_slam.size(); ++i)
+    huge.vertices_slam[i] = {static_cast<float>(i % 1000) * 0.01f,
+                             static_cast<float>(i / 1000) * 0.01f, 1.0f};
+  huge.triangles = {0, 1, 1000};
+  tools::HeadsetLink& a = Attacker();
+  a.Send(Topic::kMeshDelta, tools::ToMeshDelta(huge, kFrame, 1'000'000'000), 1'000'000'000);
+  ASSERT_TRUE(link_->WaitUntil(
+      [&] {
+        if (!link_->status) return false;
+        const auto& c = link_->status->counters();
+        return c.over_limits() + c.samples_lost() + c.samples_rejected() > 0;
+      },
+      seconds(30)))
+      << "no trace of the mesh: " << link_->status->ShortDebugString();
+  // Then a flood faster than the daemon extracts walls: the mesh reader's queue (1024
+  // samples) overflows; DDS rejects samples until there is room (and the writer resends).
+  sim::SimMesh wall;
+  for (int i = 0; i < 400; ++i)
+    wall.vertices_slam.push_back(
+        {static_cast<float>(i % 40) * 0.1f, 2.0f, static_cast<float>(i / 40) * 0.2f});
+  for (uint32_t i = 0; i + 41 < 400; ++i) {
+    wall.triangles.insert(wall.triangles.end(), {i, i + 1, i + 40, i + 1, i + 41, i + 40});
+  }
+  for (int i = 0; i < 3000; ++i) {
+    wall.id = 1000 + static_cast<uint64_t>(i);
+    a.Send(Topic::kMeshDelta, tools::ToMeshDelta(wall, kFrame, 2'000'000'000 + i),
+           2'000'000'000 + i);
+  }
+  ASSERT_TRUE(link_->WaitUntil(
+      [&] { return link_->status && link_->status->counters().samples_rejected() > 0; },
+      seconds(30)))
+      << link_->status->ShortDebugString();
+  const auto& c = link_->status->counters();
+  std::printf("60 MB mesh: over_limits %llu, samples_lost %llu, samples_rejected %llu\n",
+              static_cast<unsigned long long>(c.over_limits()),
+              static_cast<unsigned long long>(c.samples_lost()),
+              static_cast<unsigned long long>(c.samples_rejected()));
+  const std::string log = Log();
+  EXPECT_TRUE(log.find("DDS lost") != std::string::npos ||
+              log.find("rejected: mesh") != std::string::npos)
+      << log;
+}
+
 // 8. A second floorposed on the same state_dir used to start, and the two overwrote each
 // other's snapshots.
 TEST_F(HostileTest, ASecondDaemonOnTheSameStateDirectoryExitsWithTheReason) {
