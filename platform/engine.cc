@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "platform/codec.h"
@@ -186,6 +187,40 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
   return done;
 }
 
+namespace {
+
+// Why a plan is refused before anything is built from it, or empty.
+std::string PlanOutOfLimits(const FloorPlan& plan, const v1::LimitsConfig& limits) {
+  const double max_coordinate = limits.max_plan_coordinate_m();
+  for (const Eigen::Vector2d& corner : {plan.min, plan.max})
+    if (!corner.allFinite() || corner.cwiseAbs().maxCoeff() > max_coordinate)
+      return fmt::format("a coordinate beyond limits.max_plan_coordinate_m ({} m)", max_coordinate);
+  const Eigen::Vector2d extent = plan.max - plan.min;
+  if (extent.maxCoeff() > limits.max_plan_extent_m())
+    return fmt::format("{:.0f} x {:.0f} m, larger than limits.max_plan_extent_m ({} m) on a side",
+                       extent.x(), extent.y(), limits.max_plan_extent_m());
+  return {};
+}
+
+// How many times coarser than configured a plan's grids must be to stay within
+// limits.max_plan_memory_mb. Bytes a cell, as measured on ILC F1 (240 x 176 m: 436 MB of
+// RSS at the default cells): routes 20 (passable, components, a search's distances and
+// parents), rooms and explored maps 8 each, the closest-wall index 8 (cells and lists).
+double PlanGridScale(const FloorPlan& plan, const v1::FloorposedConfig& c) {
+  const Eigen::Vector2d extent = (plan.max - plan.min).array() + 2.0;  // the grids' margins
+  auto per_m2 = [](double bytes_per_cell, double cell_m) {
+    return bytes_per_cell / (cell_m * cell_m);
+  };
+  const double bytes =
+      extent.x() * extent.y() *
+      (per_m2(20, c.routes().cell_m()) + per_m2(8, RoomOptions{}.cell_m) +
+       per_m2(8, c.explored().cell_m()) + per_m2(8, ClosestWallIndex::Options{}.cell_m));
+  const double budget = static_cast<double>(c.limits().max_plan_memory_mb()) * (1 << 20);
+  return std::max(1.0, std::sqrt(bytes / budget));
+}
+
+}  // namespace
+
 std::string Engine::LoadPlan(const std::string& path, const std::string& floor) {
   auto refuse = [this](const std::string& error) {
     counters_.set_plans_refused(counters_.plans_refused() + 1);
@@ -202,6 +237,8 @@ std::string Engine::LoadPlan(const std::string& path, const std::string& floor) 
   }
   const FloorPlanParse parsed = LoadFloorPlan(file);
   if (!parsed.ok()) return refuse(parsed.error);
+  if (const std::string e = PlanOutOfLimits(parsed.plan, config_.limits()); !e.empty())
+    return refuse(file + ": " + e);
   // Every other floor of a set is built now, so that a floor change on the stairs costs
   // the poses nothing; one that does not load refuses the set.
   std::map<std::string, PlanAssets> others;
@@ -209,6 +246,8 @@ std::string Engine::LoadPlan(const std::string& path, const std::string& floor) 
     if (f.id == floor) continue;
     const FloorPlanParse other = LoadFloorPlan(f.plan_path);
     if (!other.ok()) return refuse(path + ": floor " + f.id + ": " + other.error);
+    if (const std::string e = PlanOutOfLimits(other.plan, config_.limits()); !e.empty())
+      return refuse(path + ": floor " + f.id + ": " + e);
     others[f.id] = BuildPlan(other, f.plan_path);
   }
   floor_ = floor;
@@ -223,7 +262,14 @@ std::string Engine::LoadPlan(const std::string& path, const std::string& floor) 
 
 Engine::PlanAssets Engine::BuildPlan(const FloorPlanParse& parsed, const std::string& file) const {
   PlanAssets a;
+  const double scale = PlanGridScale(parsed.plan, config_);
+  if (scale > 1)
+    spdlog::warn(
+        "floor plan {}: grids {:.1f} times coarser than configured, to stay within "
+        "limits.max_plan_memory_mb ({} MB)",
+        file, scale, config_.limits().max_plan_memory_mb());
   ClosestWallIndex::Options index_options;
+  index_options.cell_m *= scale;
   index_options.max_distance_m = std::max(3.0, config_.icp().max_correspondence_m());
   a.index = std::make_shared<const ClosestWallIndex>(parsed.plan, index_options);
   spdlog::info("floor plan {}: {} segments ({} dropped), {:.1f} x {:.1f} m, index {:.1f} MB", file,
@@ -241,15 +287,16 @@ Engine::PlanAssets Engine::BuildPlan(const FloorPlanParse& parsed, const std::st
   const int64_t t0 = now_ns_();
   RouteOptions route;
   route.body_radius_m = config_.routes().body_radius_m();
-  route.cell_m = config_.routes().cell_m();
+  route.cell_m = config_.routes().cell_m() * scale;
   route.snap_m = config_.routes().snap_m();
   a.routes = std::make_unique<RoutePlanner>(parsed.plan, route);
   const v1::ExploredConfig& e = config_.explored();
   if (e.enabled()) {
     RoomOptions rooms;
     rooms.max_door_m = e.max_door_m();
+    rooms.cell_m *= scale;
     ExploredOptions explored;
-    explored.cell_m = e.cell_m();
+    explored.cell_m = e.cell_m() * scale;
     explored.max_ray_m = e.max_ray_m();
     explored.min_visit_poses = static_cast<int>(e.min_visit_poses());
     explored.body_radius_m = route.body_radius_m;

@@ -225,6 +225,50 @@ TEST_F(HostileTest, MeshesTooLargeOrTooManyLeaveACountAndALogLine) {
       << log;
 }
 
+// 7. A plan with coordinates of 1e300 was taken ("routes on a 1 x 1 grid of inf m"); a
+// 440-byte plan whose walls lie 100 km apart took 553 MB when loaded at run time.
+TEST_F(HostileTest, PlansOutOfBoundsAreRefusedAndLargeOnesStayWithinTheMemoryLimit) {
+  StartDaemon("limits { max_plan_memory_mb: 64 }\n");
+  auto write_plan = [&](const std::string& name, const std::string& coordinates) {
+    const std::string path = (dir_ / name).string();
+    std::ofstream(path) << R"({"type": "FeatureCollection", "properties": {"units": "m"},
+      "features": [{"type": "Feature", "properties": {"kind": "wall"}, "geometry":
+      {"type": "LineString", "coordinates": )"
+                        << coordinates << "}}]}";
+    return path;
+  };
+  tools::HeadsetLink& a = Attacker();
+  auto load = [&](const std::string& path) {
+    v1::Command c;
+    c.mutable_load_plan()->set_path(path);
+    return a.Request(c, seconds(30));
+  };
+  const auto huge = load(write_plan("huge.geojson", "[[0, 0], [1e300, 0]]"));
+  ASSERT_TRUE(huge);
+  EXPECT_FALSE(huge->ok());
+  EXPECT_NE(huge->message().find("beyond limits.max_plan_coordinate_m"), std::string::npos)
+      << huge->message();
+  const auto apart =
+      load(write_plan("apart.geojson", "[[0, 0], [1, 0], [100000, 0], [100000, 1]]"));
+  ASSERT_TRUE(apart);
+  EXPECT_FALSE(apart->ok());
+  EXPECT_NE(apart->message().find("larger than limits.max_plan_extent_m"), std::string::npos)
+      << apart->message();
+  // Within the limits but 1990 m across: the grids are made coarser to fit 64 MB.
+  const auto wide =
+      load(write_plan("wide.geojson", "[[0, 0], [1990, 0], [1990, 1990], [0, 1990], [0, 0]]"));
+  ASSERT_TRUE(wide);
+  EXPECT_TRUE(wide->ok()) << wide->message();
+  const tools::ProcSample sample = tools::SampleProcess(daemon_->pid());
+  std::printf("a 1990 m plan under max_plan_memory_mb 64: peak RSS %.0f MB\n", sample.hwm_mb);
+  EXPECT_LT(sample.hwm_mb, 64.0 + 60.0);  // the grids, and the daemon without a plan (40 MB)
+  EXPECT_NE(Log().find("times coarser than configured"), std::string::npos);
+  // The daemon still answers.
+  const sim::DemoWalk walk = DaemonTest::Walk(0.0, 1);
+  link_->Send(Topic::kHeadsetPose, tools::ToHeadsetPose(walk.steps[0].slam, kFrame, 1), 1);
+  EXPECT_TRUE(link_->WaitUntil([&] { return !link_->plan_poses.empty(); }, seconds(5)));
+}
+
 // 8. A second floorposed on the same state_dir used to start, and the two overwrote each
 // other's snapshots.
 TEST_F(HostileTest, ASecondDaemonOnTheSameStateDirectoryExitsWithTheReason) {
