@@ -3,11 +3,20 @@
 # signs the identities and, as the permissions CA, the two access-control documents), an
 # identity (key and certificate) per participant, a governance document that lets no
 # unauthenticated participant join and encrypts discovery, liveliness and data on every
-# topic, and a permissions document that lets each named participant publish and
-# subscribe on the floorpose topics in the domains given. For tests and trials: in the
-# field the CA key lives offline and each device gets only its own key.
+# topic, and a permissions document that grants each identity the topics of its role, in
+# the domains given:
 #
-#   tools/make-dds-security.sh OUT_DIR [NAME ...]     (default names: floorposed app)
+#   daemon     subscribes mesh_delta, headset_pose, command; publishes every output
+#   headset    the AR app: publishes mesh_delta, headset_pose, command; subscribes outputs
+#   dashboard  subscribes outputs only
+#
+# so that only a daemon can publish plan poses. For tests and trials: in the field the CA
+# key lives offline and each device gets only its own key.
+#
+#   tools/make-dds-security.sh OUT_DIR [NAME[:ROLE] ...]   (default: floorposed app)
+#
+# A NAME without a ROLE is a daemon when it starts with "floorposed", a dashboard when it
+# starts with "dashboard", else a headset.
 #
 # Environment: DOMAINS (default "0 230": the domain id range granted), DAYS (validity,
 # default 3650), CA_NAME (default "floorpose test CA").
@@ -35,9 +44,26 @@ fi
 
 not_before="$(date -u +%Y-%m-%dT%H:%M:%S)"
 not_after="$(date -u -d "+$days days" +%Y-%m-%dT%H:%M:%S)"
+inputs="<topic>floorpose/v1/mesh_delta</topic><topic>floorpose/v1/headset_pose</topic><topic>floorpose/v1/command</topic>"
+outputs="<topic>floorpose/v1/plan_pose</topic><topic>floorpose/v1/alignment</topic><topic>floorpose/v1/status</topic><topic>floorpose/v1/plan_track</topic><topic>floorpose/v1/command_reply</topic><topic>floorpose/v1/explored</topic>"
 grants=""
-for name in "${names[@]}"; do
+made=()
+for spec in "${names[@]}"; do
+  name="${spec%%:*}"
+  role="${spec#*:}"
+  if [[ "$role" == "$spec" ]]; then
+    case "$name" in floorposed*) role=daemon ;; dashboard*) role=dashboard ;; *) role=headset ;; esac
+  fi
   [[ "$name" =~ ^[A-Za-z0-9._-]+$ ]] || { echo "make-dds-security: bad name '$name'" >&2; exit 2; }
+  case "$role" in
+    daemon) rules="<publish><topics>$outputs</topics></publish>
+        <subscribe><topics>$inputs</topics></subscribe>" ;;
+    headset) rules="<publish><topics>$inputs</topics></publish>
+        <subscribe><topics>$outputs</topics></subscribe>" ;;
+    dashboard) rules="<subscribe><topics>$outputs</topics></subscribe>" ;;
+    *) echo "make-dds-security: '$spec': the role is daemon, headset or dashboard" >&2; exit 2 ;;
+  esac
+  made+=("$name ($role)")
   openssl ecparam -name prime256v1 -genkey -noout -out "$name.key"
   openssl req -new -key "$name.key" -subj "/O=floorpose/CN=$name" -out "$name.csr" 2>/dev/null
   openssl x509 -req -in "$name.csr" -CA ca.pem -CAkey ca.key -CAcreateserial -sha256 \
@@ -50,8 +76,7 @@ for name in "${names[@]}"; do
       <validity><not_before>$not_before</not_before><not_after>$not_after</not_after></validity>
       <allow_rule>
         <domains><id_range><min>$domain_min</min><max>$domain_max</max></id_range></domains>
-        <publish><topics><topic>floorpose/*</topic></topics></publish>
-        <subscribe><topics><topic>floorpose/*</topic></topics></subscribe>
+        $rules
       </allow_rule>
       <default>DENY</default>
     </grant>"
@@ -98,4 +123,4 @@ for doc in governance permissions; do
   openssl smime -sign -in "$doc.xml" -text -out "$doc.p7s" -signer ca.pem -inkey ca.key
 done
 chmod 0644 ca.pem governance.p7s permissions.p7s ./*.pem
-echo "make-dds-security: $(pwd): CA ca.pem; identities ${names[*]}; governance.p7s, permissions.p7s"
+echo "make-dds-security: $(pwd): CA ca.pem; identities ${made[*]}; governance.p7s, permissions.p7s"

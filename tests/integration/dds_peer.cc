@@ -5,17 +5,68 @@
 //
 //   dds_peer DOMAIN DEVICE SECONDS [IDENTITY_DIR NAME]
 //   -> "plan_poses N status S replies R"
+//
+// Or it forges a daemon's output: 20 PlanPose samples for DEVICE (x = 999, RELIABLE),
+// written once a reader matched (or after 3 s):
+//
+//   dds_peer --forge DOMAIN DEVICE IDENTITY_DIR NAME
+//   -> "forged N" (samples written) or "refused WHY" (DDS would not make the writer)
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <memory>
 #include <string>
+#include <thread>
 
 #include "platform/dds.h"
 #include "tools/lib/headset_link.h"
 #include "tools/lib/headset_messages.h"
 
+namespace {
+
+int Forge(uint32_t domain, const std::string& device, const std::string& dir,
+          const std::string& name) {
+  using namespace floorpose;
+  const platform::DdsSecurity identity = platform::SecurityFilesIn(dir, name);
+  platform::Participant participant(domain, platform::LoopbackCycloneConfig(), &identity);
+  std::unique_ptr<platform::Writer> writer;
+  try {
+    writer = std::make_unique<platform::Writer>(participant, platform::Topic::kPlanPose);
+  } catch (const std::exception& e) {
+    std::printf("refused %s\n", e.what());
+    return 0;
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+  while (writer->MatchedReaders() == 0 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  int written = 0;
+  for (int i = 0; i < 20; ++i) {
+    v1::PlanPose forged;
+    forged.set_source_stamp_ns(1'000'000'000 + i);
+    forged.set_x(999);
+    forged.mutable_reliability()->set_flag(v1::Reliability::RELIABLE);
+    platform::Envelope e{device, writer->NextSeq(), forged.source_stamp_ns(),
+                         forged.SerializeAsString(), 0};
+    written += writer->Write(e);
+  }
+  writer->WaitForAcks(std::chrono::seconds(2));
+  std::printf("forged %d\n", written);
+  return 0;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace floorpose;
+  if (argc == 6 && std::string(argv[1]) == "--forge") {
+    try {
+      return Forge(static_cast<uint32_t>(std::strtoul(argv[2], nullptr, 10)), argv[3], argv[4],
+                   argv[5]);
+    } catch (const std::exception& e) {
+      std::printf("error %s\n", e.what());
+      return 1;
+    }
+  }
   if (argc != 4 && argc != 6) {
     std::fprintf(stderr, "usage: dds_peer DOMAIN DEVICE SECONDS [IDENTITY_DIR NAME]\n");
     return 2;

@@ -120,6 +120,36 @@ TEST_F(SecurityTest, OnlyAPermittedParticipantFeedsAndReadsTheDaemon) {
   EXPECT_NEAR(link_->plan_poses.back().y(), truth.position.y(), 1e-5);
 }
 
+// Roles (tools/make-dds-security.sh): only a daemon's identity may publish plan poses. Any
+// permitted identity used to be able to forge them: the app published x = 999, RELIABLE,
+// for another device, and a reader took all 20.
+TEST_F(SecurityTest, OnlyADaemonIdentityGetsAPlanPoseToAReader) {
+  // The reader: a dashboard, in this process.
+  const platform::DdsSecurity dashboard = Identity("pki", "dashboard");
+  platform::Participant participant(domain_, platform::LoopbackCycloneConfig(), &dashboard);
+  platform::Reader reader(participant, Topic::kPlanPose);
+  auto forge = [&](const std::string& name) {
+    const fs::path out = dir_ / ("forge-" + name + ".out");
+    tools::ChildProcess process({DDS_PEER_PATH, "--forge", std::to_string(domain_), "hl-victim",
+                                 (dir_ / "pki").string(), name},
+                                out.string());
+    EXPECT_EQ(process.Wait(seconds(30)), 0) << name << ": see " << out;
+    std::ifstream in(out);
+    std::string line, said;
+    while (std::getline(in, line))
+      if (line.rfind("forged ", 0) == 0 || line.rfind("refused ", 0) == 0) said = line;
+    // What reached the reader (keep-last 1 per device: one sample stands for them all).
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    size_t received = 0;
+    for (const platform::Envelope& e : reader.Take(100)) received += e.device_id == "hl-victim";
+    std::printf("%s: %s; the dashboard received %zu\n", name.c_str(), said.c_str(), received);
+    return received;
+  };
+  EXPECT_EQ(forge("app"), 0u);        // a headset
+  EXPECT_EQ(forge("dashboard"), 0u);  // another dashboard
+  EXPECT_GT(forge("floorposed"), 0u);  // the daemon's own identity: the control
+}
+
 // The team lead's dashboard on a secured domain: with its identity it shows the wearer;
 // without one it joins nothing and shows no one.
 TEST_F(SecurityTest, OnlyADashboardWithAnIdentitySeesTheWearers) {
