@@ -66,6 +66,19 @@ bool Daemon::Start(std::string* error) {
   engine_ = std::make_unique<platform::Engine>(
       config_, [this](Topic t, const google::protobuf::Message& m) { Publish(t, m); },
       platform::MonotonicNs);
+  if (!deterministic_) {
+    engine_->SetOffload([this](std::function<void()> work, std::function<void()> done) {
+      if (plan_thread_.joinable()) plan_thread_.join();  // the last one, done already
+      plan_thread_ = std::thread([this, work = std::move(work), done = std::move(done)] {
+        work();
+        {
+          std::lock_guard lock(posted_mu_);
+          posted_.push_back(done);
+        }
+        waiter_->Wake();
+      });
+    });
+  }
   const std::string plan_error = engine_->Start();
   if (!state_dir.empty()) {
     snapshot_path_ = platform::SnapshotPath(state_dir, config_.dds().device_id());
@@ -90,6 +103,7 @@ void Daemon::Stop() {
   waiter_->Wake();
   io_thread_.join();
   worker_thread_.join();
+  if (plan_thread_.joinable()) plan_thread_.join();  // a plan being built is dropped
   if (snapshot_thread_.joinable()) {
     MaybeSnapshot(platform::MonotonicNs(), /*force=*/true);
     {
@@ -123,6 +137,12 @@ void Daemon::IoLoop() {
       if (stop_) break;
     }
     io_heartbeat_ns_ = platform::MonotonicNs();
+    std::vector<std::function<void()>> posted;
+    {
+      std::lock_guard lock(posted_mu_);
+      posted.swap(posted_);
+    }
+    for (auto& f : posted) f();
     // One batch from all inputs, in stamp order (platform::InputBefore), the order
     // `floorpose eval` takes a recording in: a pose is corrected with the walls and the
     // pick that came before it. The readers are taken in turn, and again until a turn

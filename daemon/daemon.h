@@ -5,11 +5,13 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "floorpose/v1/config.pb.h"
 #include "platform/dds.h"
@@ -67,6 +69,11 @@ class Daemon {
 
   // Io thread -> snapshot thread: the latest snapshot to write (latest wins).
   std::unique_ptr<platform::StateDirLock> state_lock_;  // held while the daemon runs
+  // Plans loaded by command are built on plan_thread_; what then goes on on the io thread
+  // waits in posted_ (Engine::SetOffload).
+  std::thread plan_thread_;
+  std::mutex posted_mu_;
+  std::vector<std::function<void()>> posted_;
   std::string snapshot_path_;  // empty: no snapshots
   std::mutex snapshot_mu_;
   std::condition_variable snapshot_cv_;

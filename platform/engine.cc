@@ -222,75 +222,94 @@ double PlanGridScale(const FloorPlan& plan, const v1::FloorposedConfig& c) {
 }  // namespace
 
 std::string Engine::LoadPlan(const std::string& path, const std::string& floor) {
-  auto refuse = [this](const std::string& error) {
-    counters_.set_plans_refused(counters_.plans_refused() + 1);
-    return error;
+  return UseLoad(ReadPlan(config_, now_ns_, path, floor));
+}
+
+Engine::PlanLoad Engine::ReadPlan(const v1::FloorposedConfig& config,
+                                  const std::function<int64_t()>& now_ns, const std::string& path,
+                                  const std::string& floor) {
+  auto Refused = [](std::string error) {
+    PlanLoad refused;
+    refused.error = std::move(error);
+    return refused;
   };
-  FloorSet set;
-  std::string file = path;
+  PlanLoad load;
+  load.path = path;
+  load.floor = floor;
+  load.file = path;
   if (IsFloorSet(path)) {
-    set = LoadFloorSet(path);
-    const FloorEntry* entry = set.ok() ? set.Find(floor) : nullptr;
-    if (set.ok() && !entry) set.error = path + ": no floor '" + floor + "' in the set";
-    if (!set.ok()) return refuse(set.error);
-    file = entry->plan_path;
+    load.set = LoadFloorSet(path);
+    const FloorEntry* entry = load.set.ok() ? load.set.Find(floor) : nullptr;
+    if (load.set.ok() && !entry) load.set.error = path + ": no floor '" + floor + "' in the set";
+    if (!load.set.ok()) return Refused(load.set.error);
+    load.file = entry->plan_path;
   }
-  const FloorPlanParse parsed = LoadFloorPlan(file);
-  if (!parsed.ok()) return refuse(parsed.error);
-  if (const std::string e = PlanOutOfLimits(parsed.plan, config_.limits()); !e.empty())
-    return refuse(file + ": " + e);
+  const FloorPlanParse parsed = LoadFloorPlan(load.file);
+  if (!parsed.ok()) return Refused(parsed.error);
+  if (const std::string e = PlanOutOfLimits(parsed.plan, config.limits()); !e.empty())
+    return Refused(load.file + ": " + e);
   // Every other floor of a set is built now, so that a floor change on the stairs costs
   // the poses nothing; one that does not load refuses the set.
-  std::map<std::string, PlanAssets> others;
-  for (const FloorEntry& f : set.floors) {
+  for (const FloorEntry& f : load.set.floors) {
     if (f.id == floor) continue;
     const FloorPlanParse other = LoadFloorPlan(f.plan_path);
-    if (!other.ok()) return refuse(path + ": floor " + f.id + ": " + other.error);
-    if (const std::string e = PlanOutOfLimits(other.plan, config_.limits()); !e.empty())
-      return refuse(path + ": floor " + f.id + ": " + e);
-    others[f.id] = BuildPlan(other, f.plan_path);
+    if (!other.ok()) return Refused(path + ": floor " + f.id + ": " + other.error);
+    if (const std::string e = PlanOutOfLimits(other.plan, config.limits()); !e.empty())
+      return Refused(path + ": floor " + f.id + ": " + e);
+    load.others[f.id] = BuildPlan(config, now_ns, other, f.plan_path);
   }
-  floor_ = floor;
-  plan_path_ = path;
-  floors_ = std::move(set);
+  load.assets = BuildPlan(config, now_ns, parsed, load.file);
+  return load;
+}
+
+std::string Engine::UseLoad(PlanLoad load) {
+  if (!load.error.empty()) {
+    counters_.set_plans_refused(counters_.plans_refused() + 1);
+    return load.error;
+  }
+  floor_ = load.floor;
+  plan_path_ = load.path;
+  floors_ = std::move(load.set);
   floor_reference_.reset();
   floor_candidate_.reset();
-  other_floors_ = std::move(others);
-  UsePlan(BuildPlan(parsed, file), /*another_floor=*/false);
+  other_floors_ = std::move(load.others);
+  UsePlan(std::move(load.assets), /*another_floor=*/false);
   return {};
 }
 
-Engine::PlanAssets Engine::BuildPlan(const FloorPlanParse& parsed, const std::string& file) const {
+Engine::PlanAssets Engine::BuildPlan(const v1::FloorposedConfig& config,
+                                     const std::function<int64_t()>& now_ns,
+                                     const FloorPlanParse& parsed, const std::string& file) {
   PlanAssets a;
-  const double scale = PlanGridScale(parsed.plan, config_);
+  const double scale = PlanGridScale(parsed.plan, config);
   if (scale > 1)
     spdlog::warn(
         "floor plan {}: grids {:.1f} times coarser than configured, to stay within "
         "limits.max_plan_memory_mb ({} MB)",
-        file, scale, config_.limits().max_plan_memory_mb());
+        file, scale, config.limits().max_plan_memory_mb());
   ClosestWallIndex::Options index_options;
   index_options.cell_m *= scale;
-  index_options.max_distance_m = std::max(3.0, config_.icp().max_correspondence_m());
+  index_options.max_distance_m = std::max(3.0, config.icp().max_correspondence_m());
   a.index = std::make_shared<const ClosestWallIndex>(parsed.plan, index_options);
   spdlog::info("floor plan {}: {} segments ({} dropped), {:.1f} x {:.1f} m, index {:.1f} MB", file,
                parsed.plan.segments.size(), parsed.dropped_segments,
                parsed.plan.max.x() - parsed.plan.min.x(), parsed.plan.max.y() - parsed.plan.min.y(),
                static_cast<double>(a.index->MemoryBytes()) / 1e6);
   if (!parsed.frame.empty()) spdlog::info("floor plan {}: {}", file, parsed.frame);
-  if (config_.tracking().global_search()) {
+  if (config.tracking().global_search()) {
     GlobalSearchOptions search;
-    search.crowd_ratio = config_.tracking().global_crowded_ratio();
+    search.crowd_ratio = config.tracking().global_crowded_ratio();
     a.global = std::make_shared<GlobalSearchCache>(parsed.plan, search);
   }
   a.id = parsed.plan.id;
   a.digest = FloorPlanDigest(parsed.plan);
-  const int64_t t0 = now_ns_();
+  const int64_t t0 = now_ns();
   RouteOptions route;
-  route.body_radius_m = config_.routes().body_radius_m();
-  route.cell_m = config_.routes().cell_m() * scale;
-  route.snap_m = config_.routes().snap_m();
+  route.body_radius_m = config.routes().body_radius_m();
+  route.cell_m = config.routes().cell_m() * scale;
+  route.snap_m = config.routes().snap_m();
   a.routes = std::make_unique<RoutePlanner>(parsed.plan, route);
-  const v1::ExploredConfig& e = config_.explored();
+  const v1::ExploredConfig& e = config.explored();
   if (e.enabled()) {
     RoomOptions rooms;
     rooms.max_door_m = e.max_door_m();
@@ -306,7 +325,7 @@ Engine::PlanAssets Engine::BuildPlan(const FloorPlanParse& parsed, const std::st
   spdlog::info("routes on a {} x {} grid of {:.2f} m, {} rooms, in {:.0f} ms", a.routes->grid().nx,
                a.routes->grid().ny, a.routes->grid().cell_m,
                a.explored ? a.explored->rooms()->rooms().size() : 0,
-               static_cast<double>(now_ns_() - t0) * 1e-6);
+               static_cast<double>(now_ns() - t0) * 1e-6);
   return a;
 }
 
@@ -722,13 +741,27 @@ void Engine::OnCommand(const Envelope& e) {
           error = "load_plan without plan_id or path";
         else if (!load.plan_id().empty())
           FindPlanFile(config_.plan_dir(), load.plan_id(), &path, &error);
-        if (error.empty())
-          error = LoadPlan(path, load.floor().empty() ? config_.floor() : load.floor());
-        if (error.empty()) {
-          store_.TakeNewPoints();  // the store is kept: the walls are the same walls
-          done = "plan loaded: " + path;
+        else if (plan_loading_)
+          error = "another plan is loading: try again when it is answered";
+        if (!error.empty()) break;
+        const std::string floor = load.floor().empty() ? config_.floor() : load.floor();
+        // Read and built elsewhere; the poses meanwhile go on on the plan in use.
+        auto built = std::make_shared<PlanLoad>();
+        auto finish = [this, built, cmd, reply, path] {
+          plan_loading_ = false;
+          const std::string refused = UseLoad(std::move(*built));
+          if (refused.empty()) store_.TakeNewPoints();  // the store is kept: the same walls
+          FinishCommand(cmd, reply, refused, refused.empty() ? "plan loaded: " + path : "");
+        };
+        auto work = [built, config = config_, now = now_ns_, path, floor] {
+          *built = ReadPlan(config, now, path, floor);
+        };
+        if (!offload_) {
+          work();
+          return finish();
         }
-        break;
+        plan_loading_ = true;
+        return offload_(std::move(work), std::move(finish));
       }
       case v1::Command::kWallPick: {
         const auto& p = cmd.wall_pick();
@@ -775,6 +808,11 @@ void Engine::OnCommand(const Envelope& e) {
       case v1::Command::COMMAND_NOT_SET: break;
     }
   }
+  FinishCommand(cmd, std::move(reply), error, done);
+}
+
+void Engine::FinishCommand(const v1::Command& cmd, v1::CommandReply reply, const std::string& error,
+                           const std::string& done) {
   const std::string prefix = "request " + std::to_string(cmd.request_id()) + ": ";
   reply.set_ok(error.empty());
   reply.set_message(error.empty() ? done : error);

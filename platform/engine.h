@@ -108,6 +108,12 @@ class Engine {
   // LoadPlan command).
   std::string Start();
 
+  // Runs `work` on another thread, then `done` on the engine's own (the daemon's io
+  // thread), so that a plan loaded by command is built without holding up the poses.
+  // Unset (floorpose eval, the tests): both at once, in order.
+  using Offload = std::function<void(std::function<void()> work, std::function<void()> done)>;
+  void SetOffload(Offload offload) { offload_ = std::move(offload); }
+
   // Inputs. Envelopes of other devices are ignored (another daemon serves them).
   void OnMeshDelta(const Envelope& e);
   void OnHeadsetPose(const Envelope& e);
@@ -147,8 +153,20 @@ class Engine {
   // A plan file, or floor `floor` of a .floors set.
   std::string LoadPlan(const std::string& path, const std::string& floor);
   struct PlanAssets;
+  struct PlanLoad;
+  // Reads and builds a plan (every floor of a set): on any thread, touching nothing of the
+  // engine's; UseLoad then makes it the plan in use, or counts the refusal.
+  static PlanLoad ReadPlan(const v1::FloorposedConfig& config,
+                           const std::function<int64_t()>& now_ns, const std::string& path,
+                           const std::string& floor);
+  std::string UseLoad(PlanLoad load);
   // A plan's index, routes, rooms and explored map (and global search, when on).
-  PlanAssets BuildPlan(const FloorPlanParse& parsed, const std::string& file) const;
+  static PlanAssets BuildPlan(const v1::FloorposedConfig& config,
+                              const std::function<int64_t()>& now_ns, const FloorPlanParse& parsed,
+                              const std::string& file);
+  // The end of a command: its reply and status, and what it changed published.
+  void FinishCommand(const v1::Command& cmd, v1::CommandReply reply, const std::string& error,
+                     const std::string& done);
   // Makes them the plan in use; the alignment goes with the old plan, or stays when the
   // new one is another floor of the same set.
   void UsePlan(PlanAssets assets, bool another_floor);
@@ -212,6 +230,16 @@ class Engine {
     uint64_t digest = 0;
   };
   PlanAssets plan_;  // the plan in use (its index is the tracker's)
+  // A plan read and built, with what a .floors set brings.
+  struct PlanLoad {
+    std::string error;  // why it was refused; the rest is then empty
+    std::string path, floor, file;
+    FloorSet set;
+    PlanAssets assets;
+    std::map<std::string, PlanAssets> others;
+  };
+  Offload offload_;
+  bool plan_loading_ = false;  // a load_plan command is being built elsewhere
   // For a .floors set, every floor not in use, built at the load: a floor change costs
   // the poses nothing, and a wearer coming back finds the floor explored as it was.
   std::map<std::string, PlanAssets> other_floors_;

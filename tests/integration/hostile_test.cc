@@ -269,6 +269,49 @@ TEST_F(HostileTest, PlansOutOfBoundsAreRefusedAndLargeOnesStayWithinTheMemoryLim
   EXPECT_TRUE(link_->WaitUntil([&] { return !link_->plan_poses.empty(); }, seconds(5)));
 }
 
+// 7, continued. A plan loaded at run time used to stall the poses while it was built.
+TEST_F(HostileTest, APlanLoadedAtRunTimeIsBuiltWithoutHoldingUpThePoses) {
+  StartDaemon();
+  // A 240 x 170 m floor of 10 m rooms, built in a few hundred milliseconds.
+  const std::string path = (dir_ / "mall.txt").string();
+  {
+    std::ofstream out(path);
+    out << 25 + 18 << "\n";
+    for (int i = 0; i <= 24; ++i) out << i * 10 << " 0 " << i * 10 << " 170\n";
+    for (int j = 0; j <= 17; ++j) out << "0 " << j * 10 << " 240 " << j * 10 << "\n";
+  }
+  v1::Command load;
+  load.set_request_id(77);
+  load.mutable_load_plan()->set_path(path);
+  link_->Send(Topic::kCommand, load, 0);
+  const sim::DemoWalk walk = DaemonTest::Walk(0.0, 1);
+  const size_t before = link_->plan_poses.size();
+  size_t answered_while_loading = 0;
+  int64_t stamp = 1'000'000'000;
+  auto next_send = std::chrono::steady_clock::now();
+  ASSERT_TRUE(link_->WaitUntil(
+      [&] {
+        for (const v1::CommandReply& r : link_->replies)
+          if (r.request_id() == 77) return true;
+        answered_while_loading = link_->plan_poses.size() - before;
+        if (std::chrono::steady_clock::now() >= next_send) {  // a pose every 20 ms
+          next_send += std::chrono::milliseconds(20);
+          stamp += 20'000'000;
+          link_->Send(Topic::kHeadsetPose, tools::ToHeadsetPose(walk.steps[0].slam, kFrame, stamp),
+                      stamp);
+        }
+        return false;
+      },
+      seconds(30)));
+  std::printf("plan poses answered while the plan was built: %zu\n", answered_while_loading);
+  EXPECT_GT(answered_while_loading, 0u);
+  for (const v1::CommandReply& r : link_->replies) {
+    if (r.request_id() == 77) {
+      EXPECT_TRUE(r.ok()) << r.message();
+    }
+  }
+}
+
 // 8. A second floorposed on the same state_dir used to start, and the two overwrote each
 // other's snapshots.
 TEST_F(HostileTest, ASecondDaemonOnTheSameStateDirectoryExitsWithTheReason) {

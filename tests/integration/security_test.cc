@@ -145,8 +145,8 @@ TEST_F(SecurityTest, OnlyADaemonIdentityGetsAPlanPoseToAReader) {
     std::printf("%s: %s; the dashboard received %zu\n", name.c_str(), said.c_str(), received);
     return received;
   };
-  EXPECT_EQ(forge("app"), 0u);        // a headset
-  EXPECT_EQ(forge("dashboard"), 0u);  // another dashboard
+  EXPECT_EQ(forge("app"), 0u);         // a headset
+  EXPECT_EQ(forge("dashboard"), 0u);   // another dashboard
   EXPECT_GT(forge("floorposed"), 0u);  // the daemon's own identity: the control
 }
 
