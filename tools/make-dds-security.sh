@@ -33,6 +33,20 @@ days="${DAYS:-3650}"
 ca_name="${CA_NAME:-floorpose test CA}"
 command -v openssl >/dev/null || { echo "make-dds-security: openssl not found (apt-get install openssl)" >&2; exit 2; }
 
+# NAME[:ROLE] -> role, the default from the name.
+role_of() {
+  local spec="$1" name="${1%%:*}"
+  if [[ "$spec" == *:* ]]; then echo "${spec#*:}"; return; fi
+  case "$name" in floorposed*) echo daemon ;; dashboard*) echo dashboard ;; *) echo headset ;; esac
+}
+for spec in "${names[@]}"; do  # every name checked before any key is made
+  name="${spec%%:*}"
+  [[ "$name" =~ ^[A-Za-z0-9._-]+$ ]] || { echo "make-dds-security: bad name '$name'" >&2; exit 2; }
+  case "$(role_of "$spec")" in
+    daemon | headset | dashboard) ;;
+    *) echo "make-dds-security: '$spec': the role is daemon, headset or dashboard" >&2; exit 2 ;;
+  esac
+done
 mkdir -p "$out"
 cd "$out"
 umask 077
@@ -50,18 +64,13 @@ grants=""
 made=()
 for spec in "${names[@]}"; do
   name="${spec%%:*}"
-  role="${spec#*:}"
-  if [[ "$role" == "$spec" ]]; then
-    case "$name" in floorposed*) role=daemon ;; dashboard*) role=dashboard ;; *) role=headset ;; esac
-  fi
-  [[ "$name" =~ ^[A-Za-z0-9._-]+$ ]] || { echo "make-dds-security: bad name '$name'" >&2; exit 2; }
+  role="$(role_of "$spec")"
   case "$role" in
     daemon) rules="<publish><topics>$outputs</topics></publish>
         <subscribe><topics>$inputs</topics></subscribe>" ;;
     headset) rules="<publish><topics>$inputs</topics></publish>
         <subscribe><topics>$outputs</topics></subscribe>" ;;
     dashboard) rules="<subscribe><topics>$outputs</topics></subscribe>" ;;
-    *) echo "make-dds-security: '$spec': the role is daemon, headset or dashboard" >&2; exit 2 ;;
   esac
   made+=("$name ($role)")
   openssl ecparam -name prime256v1 -genkey -noout -out "$name.key"

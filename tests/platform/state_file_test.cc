@@ -1,6 +1,8 @@
 // The state snapshot: the file (atomic, checked) and the Engine's state in it, saved and
 // resumed; corrupt, foreign and out-of-range snapshots refused with the reason.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -87,6 +89,49 @@ TEST_F(StateFileTest, CorruptTruncatedAndForeignFilesAreRefusedWithTheReason) {
     EXPECT_EQ(ReadStateFile(path, &s, &error), StateRead::kBad) << c.reason;
     EXPECT_NE(error.find(c.reason), std::string::npos) << error;
   }
+}
+
+TEST_F(StateFileTest, OnlyARegularFileWithinTheLimitIsRead) {
+  namespace fs = std::filesystem;
+  std::string error;
+  const std::string good = Path("good.snapshot");
+  ASSERT_TRUE(WriteStateFile(good, Sample(), &error)) << error;
+  const std::string link = Path("link.snapshot"), dir = Path("dir.snapshot"),
+                    fifo = Path("fifo.snapshot");
+  fs::create_symlink(good, link);
+  fs::create_directory(dir);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  for (const auto& [path, reason] : {std::pair{link, "a symbolic link, not followed"},
+                                     {dir, "a directory, not a file"},
+                                     {fifo, "a FIFO, not a file"}}) {
+    v1::StateSnapshot s;
+    error.clear();
+    EXPECT_EQ(ReadStateFile(path, &s, &error), StateRead::kBad) << path;
+    EXPECT_EQ(error, reason);
+  }
+  v1::StateSnapshot s;
+  error.clear();
+  EXPECT_EQ(ReadStateFile(good, &s, &error, /*max_bytes=*/8), StateRead::kBad);
+  EXPECT_NE(error.find("over limits.max_snapshot_mb"), std::string::npos) << error;
+  error.clear();
+  EXPECT_EQ(ReadStateFile(good, &s, &error), StateRead::kOk) << error;
+  // A link left where the temporary file goes is replaced, not written through.
+  const std::string victim = Write("victim", "keep me");
+  fs::create_symlink(victim, good + ".tmp");
+  ASSERT_TRUE(WriteStateFile(good, Sample(), &error)) << error;
+  EXPECT_EQ(Read(victim), "keep me");
+}
+
+TEST_F(StateFileTest, OneDaemonPerStateDirectory) {
+  std::string error;
+  auto first = StateDirLock::Take(dir_.string(), &error);
+  ASSERT_TRUE(first) << error;
+  EXPECT_FALSE(StateDirLock::Take(dir_.string(), &error));
+  EXPECT_NE(error.find("is in use by another floorposed (pid " + std::to_string(::getpid()) + ")"),
+            std::string::npos)
+      << error;
+  first.reset();
+  EXPECT_TRUE(StateDirLock::Take(dir_.string(), &error)) << error;
 }
 
 TEST_F(StateFileTest, SetAsideMovesTheFileOutOfTheWay) {
