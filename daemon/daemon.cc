@@ -41,9 +41,13 @@ bool Daemon::Start(std::string* error) {
     const std::optional<platform::DdsSecurity> security = platform::ToDdsSecurity(config_);
     participant_ = std::make_unique<platform::Participant>(
         config_.dds().domain_id(), config_.dds().cyclonedds_uri(), security ? &*security : nullptr);
-    mesh_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kMeshDelta);
-    pose_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kHeadsetPose);
-    command_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kCommand);
+    // Inputs from the default partition (clients written from docs/protocol.md) and the
+    // device's own (a headset identity may publish only there: docs/security.md).
+    const std::vector<std::string> inputs = {"",
+                                             platform::DevicePartition(config_.dds().device_id())};
+    mesh_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kMeshDelta, inputs);
+    pose_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kHeadsetPose, inputs);
+    command_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kCommand, inputs);
     plan_pose_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kPlanPose);
     alignment_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kAlignment);
     status_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kStatus);

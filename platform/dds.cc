@@ -156,15 +156,42 @@ Participant::~Participant() {
   if (domain_ > 0) dds_delete(domain_);
 }
 
-Writer::Writer(const Participant& participant, Topic topic) : topic_(topic) {
-  Check(participant.topic(topic), (std::string("dds_create_topic ") + TopicName(topic)).c_str());
-  dds_qos_t* q = MakeQos(topic, false);
-  writer_ = dds_create_writer(participant.entity(), participant.topic(topic), q, nullptr);
+std::string DevicePartition(const std::string& device_id) { return "device/" + device_id; }
+
+namespace {
+
+// A publisher or subscriber of its own in `partitions`; 0 (the participant's default one)
+// when there are none.
+dds_entity_t InPartitions(const Participant& participant,
+                          const std::vector<std::string>& partitions, bool subscriber) {
+  if (partitions.empty()) return 0;
+  std::vector<const char*> names;
+  for (const std::string& p : partitions) names.push_back(p.c_str());
+  dds_qos_t* q = dds_create_qos();
+  dds_qset_partition(q, static_cast<uint32_t>(names.size()), names.data());
+  const dds_entity_t e = subscriber ? dds_create_subscriber(participant.entity(), q, nullptr)
+                                    : dds_create_publisher(participant.entity(), q, nullptr);
   dds_delete_qos(q);
+  Check(e, subscriber ? "dds_create_subscriber" : "dds_create_publisher");
+  return e;
+}
+
+}  // namespace
+
+Writer::Writer(const Participant& participant, Topic topic,
+               const std::vector<std::string>& partitions)
+    : topic_(topic) {
+  Check(participant.topic(topic), (std::string("dds_create_topic ") + TopicName(topic)).c_str());
+  publisher_ = InPartitions(participant, partitions, /*subscriber=*/false);
+  dds_qos_t* q = MakeQos(topic, false);
+  writer_ = dds_create_writer(publisher_ ? publisher_ : participant.entity(),
+                              participant.topic(topic), q, nullptr);
+  dds_delete_qos(q);
+  if (writer_ < 0 && publisher_) dds_delete(publisher_);
   Check(writer_, "dds_create_writer");
 }
 
-Writer::~Writer() { dds_delete(writer_); }
+Writer::~Writer() { dds_delete(publisher_ ? publisher_ : writer_); }
 
 bool Writer::Write(const Envelope& e, std::string* error) {
   floorpose_Envelope sample{};
@@ -190,15 +217,20 @@ bool Writer::WaitForAcks(std::chrono::milliseconds timeout) {
   return dds_wait_for_acks(writer_, DDS_MSECS(timeout.count())) == DDS_RETCODE_OK;
 }
 
-Reader::Reader(const Participant& participant, Topic topic) : topic_(topic) {
+Reader::Reader(const Participant& participant, Topic topic,
+               const std::vector<std::string>& partitions)
+    : topic_(topic) {
   Check(participant.topic(topic), (std::string("dds_create_topic ") + TopicName(topic)).c_str());
+  subscriber_ = InPartitions(participant, partitions, /*subscriber=*/true);
   dds_qos_t* q = MakeQos(topic, true);
-  reader_ = dds_create_reader(participant.entity(), participant.topic(topic), q, nullptr);
+  reader_ = dds_create_reader(subscriber_ ? subscriber_ : participant.entity(),
+                              participant.topic(topic), q, nullptr);
   dds_delete_qos(q);
+  if (reader_ < 0 && subscriber_) dds_delete(subscriber_);
   Check(reader_, "dds_create_reader");
 }
 
-Reader::~Reader() { dds_delete(reader_); }
+Reader::~Reader() { dds_delete(subscriber_ ? subscriber_ : reader_); }
 
 std::vector<Envelope> Reader::Take(size_t max) {
   constexpr size_t kBatch = 64;

@@ -47,9 +47,17 @@ struct Envelope {
 
 class Participant;
 
+// The DDS partition a headset's inputs travel in: "device/<device id>". floorposed reads
+// its own device's partition and the default one; with DDS Security a headset identity
+// is granted only its own device's partition (tools/make-dds-security.sh), so it cannot
+// feed another wearer's daemon.
+std::string DevicePartition(const std::string& device_id);
+
 class Writer {
  public:
-  Writer(const Participant& participant, Topic topic);
+  // In `partitions` (none: the default partition).
+  Writer(const Participant& participant, Topic topic,
+         const std::vector<std::string>& partitions = {});
   ~Writer();
   Writer(const Writer&) = delete;
   Writer& operator=(const Writer&) = delete;
@@ -65,13 +73,16 @@ class Writer {
 
  private:
   Topic topic_;
+  dds_entity_t publisher_ = 0;  // its own, when it has partitions
   dds_entity_t writer_ = 0;
   uint64_t seq_ = 0;
 };
 
 class Reader {
  public:
-  Reader(const Participant& participant, Topic topic);
+  // In `partitions` (none: the default partition; wildcards allowed).
+  Reader(const Participant& participant, Topic topic,
+         const std::vector<std::string>& partitions = {});
   ~Reader();
   Reader(const Reader&) = delete;
   Reader& operator=(const Reader&) = delete;
@@ -90,6 +101,7 @@ class Reader {
 
  private:
   Topic topic_;
+  dds_entity_t subscriber_ = 0;  // its own, when it has partitions
   dds_entity_t reader_ = 0;
 };
 

@@ -7,16 +7,18 @@
 # the domains given:
 #
 #   daemon     subscribes mesh_delta, headset_pose, command; publishes every output
-#   headset    the AR app: publishes mesh_delta, headset_pose, command; subscribes outputs
+#   headset    the AR app of one device: publishes mesh_delta, headset_pose, command in
+#              that device's partition ("device/DEVICE") only; subscribes outputs
 #   dashboard  subscribes outputs only
 #
-# so that only a daemon can publish plan poses. For tests and trials: in the field the CA
-# key lives offline and each device gets only its own key.
+# so that only a daemon can publish plan poses, and a headset feeds only its own device's
+# daemon. For tests and trials: in the field the CA key lives offline and each device gets
+# only its own key.
 #
-#   tools/make-dds-security.sh OUT_DIR [NAME[:ROLE] ...]   (default: floorposed app)
+#   tools/make-dds-security.sh OUT_DIR [NAME[:ROLE[:DEVICE]] ...]  (default: floorposed app)
 #
 # A NAME without a ROLE is a daemon when it starts with "floorposed", a dashboard when it
-# starts with "dashboard", else a headset.
+# starts with "dashboard", else a headset; a headset's DEVICE is its NAME unless given.
 #
 # Environment: DOMAINS (default "0 230": the domain id range granted), DAYS (validity,
 # default 3650), CA_NAME (default "floorpose test CA").
@@ -36,7 +38,11 @@ command -v openssl >/dev/null || { echo "make-dds-security: openssl not found (a
 # NAME[:ROLE] -> role, the default from the name.
 role_of() {
   local spec="$1" name="${1%%:*}"
-  if [[ "$spec" == *:* ]]; then echo "${spec#*:}"; return; fi
+  if [[ "$spec" == *:* ]]; then
+    local rest="${spec#*:}"
+    echo "${rest%%:*}"
+    return
+  fi
   case "$name" in floorposed*) echo daemon ;; dashboard*) echo dashboard ;; *) echo headset ;; esac
 }
 for spec in "${names[@]}"; do  # every name checked before any key is made
@@ -65,14 +71,17 @@ made=()
 for spec in "${names[@]}"; do
   name="${spec%%:*}"
   role="$(role_of "$spec")"
+  device="$name"
+  [[ "$spec" == *:*:* ]] && device="${spec##*:}"
+  [[ "$device" =~ ^[A-Za-z0-9._-]+$ ]] || { echo "make-dds-security: bad device '$device'" >&2; exit 2; }
   case "$role" in
     daemon) rules="<publish><topics>$outputs</topics></publish>
-        <subscribe><topics>$inputs</topics></subscribe>" ;;
-    headset) rules="<publish><topics>$inputs</topics></publish>
+        <subscribe><topics>$inputs</topics><partitions><partition>*</partition></partitions></subscribe>" ;;
+    headset) rules="<publish><topics>$inputs</topics><partitions><partition>device/$device</partition></partitions></publish>
         <subscribe><topics>$outputs</topics></subscribe>" ;;
     dashboard) rules="<subscribe><topics>$outputs</topics></subscribe>" ;;
   esac
-  made+=("$name ($role)")
+  if [[ "$role" == headset ]]; then made+=("$name (headset of $device)"); else made+=("$name ($role)"); fi
   openssl ecparam -name prime256v1 -genkey -noout -out "$name.key"
   openssl req -new -key "$name.key" -subj "/O=floorpose/CN=$name" -out "$name.csr" 2>/dev/null
   openssl x509 -req -in "$name.csr" -CA ca.pem -CAkey ca.key -CAcreateserial -sha256 \

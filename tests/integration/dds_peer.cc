@@ -11,12 +11,19 @@
 //
 //   dds_peer --forge DOMAIN DEVICE IDENTITY_DIR NAME
 //   -> "forged N" (samples written) or "refused WHY" (DDS would not make the writer)
+//
+// Or it feeds a daemon 20 HeadsetPose samples for DEVICE in a partition of its choice
+// ("-": the default one), as a headset of another device might try:
+//
+//   dds_peer --feed PARTITION DOMAIN DEVICE IDENTITY_DIR NAME
+//   -> "forged N" or "refused WHY"
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "platform/dds.h"
 #include "tools/lib/headset_link.h"
@@ -24,14 +31,17 @@
 
 namespace {
 
-int Forge(uint32_t domain, const std::string& device, const std::string& dir,
+// Writes 20 samples of `topic` for `device` (a PlanPose at x = 999, or a HeadsetPose)
+// in `partitions`.
+int Forge(floorpose::platform::Topic topic, const std::vector<std::string>& partitions,
+          uint32_t domain, const std::string& device, const std::string& dir,
           const std::string& name) {
   using namespace floorpose;
   const platform::DdsSecurity identity = platform::SecurityFilesIn(dir, name);
   platform::Participant participant(domain, platform::LoopbackCycloneConfig(), &identity);
   std::unique_ptr<platform::Writer> writer;
   try {
-    writer = std::make_unique<platform::Writer>(participant, platform::Topic::kPlanPose);
+    writer = std::make_unique<platform::Writer>(participant, topic, partitions);
   } catch (const std::exception& e) {
     std::printf("refused %s\n", e.what());
     return 0;
@@ -41,12 +51,17 @@ int Forge(uint32_t domain, const std::string& device, const std::string& dir,
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   int written = 0;
   for (int i = 0; i < 20; ++i) {
+    const int64_t stamp = 1'000'000'000 + i * 300'000'000LL;
     v1::PlanPose forged;
-    forged.set_source_stamp_ns(1'000'000'000 + i);
+    forged.set_source_stamp_ns(stamp);
     forged.set_x(999);
     forged.mutable_reliability()->set_flag(v1::Reliability::RELIABLE);
-    platform::Envelope e{device, writer->NextSeq(), forged.source_stamp_ns(),
-                         forged.SerializeAsString(), 0};
+    const std::string payload = topic == platform::Topic::kPlanPose
+                                    ? forged.SerializeAsString()
+                                    : tools::ToHeadsetPose(Pose2{{1.0, 2.0}, 0.0, 1.6},
+                                                           HeadsetFrame::kUnityLeftHandedYUp, stamp)
+                                          .SerializeAsString();
+    platform::Envelope e{device, writer->NextSeq(), stamp, payload, 0};
     written += writer->Write(e);
   }
   writer->WaitForAcks(std::chrono::seconds(2));
@@ -60,8 +75,20 @@ int main(int argc, char** argv) {
   using namespace floorpose;
   if (argc == 6 && std::string(argv[1]) == "--forge") {
     try {
-      return Forge(static_cast<uint32_t>(std::strtoul(argv[2], nullptr, 10)), argv[3], argv[4],
+      return Forge(platform::Topic::kPlanPose, {},
+                   static_cast<uint32_t>(std::strtoul(argv[2], nullptr, 10)), argv[3], argv[4],
                    argv[5]);
+    } catch (const std::exception& e) {
+      std::printf("error %s\n", e.what());
+      return 1;
+    }
+  }
+  if (argc == 7 && std::string(argv[1]) == "--feed") {
+    const std::string partition = argv[2];
+    try {
+      return Forge(platform::Topic::kHeadsetPose, {partition == "-" ? std::string() : partition},
+                   static_cast<uint32_t>(std::strtoul(argv[3], nullptr, 10)), argv[4], argv[5],
+                   argv[6]);
     } catch (const std::exception& e) {
       std::printf("error %s\n", e.what());
       return 1;

@@ -27,7 +27,8 @@ class SecurityTest : public DaemonTest {
     DaemonTest::SetUp();
     // Ours, and a rogue CA that issues an "app" identity of its own.
     for (const auto& [dir, names] :
-         {std::pair{"pki", "floorposed app dashboard"}, {"rogue", "app"}}) {
+         {std::pair{"pki", "floorposed app:headset:hl-test intruder:headset:hl-other dashboard"},
+          {"rogue", "app:headset:hl-test"}}) {
       const std::string cmd = std::string(FLOORPOSE_SOURCE_DIR) + "/tools/make-dds-security.sh '" +
                               (dir_ / dir).string() + "' " + names + " > '" +
                               (dir_ / dir).string() + ".log' 2>&1";
@@ -107,6 +108,21 @@ TEST_F(SecurityTest, OnlyAPermittedParticipantFeedsAndReadsTheDaemon) {
   EXPECT_GE(c.poses_in(), plan_poses) << c.ShortDebugString();
   EXPECT_GT(c.mesh_deltas_in(), 0u) << c.ShortDebugString();
   EXPECT_GT(c.commands_in(), 0u) << c.ShortDebugString();
+
+  // A headset identity of another device cannot feed this one's daemon: neither in this
+  // device's partition nor in the default one.
+  for (const std::string partition : {"device/hl-test", "-"}) {
+    const fs::path out = dir_ / ("intruder" + std::to_string(partition.size()) + ".out");
+    tools::ChildProcess process({DDS_PEER_PATH, "--feed", partition, std::to_string(domain_),
+                                 "hl-test", (dir_ / "pki").string(), "intruder"},
+                                out.string());
+    EXPECT_EQ(process.Wait(seconds(30)), 0) << "see " << out;
+    std::ifstream in(out);
+    const std::string said{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    std::printf("intruder in partition %s: %s", partition.c_str(), said.c_str());
+    EXPECT_NE(said.find("refused"), std::string::npos) << said;
+  }
+  EXPECT_EQ(counters().poses_in(), c.poses_in()) << "the intruder's poses reached the daemon";
 
   // The app in this process, permitted too: a walk after a pick comes back on the plan.
   const sim::DemoWalk walk = Walk(/*pick_error_m=*/0.0, 1);

@@ -43,7 +43,9 @@ int RunRecord(const RecordOptions& o) {
     participant = std::make_unique<platform::Participant>(o.dds.domain_id, o.dds.Config());
     waiter = std::make_unique<platform::Waiter>(*participant);
     for (Topic t : platform::kAllTopics) {
-      readers.push_back(std::make_unique<platform::Reader>(*participant, t));
+      // Every device's inputs: the default partition and each device's own.
+      readers.push_back(std::make_unique<platform::Reader>(
+          *participant, t, std::vector<std::string>{"", platform::DevicePartition("*")}));
       waiter->Attach(*readers.back());
     }
   } catch (const std::exception& e) {

@@ -10,9 +10,11 @@ HeadsetLink::HeadsetLink(uint32_t domain_id, const std::string& cyclone_config,
                          std::string device_id, const platform::DdsSecurity* security)
     : device_id_(std::move(device_id)) {
   participant_ = std::make_unique<platform::Participant>(domain_id, cyclone_config, security);
-  mesh_ = std::make_unique<platform::Writer>(*participant_, Topic::kMeshDelta);
-  pose_ = std::make_unique<platform::Writer>(*participant_, Topic::kHeadsetPose);
-  command_ = std::make_unique<platform::Writer>(*participant_, Topic::kCommand);
+  // Inputs in the device's own partition (the only one a headset identity is granted).
+  const std::vector<std::string> mine = {platform::DevicePartition(device_id_)};
+  mesh_ = std::make_unique<platform::Writer>(*participant_, Topic::kMeshDelta, mine);
+  pose_ = std::make_unique<platform::Writer>(*participant_, Topic::kHeadsetPose, mine);
+  command_ = std::make_unique<platform::Writer>(*participant_, Topic::kCommand, mine);
   plan_pose_ = std::make_unique<platform::Reader>(*participant_, Topic::kPlanPose);
   alignment_ = std::make_unique<platform::Reader>(*participant_, Topic::kAlignment);
   status_ = std::make_unique<platform::Reader>(*participant_, Topic::kStatus);
