@@ -174,7 +174,8 @@ std::unique_ptr<StateDirLock> StateDirLock::Take(const std::string& dir, std::st
   }
   if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
     const bool held = errno == EWOULDBLOCK;
-    *error = held ? "state_dir " + dir + " is in use by another floorposed" : Errno("flock " + path);
+    *error =
+        held ? "state_dir " + dir + " is in use by another floorposed" : Errno("flock " + path);
     char pid[32] = {};
     if (held && ::pread(fd, pid, sizeof pid - 1, 0) > 0)
       *error += " (pid " + std::string(pid, ::strcspn(pid, "\n")) + ")";
