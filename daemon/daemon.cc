@@ -165,10 +165,6 @@ void Daemon::IoLoop() {
         for (auto& e : reader->Take(256)) batch.push_back({reader->topic(), std::move(e)});
       if (batch.size() == before) break;
     }
-    for (auto* reader : {pose_reader_.get(), mesh_reader_.get(), command_reader_.get()}) {
-      const platform::Reader::Losses l = reader->TakeLosses();
-      engine_->OnDdsLosses(reader->topic(), l.lost, l.rejected);
-    }
     std::stable_sort(batch.begin(), batch.end(), [](const Input& a, const Input& b) {
       return platform::InputBefore(a.topic, a.envelope.stamp_ns, b.topic, b.envelope.stamp_ns);
     });
@@ -206,6 +202,11 @@ void Daemon::IoLoop() {
     const int64_t now = platform::MonotonicNs();
     MaybeSnapshot(now, false);
     if (now >= next_status_ns_) {
+      // What DDS lost or rejected since the last status, counted in this one.
+      for (auto* reader : {pose_reader_.get(), mesh_reader_.get(), command_reader_.get()}) {
+        const platform::Reader::Losses l = reader->TakeLosses();
+        engine_->OnDdsLosses(reader->topic(), l.lost, l.rejected);
+      }
       engine_->PublishStatus({});
       next_status_ns_ = now + static_cast<int64_t>(config_.status_period_s() * 1e9);
       std::lock_guard lock(status_mu_);

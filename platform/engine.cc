@@ -421,7 +421,7 @@ void Engine::ExploreWalls(const std::vector<WallPoint>& points) {
 void Engine::PublishExplored() {
   if (!plan_.explored || plan_.explored->revision() == explored_sent_) return;
   explored_sent_ = plan_.explored->revision();
-  publish_(Topic::kExplored, ToProto(*plan_.explored, plan_.id, floor_, latest_stamp_ns_));
+  publish_(Topic::kExplored, ToProto(*plan_.explored, plan_.id, floor_, clock_.newest_ns()));
 }
 
 WallExtractionOptions Engine::BandedWallOptions() const {
@@ -496,7 +496,6 @@ bool Engine::TakeStamp(const std::string& what, int64_t* stamp_ns) {
     case DeviceClock::Verdict::kTaken: break;
   }
   *stamp_ns = m.timeline_ns;
-  latest_stamp_ns_ = std::max(latest_stamp_ns_, m.timeline_ns);
   return true;
 }
 
@@ -773,12 +772,12 @@ void Engine::OnCommand(const Envelope& e) {
                       normal.head<2>(),
                       {p.plan_x(), p.plan_y()},
                       {p.plan_normal_x(), p.plan_normal_y()}};
-        error = tracker_.ApplyWallPick(pick, latest_stamp_ns_);
+        error = tracker_.ApplyWallPick(pick, clock_.newest_ns());
         if (error.empty()) done = "wall pick applied";
         break;
       }
       case v1::Command::kFlip:
-        error = tracker_.Flip(latest_stamp_ns_);
+        error = tracker_.Flip(clock_.newest_ns());
         if (error.empty()) done = "flipped";
         break;
       case v1::Command::kReset:
@@ -854,14 +853,14 @@ void Engine::OnGlobalSearchDone(const Done& done) {
 
 std::optional<Engine::Job> Engine::TakeDueJob() {
   if (running_) return std::nullopt;
-  if (plan_.global && tracker_.GlobalSearchDue(latest_stamp_ns_, store_.points())) {
+  if (plan_.global && tracker_.GlobalSearchDue(clock_.newest_ns(), store_.points())) {
     // Where on the whole plan do the recent walls fit: to place the wearer, or to check
     // the place in use (the tracker says which, and how often).
-    tracker_.MarkGlobalSearchStarted(latest_stamp_ns_);
+    tracker_.MarkGlobalSearchStarted(clock_.newest_ns());
     Job job;
     const double window_s = tracker_.options().global_window_s;
     const int64_t since =
-        window_s > 0 ? latest_stamp_ns_ - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
+        window_s > 0 ? clock_.newest_ns() - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
     job.cloud = store_.Snapshot(config_.tracking().max_points(), nullptr, 0, since);
     if (job.cloud.size() < tracker_.GlobalMinPoints()) return std::nullopt;
     // Nothing scanned or dropped since the last search (the wearer stands, or walks
@@ -888,32 +887,32 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
     job.initial = tracker_.alignment().T_plan_slam;
     job.version = tracker_.alignment().version;
     if (tracker_.leading_place()) job.seeds.push_back(*tracker_.leading_place());
-    job.stamp_ns = latest_stamp_ns_;
+    job.stamp_ns = clock_.newest_ns();
     running_ = true;
     return job;
   }
-  if (!tracker_.RegistrationDue(latest_stamp_ns_, store_.points(), store_.new_points()))
+  if (!tracker_.RegistrationDue(clock_.newest_ns(), store_.points(), store_.new_points()))
     return std::nullopt;
   store_.TakeNewPoints();
   Job job;
   const TrackerOptions& options = tracker_.options();
   const double window_s = config_.tracking().window_s();
   const int64_t min_stamp =
-      window_s > 0 ? latest_stamp_ns_ - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
+      window_s > 0 ? clock_.newest_ns() - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
   job.cloud = store_.Snapshot(config_.tracking().max_points(), &job.normals,
                               options.local_meshes ? last_run_generation_ : 0, min_stamp);
   // The live points were enough, but not the distinct ones in the window (a voxel keeps
   // one): try again as soon as new walls come, not a whole interval later (a wrong pick
   // is told by its first check).
   if (job.cloud.size() < tracker_.MinPoints()) return std::nullopt;
-  tracker_.MarkRegistrationStarted(latest_stamp_ns_);
+  tracker_.MarkRegistrationStarted(clock_.newest_ns());
   // A first place after a pick must not walk the wearer through walls (Tracker::Offer).
   if (tracker_.on_pick() || tracker_.path_crossed()) job.path = PathSince(min_stamp);
   const double refine_s = config_.tracking().refine_window_s();
   if (refine_s > 0) {
     job.recent = store_.Snapshot(config_.tracking().max_points(), &job.recent_normals,
                                  options.local_meshes ? last_run_generation_ : 0,
-                                 latest_stamp_ns_ - static_cast<int64_t>(refine_s * 1e9));
+                                 clock_.newest_ns() - static_cast<int64_t>(refine_s * 1e9));
     if (job.recent.size() < tracker_.MinPoints() / 2) {
       job.recent.clear();
       job.recent_normals.clear();
@@ -925,7 +924,7 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
   job.options = tracker_.NextRegistrationOptions();
   job.initial = tracker_.alignment().T_plan_slam;
   job.version = tracker_.alignment().version;
-  job.stamp_ns = latest_stamp_ns_;
+  job.stamp_ns = clock_.newest_ns();
   job.turn = config_.tracking().turn_to_walls() &&
              tracker_.alignment().source != AlignmentSource::kRegistration &&
              job.cloud.size() >= options.min_points;
@@ -1010,7 +1009,7 @@ v1::StateSnapshot Engine::SaveState() const {
   s.set_plan_path(plan_path_);
   s.set_plan_digest(plan_.digest);
   s.set_floor(floor_);
-  s.set_latest_stamp_ns(latest_stamp_ns_);
+  s.set_latest_stamp_ns(clock_.newest_ns());
   s.set_stamp_offset_ns(clock_.offset_ns());
   const TrackerState t = tracker_.SaveState();
   *s.mutable_alignment() = ToProto(t.alignment, floor_);
@@ -1127,8 +1126,7 @@ std::string Engine::RestoreState(const v1::StateSnapshot& s) {
   store_.Clear();
   for (auto& [m, points] : meshes) store_.Upsert(m->mesh_id(), std::move(points), m->stamp_ns());
   store_.TakeNewPoints();
-  latest_stamp_ns_ = std::max(latest_stamp_ns_, s.latest_stamp_ns());
-  clock_.Restore(latest_stamp_ns_, s.stamp_offset_ns(), now_ns_());
+  clock_.Restore(std::max(clock_.newest_ns(), s.latest_stamp_ns()), s.stamp_offset_ns(), now_ns_());
   return {};
 }
 

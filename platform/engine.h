@@ -254,9 +254,8 @@ class Engine {
   };
   std::optional<LastRegistration> last_registration_;
   // The device's stamps as one forward timeline; every stamp below is on it, except the
-  // source stamps of published poses.
+  // source stamps of published poses. Its newest stamp is the scheduling clock.
   DeviceClock clock_;
-  int64_t latest_stamp_ns_ = 0;                // newest headset stamp seen: the scheduling clock
   std::optional<int64_t> last_pose_stamp_ns_;  // of the newest pose taken
   struct Throttle {
     int64_t next_ns = 0;

@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <string>
 #include <vector>
@@ -90,6 +91,12 @@ class DaemonTest : public ::testing::Test {
       const auto code = daemon_->Terminate(seconds(2));
       EXPECT_EQ(code, 0) << "floorposed did not stop cleanly within 2 s after SIGTERM";
     }
+  }
+
+  // The latest launch's log.
+  std::string Log() const {
+    std::ifstream in(log_path_);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   }
 
   // Waits for a status that satisfies pred (statuses come every 0.1 s).

@@ -55,10 +55,6 @@ class RecoveryTest : public DaemonTest {
     ASSERT_NO_FATAL_FAILURE(PickAndWalk(walk));
     ASSERT_EQ(daemon_->Terminate(seconds(5)), 0);
   }
-  std::string Log() const {
-    std::ifstream in(log_path_);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  }
   // Restarts floorposed and waits for its first status.
   void Restart() {
     link_->status.reset();
