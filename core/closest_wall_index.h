@@ -38,6 +38,7 @@ class ClosestWallIndex {
   std::optional<ClosestWall> Query(const Eigen::Vector2d& p) const;
 
   const FloorPlan& plan() const { return plan_; }
+  double max_distance_m() const { return options_.max_distance_m; }
   size_t MemoryBytes() const;
   size_t cells() const { return cell_begin_.size() - 1; }
 

@@ -320,7 +320,7 @@ void Daemon::MaybeSnapshot(int64_t now_ns, bool force) {
   if (snapshot_path_.empty()) return;
   // A new alignment within a second (it is what a restart must not lose), new walls only
   // every snapshot_period_s (a restart re-scans them anyway), anything on force.
-  const uint64_t version = engine_->tracker().alignment().version;
+  const uint64_t version = engine_->alignment().version;
   const uint64_t deltas = engine_->counters().mesh_deltas_in();
   const bool new_alignment = version != saved_version_, new_walls = deltas != saved_deltas_;
   if (!new_alignment && !new_walls) return;

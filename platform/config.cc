@@ -100,6 +100,31 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
              "permissions_ca, governance and permissions, or none";
   }
   if (c.dds().device_id().empty()) return "dds.device_id must not be empty";
+  {
+    const v1::MclConfig& m = c.tracking().mcl();
+    for (const auto& [value, name] :
+         {std::pair{m.measurement().sigma_m(), "tracking.mcl.measurement.sigma_m"},
+          std::pair{m.measurement().independent_points(),
+                    "tracking.mcl.measurement.independent_points"},
+          std::pair{m.measurement().window_s(), "tracking.mcl.measurement.window_s"},
+          std::pair{m.measurement().update_interval_s(), "tracking.mcl.measurement.update_interval_s"},
+          std::pair{m.samples().kld_error(), "tracking.mcl.samples.kld_error"},
+          std::pair{m.recovery().pick_sigma_m(), "tracking.mcl.recovery.pick_sigma_m"},
+          std::pair{m.recovery().pick_sigma_deg(), "tracking.mcl.recovery.pick_sigma_deg"},
+          std::pair{m.recovery().slow_s(), "tracking.mcl.recovery.slow_s"},
+          std::pair{m.recovery().fast_s(), "tracking.mcl.recovery.fast_s"},
+          std::pair{m.recovery().search_interval_s(), "tracking.mcl.recovery.search_interval_s"},
+          std::pair{m.publish().within_m(), "tracking.mcl.publish.within_m"}})
+      if (!(value > 0 && std::isfinite(value))) return std::string(name) + " must be positive";
+    if (!(m.measurement().clutter() > 0 && m.measurement().clutter() < 1))
+      return "tracking.mcl.measurement.clutter must be in (0, 1)";
+    if (!(m.samples().min_samples() >= 1 && m.samples().min_samples() <= m.samples().max_samples() &&
+          m.samples().max_samples() <= 100000))
+      return "tracking.mcl.samples must have 1 <= min_samples <= max_samples <= 100000";
+    if (!(m.publish().degraded() >= 0 && m.publish().degraded() <= m.publish().reliable() &&
+          m.publish().reliable() <= 1))
+      return "tracking.mcl.publish must have 0 <= degraded <= reliable <= 1";
+  }
   if (!(c.walls().density_per_m2() > 0 && c.walls().density_per_m2() <= 10000))
     return "walls.density_per_m2 must be in (0, 10000]";
   if (!(c.walls().max_normal_up() > 0 && c.walls().max_normal_up() < 1))
@@ -248,6 +273,33 @@ std::string ResolvedConfigText(const v1::FloorposedConfig& config) {
   std::string out;
   pb::TextFormat::PrintToString(copy, &out);
   return out;
+}
+
+tracking::MclOptions ToMclOptions(const v1::FloorposedConfig& c) {
+  const v1::MclConfig& m = c.tracking().mcl();
+  tracking::MclOptions o;
+  o.motion.position_m_per_sqrt_m = m.motion().position_m_per_sqrt_m();
+  o.motion.heading_rad_per_sqrt_m = m.motion().heading_deg_per_sqrt_m() * M_PI / 180;
+  o.motion.heading_per_turn = m.motion().heading_per_turn();
+  o.measurement.sigma_m = m.measurement().sigma_m();
+  o.measurement.clutter = m.measurement().clutter();
+  o.measurement.independent_points = m.measurement().independent_points();
+  o.window_s = m.measurement().window_s();
+  o.update_interval_s = m.measurement().update_interval_s();
+  o.samples.min_samples = m.samples().min_samples();
+  o.samples.max_samples = m.samples().max_samples();
+  o.samples.kld_error = m.samples().kld_error();
+  o.pick_sigma_m = m.recovery().pick_sigma_m();
+  o.pick_sigma_rad = m.recovery().pick_sigma_deg() * M_PI / 180;
+  o.recovery.slow_s = m.recovery().slow_s();
+  o.recovery.fast_s = m.recovery().fast_s();
+  o.recovery.search_share = m.recovery().search_share();
+  o.recovery.search_interval_s = m.recovery().search_interval_s();
+  o.publish.within_m = m.publish().within_m();
+  o.publish.reliable = m.publish().reliable();
+  o.publish.degraded = m.publish().degraded();
+  o.icp = ToTrackerOptions(c).icp;
+  return o;
 }
 
 TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {

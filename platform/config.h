@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/tracker.h"
+#include "core/tracking/mcl.h"
 #include "core/wall_extractor.h"
 #include "floorpose/v1/config.pb.h"
 #include "floorpose/v1/floorpose.pb.h"
@@ -31,6 +32,8 @@ std::string LoopbackDdsConfigText(uint32_t domain, const std::string& device_id,
 std::string ResolvedConfigText(const v1::FloorposedConfig& config);
 
 TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& config);
+// The MCL estimator's options (tracking.estimator MCL), ICP's from `icp`.
+tracking::MclOptions ToMclOptions(const v1::FloorposedConfig& config);
 // The configuration a device moving on this odometry is tracked with: for WHEEL,
 // tracking.wheel_odometry replaces the tracking options of the same names.
 v1::FloorposedConfig ForOdometry(v1::FloorposedConfig config, v1::HeadsetPose::Odometry odometry);

@@ -105,7 +105,10 @@ Engine::Engine(v1::FloorposedConfig config, Publish publish, std::function<int64
       store_(config_.tracking().snapshot_voxel_m()),
       floor_(config_.floor()),
       clock_({static_cast<int64_t>(config_.limits().max_future_s() * 1e9),
-              static_cast<int64_t>(config_.limits().restart_gap_s() * 1e9)}) {}
+              static_cast<int64_t>(config_.limits().restart_gap_s() * 1e9)}) {
+  if (config_.tracking().estimator() == v1::TrackingConfig::MCL)
+    mcl_ = std::make_unique<tracking::MclTracker>(ToMclOptions(config_));
+}
 
 std::string Engine::Start() {
   if (config_.plan_path().empty()) return {};
@@ -154,6 +157,12 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
     }
     done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
     done.result.points = static_cast<uint32_t>(job.cloud.size());
+  } else if (job.mcl && job.index) {
+    const int64_t t0 = now_ns();
+    done.mcl = tracking::RunMclUpdate(std::move(*job.mcl), job.cloud, *job.index, job.mcl_options);
+    job.mcl.reset();
+    done.result = done.mcl->icp;
+    done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
   } else if (job.index) {
     const int64_t t0 = now_ns();
     if (job.search_recent && job.options.search_window_m > 0 && !job.recent.empty()) {
@@ -296,7 +305,8 @@ Engine::PlanAssets Engine::BuildPlan(const v1::FloorposedConfig& config,
                parsed.plan.max.x() - parsed.plan.min.x(), parsed.plan.max.y() - parsed.plan.min.y(),
                static_cast<double>(a.index->MemoryBytes()) / 1e6);
   if (!parsed.frame.empty()) spdlog::info("floor plan {}: {}", file, parsed.frame);
-  if (config.tracking().global_search()) {
+  if (config.tracking().global_search() ||
+      config.tracking().estimator() == v1::TrackingConfig::MCL) {
     GlobalSearchOptions search;
     search.crowd_ratio = config.tracking().global_crowded_ratio();
     a.global = std::make_shared<GlobalSearchCache>(parsed.plan, search);
@@ -335,6 +345,8 @@ void Engine::UsePlan(PlanAssets assets, bool another_floor) {
     tracker_.ChangeFloor(plan_.index);
   else
     tracker_.SetPlan(plan_.index);
+  if (mcl_ && another_floor) mcl_->ChangeFloor(plan_.index);
+  if (mcl_ && !another_floor) mcl_->SetPlan(plan_.index);
   last_plan_pose_.reset();
   // Its explored map at once: the plan's rooms, or the floor as it was left.
   if (plan_.explored) explored_sent_ = plan_.explored->revision() - 1;
@@ -408,10 +420,10 @@ std::string Engine::PlanRoute(const v1::Command::Route& request, v1::RouteReply*
 }
 
 void Engine::ExploreWalls(const std::vector<WallPoint>& points) {
-  if (!plan_.explored || !last_plan_pose_ || !tracker_.has_alignment() ||
+  if (!plan_.explored || !last_plan_pose_ || alignment().version == 0 ||
       last_plan_pose_->reliability().flag() != v1::Reliability::RELIABLE)
     return;
-  const Se2& T = tracker_.alignment().T_plan_slam;
+  const Se2& T = alignment().T_plan_slam;
   std::vector<Eigen::Vector2d> plan;
   plan.reserve(points.size());
   for (const WallPoint& w : points) plan.push_back(T * w.p.cast<double>());
@@ -606,12 +618,12 @@ void Engine::OnHeadsetPose(const Envelope& e) {
                      "tracked",
                      source_stamp_ns,
                      1e-9 * static_cast<double>(*last_pose_stamp_ns_ - pose.stamp_ns)));
-    est = tracker_.Project(pose.pose_slam);
+    est = mcl_ ? mcl_->Project(pose.pose_slam) : tracker_.Project(pose.pose_slam);
   } else {
     last_pose_stamp_ns_ = pose.stamp_ns;
     eye_z_ = pose.pose_slam.z;
     FollowFloors(pose);
-    est = tracker_.Correct(pose.pose_slam);
+    est = mcl_ ? mcl_->Correct(pose.pose_slam) : tracker_.Correct(pose.pose_slam);
   }
   if (!tracker_.has_plan()) {
     counters_.set_poses_without_plan(counters_.poses_without_plan() + 1);
@@ -686,9 +698,9 @@ v1::PlanPose Engine::ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) c
 }
 
 void Engine::PublishTrack() {
-  if (recent_.empty() || !tracker_.has_alignment()) return;
+  if (recent_.empty() || alignment().version == 0) return;
   v1::PlanTrack track;
-  const AlignmentState& a = tracker_.alignment();
+  const AlignmentState& a = alignment();
   track.set_alignment_version(a.version);
   track.set_floor(floor_);
   for (const auto& [slam, published] : recent_) {
@@ -772,16 +784,18 @@ void Engine::OnCommand(const Envelope& e) {
                       normal.head<2>(),
                       {p.plan_x(), p.plan_y()},
                       {p.plan_normal_x(), p.plan_normal_y()}};
-        error = tracker_.ApplyWallPick(pick, clock_.newest_ns());
+        error = mcl_ ? mcl_->ApplyWallPick(pick, clock_.newest_ns())
+                     : tracker_.ApplyWallPick(pick, clock_.newest_ns());
         if (error.empty()) done = "wall pick applied";
         break;
       }
       case v1::Command::kFlip:
-        error = tracker_.Flip(clock_.newest_ns());
+        error = mcl_ ? mcl_->Flip(clock_.newest_ns()) : tracker_.Flip(clock_.newest_ns());
         if (error.empty()) done = "flipped";
         break;
       case v1::Command::kReset:
         tracker_.Reset();
+        if (mcl_) mcl_->Reset();
         store_.Clear();
         clock_.Reset();
         done = "reset: alignment, wall store and the headset's clock cleared";
@@ -851,43 +865,50 @@ void Engine::OnGlobalSearchDone(const Done& done) {
   PublishTrack();
 }
 
+std::optional<Engine::Job> Engine::SearchJob(int64_t since, size_t min_points) {
+  Job job;
+  job.cloud = store_.Snapshot(config_.tracking().max_points(), nullptr, 0, since);
+  if (job.cloud.size() < min_points) return std::nullopt;
+    // Nothing scanned or dropped since the last search (the wearer stands, or walks
+    // where the headset has meshed everything): the same places again, no new evidence.
+  SearchedWalls walls{job.cloud.size(), Eigen::Vector2d::Zero(), alignment().version};
+  for (const Eigen::Vector2d& p : job.cloud) walls.sum += p;
+  if (last_searched_ == walls) return std::nullopt;
+  last_searched_ = walls;
+  job.path = PathSince(since);
+  job.global = plan_.global;
+  job.index = tracker_.index();
+  job.options.icp = tracker_.options().icp;
+  job.refine.cap_m = tracker_.options().score_cap_m;
+  job.refine.path_margin_m = tracker_.options().path_check_margin_m;
+  job.refine.min_inliers = tracker_.options().global_place_min_inliers;
+  if (tracker_.options().global_max_crossings > 0)
+    job.refine.max_crossings = tracker_.options().global_max_crossings;
+  job.refine.excuse_crossings_ratio = tracker_.options().global_excuse_crossings;
+  job.refine.sight_reach_m = tracker_.options().global_sight_reach_m;
+  job.refine.unseen_reach_m = tracker_.options().global_unseen_reach_m;
+  job.refine.unseen_allowance = tracker_.options().global_unseen_allowance;
+  if (tracker_.options().global_alike_share > 0)
+    job.refine.alike_reach_m = tracker_.options().global_sight_reach_m;
+  job.initial = alignment().T_plan_slam;
+  job.version = alignment().version;
+  job.stamp_ns = clock_.newest_ns();
+  return job;
+}
+
 std::optional<Engine::Job> Engine::TakeDueJob() {
   if (running_) return std::nullopt;
+  if (mcl_) return TakeMclJob();
   if (plan_.global && tracker_.GlobalSearchDue(clock_.newest_ns(), store_.points())) {
     // Where on the whole plan do the recent walls fit: to place the wearer, or to check
     // the place in use (the tracker says which, and how often).
     tracker_.MarkGlobalSearchStarted(clock_.newest_ns());
-    Job job;
     const double window_s = tracker_.options().global_window_s;
     const int64_t since =
         window_s > 0 ? clock_.newest_ns() - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
-    job.cloud = store_.Snapshot(config_.tracking().max_points(), nullptr, 0, since);
-    if (job.cloud.size() < tracker_.GlobalMinPoints()) return std::nullopt;
-    // Nothing scanned or dropped since the last search (the wearer stands, or walks
-    // where the headset has meshed everything): the same places again, no new evidence.
-    SearchedWalls walls{job.cloud.size(), Eigen::Vector2d::Zero(), tracker_.alignment().version};
-    for (const Eigen::Vector2d& p : job.cloud) walls.sum += p;
-    if (last_searched_ == walls) return std::nullopt;
-    last_searched_ = walls;
-    job.path = PathSince(since);
-    job.global = plan_.global;
-    job.index = tracker_.index();
-    job.options.icp = tracker_.options().icp;
-    job.refine.cap_m = tracker_.options().score_cap_m;
-    job.refine.path_margin_m = tracker_.options().path_check_margin_m;
-    job.refine.min_inliers = tracker_.options().global_place_min_inliers;
-    if (tracker_.options().global_max_crossings > 0)
-      job.refine.max_crossings = tracker_.options().global_max_crossings;
-    job.refine.excuse_crossings_ratio = tracker_.options().global_excuse_crossings;
-    job.refine.sight_reach_m = tracker_.options().global_sight_reach_m;
-    job.refine.unseen_reach_m = tracker_.options().global_unseen_reach_m;
-    job.refine.unseen_allowance = tracker_.options().global_unseen_allowance;
-    if (tracker_.options().global_alike_share > 0)
-      job.refine.alike_reach_m = tracker_.options().global_sight_reach_m;
-    job.initial = tracker_.alignment().T_plan_slam;
-    job.version = tracker_.alignment().version;
-    if (tracker_.leading_place()) job.seeds.push_back(*tracker_.leading_place());
-    job.stamp_ns = clock_.newest_ns();
+    std::optional<Job> job = SearchJob(since, tracker_.GlobalMinPoints());
+    if (!job) return std::nullopt;
+    if (tracker_.leading_place()) job->seeds.push_back(*tracker_.leading_place());
     running_ = true;
     return job;
   }
@@ -932,6 +953,59 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
   return job;
 }
 
+std::optional<Engine::Job> Engine::TakeMclJob() {
+  const int64_t now = clock_.newest_ns();
+  const tracking::MclOptions& options = mcl_->options();
+  const auto since = [&](double window_s) { return now - static_cast<int64_t>(window_s * 1e9); };
+  if (plan_.global && mcl_->SearchDue(now, store_.points())) {
+    // Where on the whole plan do the walls fit: to seed the belief, or to reseed it.
+    mcl_->MarkSearchStarted(now);
+    const double window_s = tracker_.options().global_window_s;
+    std::optional<Job> job =
+        SearchJob(window_s > 0 ? since(window_s) : INT64_MIN, options.search_min_points);
+    if (job) {
+      running_ = true;
+      return job;
+    }
+  }
+  if (!mcl_->UpdateDue(now, store_.points())) return std::nullopt;
+  Job job;
+  job.cloud = store_.Snapshot(config_.tracking().max_points(), nullptr, 0, since(options.window_s));
+  if (job.cloud.size() < options.min_points) return std::nullopt;
+  store_.TakeNewPoints();
+  job.mcl = mcl_->PrepareUpdate(now);
+  job.mcl_options = options;
+  job.index = tracker_.index();
+  job.version = alignment().version;
+  job.stamp_ns = now;
+  running_ = true;
+  return job;
+}
+
+void Engine::OnMclDone(Done done) {
+  if (done.job.global) {
+    const std::string what = mcl_->OfferPlaces(done.places, done.job.stamp_ns);
+    spdlog::info("global search: {} points, {} place(s), {:.1f} ms: {}", done.job.cloud.size(),
+                 done.places.size(), done.result.time_ms, what);
+    PublishAlignment();
+    return;
+  }
+  if (!done.mcl) return;
+  counters_.set_registrations(counters_.registrations() + 1);
+  const tracking::MclUpdateResult& u = *done.mcl;
+  const size_t samples = u.belief.size();
+  const bool taken = mcl_->FinishUpdate(std::move(*done.mcl), done.job.stamp_ns);
+  const Reliability r = mcl_->CurrentReliability();
+  last_registration_ = {done.result, taken, taken ? r.reason : "a new prior came meanwhile"};
+  spdlog::debug("belief: {} samples, {} place(s), fit {:.2f}, polished {}, {:.1f} ms: {:.0f}% {}",
+                samples, u.places, u.fit, u.polished, done.result.time_ms, 100 * r.probability,
+                r.reason);
+  if (!taken) return;
+  counters_.set_registrations_accepted(counters_.registrations_accepted() + 1);
+  PublishAlignment();
+  PublishTrack();
+}
+
 std::vector<Eigen::Vector2d> Engine::PathSince(int64_t since_ns) const {
   std::vector<Eigen::Vector2d> path;
   for (const auto& [stamp, position] : path_)
@@ -941,6 +1015,7 @@ std::vector<Eigen::Vector2d> Engine::PathSince(int64_t since_ns) const {
 
 void Engine::OnRegistrationDone(Done done) {
   running_ = false;
+  if (mcl_) return OnMclDone(std::move(done));
   if (done.job.global) {
     OnGlobalSearchDone(done);
     return;
@@ -971,7 +1046,7 @@ void Engine::OnRegistrationDone(Done done) {
 }
 
 void Engine::PublishAlignment() {
-  publish_(Topic::kAlignment, ToProto(tracker_.alignment(), floor_));
+  publish_(Topic::kAlignment, ToProto(alignment(), floor_));
 }
 
 void Engine::PublishStatus(const std::string& message) {
@@ -980,7 +1055,7 @@ void Engine::PublishStatus(const std::string& message) {
 
 v1::DaemonStatus Engine::Status(const std::string& message) const {
   v1::DaemonStatus s;
-  s.set_state(ToProto(tracker_.state()));
+  s.set_state(ToProto(state()));
   s.set_plan_id(tracker_.has_plan() ? tracker_.index()->plan().id : "");
   s.set_live_meshes(store_.meshes());
   s.set_wall_points(store_.points());
@@ -991,15 +1066,15 @@ v1::DaemonStatus Engine::Status(const std::string& message) const {
     if (!last_registration_->accepted)
       s.mutable_last_registration()->set_reason(last_registration_->why);
   }
-  s.set_alignment_version(tracker_.alignment().version);
+  s.set_alignment_version(alignment().version);
   s.set_stamp_ns(now_ns_());
   s.set_message(message);
-  *s.mutable_reliability() = ToProto(tracker_.CurrentReliability());
+  *s.mutable_reliability() = ToProto(reliability());
   return s;
 }
 
 std::string Engine::StatusLine() const {
-  return std::string(ToString(tracker_.state())) + ", " + std::to_string(store_.points()) +
+  return std::string(ToString(state())) + ", " + std::to_string(store_.points()) +
          " wall points, " + std::to_string(counters_.plan_poses_out()) + " plan poses";
 }
 
@@ -1011,7 +1086,7 @@ v1::StateSnapshot Engine::SaveState() const {
   s.set_floor(floor_);
   s.set_latest_stamp_ns(clock_.newest_ns());
   s.set_stamp_offset_ns(clock_.offset_ns());
-  const TrackerState t = tracker_.SaveState();
+  const TrackerState t = mcl_ ? mcl_->SaveState() : tracker_.SaveState();
   *s.mutable_alignment() = ToProto(t.alignment, floor_);
   s.set_next_version(t.next_version);
   for (int r = 0; r < 3; ++r)
@@ -1055,6 +1130,7 @@ std::string Engine::RestoreState(const v1::StateSnapshot& s) {
     if (switched) {
       if (configured_plan.empty()) {
         tracker_.SetPlan(nullptr);
+        if (mcl_) mcl_->SetPlan(nullptr);
         plan_ = {};
         plan_path_.clear();
       } else {
@@ -1121,7 +1197,8 @@ std::string Engine::RestoreState(const v1::StateSnapshot& s) {
         (t.pick_plan_point && !within(*t.pick_plan_point, 2 * max_abs)) ||
         !(t.P.cwiseAbs().maxCoeff() <= 1e6))
       return refuse("with an alignment or its filter out of range");
-    if (const std::string e = tracker_.RestoreState(t); !e.empty()) return refuse("with " + e);
+    if (const std::string e = mcl_ ? mcl_->RestoreState(t) : tracker_.RestoreState(t); !e.empty())
+      return refuse("with " + e);
   }
   store_.Clear();
   for (auto& [m, points] : meshes) store_.Upsert(m->mesh_id(), std::move(points), m->stamp_ns());

@@ -22,6 +22,7 @@
 #include "core/rooms.h"
 #include "core/route_planner.h"
 #include "core/tracker.h"
+#include "core/tracking/mcl.h"
 #include "core/wall_store.h"
 #include "floorpose/v1/config.pb.h"
 #include "floorpose/v1/floorpose.pb.h"
@@ -81,6 +82,9 @@ class Engine {
     std::vector<Eigen::Vector2d> path;
     // Places a search refines with the grid's (the previous search's best).
     std::vector<Se2> seeds;
+    // Set: an update of the MCL belief (tracking.estimator MCL) on `cloud`.
+    std::optional<tracking::MclUpdate> mcl;
+    tracking::MclOptions mcl_options;
   };
   struct Done {
     Job job;
@@ -91,6 +95,7 @@ class Engine {
     // ...and the grid's scores of its places when it returned as many as it may (more
     // may score as well), best first; else empty.
     std::vector<double> full_grid_scores;
+    std::optional<tracking::MclUpdateResult> mcl;  // of an MCL update
   };
   // Runs a job; now_ns() is read before and after to fill result.time_ms.
   static Done Run(Job job, const std::function<int64_t()>& now_ns);
@@ -141,6 +146,14 @@ class Engine {
 
   const v1::DaemonStatus::Counters& counters() const { return counters_; }
   const Tracker& tracker() const { return tracker_; }
+  // The estimator in use (tracking.estimator): its alignment, state and reliability.
+  const AlignmentState& alignment() const {
+    return mcl_ ? mcl_->alignment() : tracker_.alignment();
+  }
+  TrackState state() const { return mcl_ ? mcl_->state() : tracker_.state(); }
+  Reliability reliability() const {
+    return mcl_ ? mcl_->CurrentReliability() : tracker_.CurrentReliability();
+  }
   const WallStore& store() const { return store_; }
   // The configuration in use: as configured, for the device's odometry (ForOdometry).
   const v1::FloorposedConfig& config() const { return config_; }
@@ -175,6 +188,13 @@ class Engine {
   void FollowFloors(const DecodedPose& pose);
   void ChangeFloor(const FloorEntry& to, double slam_z, double height_m);
   void OnGlobalSearchDone(const Done& done);
+  // The MCL estimator's jobs (an update of its belief, or a search of the plan) and their
+  // results.
+  std::optional<Job> TakeMclJob();
+  void OnMclDone(Done done);
+  // A search of the whole plan over the walls since `since_ns`; nothing when those walls
+  // were searched already or are too few.
+  std::optional<Job> SearchJob(int64_t since_ns, size_t min_points);
   // The wearer's slam positions (path_) stamped since_ns or later, in order.
   std::vector<Eigen::Vector2d> PathSince(int64_t since_ns) const;
   // The recent trajectory under the alignment in use (PlanTrack).
@@ -206,6 +226,7 @@ class Engine {
   HeadsetFrame frame_;
   WallExtractionOptions wall_options_;
   Tracker tracker_;
+  std::unique_ptr<tracking::MclTracker> mcl_;  // tracking.estimator MCL: in use instead
   WallStore store_;
   std::string floor_;
   std::string plan_path_;  // as loaded (a plan or a .floors set), with its FloorPlanDigest

@@ -1,0 +1,159 @@
+#include "core/tracking/belief.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <unordered_set>
+
+#include "core/alignment_filter.h"
+
+namespace floorpose::tracking {
+
+void Belief::AddGaussian(const Se2& T, const Eigen::Matrix3d& P, const Eigen::Vector2d& pivot,
+                         size_t n, double log_weight, SplitMix64& rng) {
+  Eigen::LLT<Eigen::Matrix3d> llt(P);
+  const Eigen::Matrix3d L =
+      llt.info() == Eigen::Success ? Eigen::Matrix3d(llt.matrixL()) : Eigen::Matrix3d::Zero();
+  samples_.reserve(samples_.size() + n);
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d z(rng.Gaussian(), rng.Gaussian(), rng.Gaussian());
+    // The first sample is the mean itself: a belief of a few samples keeps its centre.
+    const Eigen::Vector3d delta = i == 0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(L * z);
+    samples_.push_back({Perturb(T, delta, pivot), log_weight});
+  }
+}
+
+std::vector<double> Belief::Weights() const {
+  std::vector<double> w(samples_.size());
+  double top = -std::numeric_limits<double>::infinity();
+  for (const Sample& s : samples_) top = std::max(top, s.log_weight);
+  double sum = 0;
+  for (size_t i = 0; i < w.size(); ++i) sum += w[i] = std::exp(samples_[i].log_weight - top);
+  for (double& x : w) x = sum > 0 ? x / sum : 1.0 / static_cast<double>(w.size());
+  return w;
+}
+
+void Belief::Normalize() {
+  const std::vector<double> w = Weights();
+  for (size_t i = 0; i < w.size(); ++i)
+    samples_[i].log_weight = w[i] > 0 ? std::log(w[i]) : -std::numeric_limits<double>::infinity();
+}
+
+double Belief::EffectiveSize() const {
+  double sum2 = 0;
+  for (double w : Weights()) sum2 += w * w;
+  return sum2 > 0 ? 1.0 / sum2 : 0.0;
+}
+
+size_t KldSamples(size_t bins, double error) {
+  if (bins <= 1) return 1;
+  const double k = static_cast<double>(bins - 1);
+  const double z = 2.326;  // upper 1% quantile of the standard normal
+  const double a = 2.0 / (9.0 * k);
+  const double n = k / (2.0 * error) * std::pow(1.0 - a + std::sqrt(a) * z, 3);
+  return static_cast<size_t>(std::ceil(n));
+}
+
+void Belief::Resample(const SampleBounds& bounds, const Eigen::Vector2d& wearer_slam,
+                      SplitMix64& rng) {
+  if (samples_.empty()) return;
+  const std::vector<double> w = Weights();
+  std::vector<Sample> out;
+  out.reserve(bounds.max_samples);
+  std::unordered_set<uint64_t> bins;
+  auto bin_of = [&](const Se2& T) {
+    const Eigen::Vector2d p = T * wearer_slam;
+    const auto ix = static_cast<int64_t>(std::floor(p.x() / bounds.bin_m));
+    const auto iy = static_cast<int64_t>(std::floor(p.y() / bounds.bin_m));
+    const auto ia = static_cast<int64_t>(std::floor((T.theta + M_PI) / bounds.bin_rad));
+    return (static_cast<uint64_t>(ix & 0x1fffff) << 42) ^
+           (static_cast<uint64_t>(iy & 0x1fffff) << 21) ^ static_cast<uint64_t>(ia & 0x1fffff);
+  };
+  // Draws in passes of low-variance resampling (one random offset, evenly spaced picks)
+  // until the count KLD-sampling asks for the bins filled so far is reached.
+  size_t target = bounds.min_samples;
+  while (out.size() < std::min(target, bounds.max_samples)) {
+    const size_t pass = std::min(target, bounds.max_samples) - out.size();
+    const double step = 1.0 / static_cast<double>(pass);
+    double u = rng.Uniform() * step, c = w[0];
+    size_t i = 0;
+    for (size_t m = 0; m < pass; ++m, u += step) {
+      while (u > c && i + 1 < w.size()) c += w[++i];
+      out.push_back({samples_[i].T_plan_slam, 0.0});
+      bins.insert(bin_of(samples_[i].T_plan_slam));
+    }
+    target = std::max(bounds.min_samples, KldSamples(bins.size(), bounds.kld_error));
+  }
+  const double lw = -std::log(static_cast<double>(out.size()));
+  for (Sample& s : out) s.log_weight = lw;
+  samples_ = std::move(out);
+}
+
+Mode Belief::LeadingMode(const Eigen::Vector2d& wearer_slam, double radius_m,
+                         double radius_rad) const {
+  Mode best;
+  if (samples_.empty()) return best;
+  const std::vector<double> w = Weights();
+  std::vector<Eigen::Vector2d> at(samples_.size());
+  for (size_t i = 0; i < at.size(); ++i) at[i] = samples_[i].T_plan_slam * wearer_slam;
+  auto near = [&](size_t i, size_t j) {
+    return (at[i] - at[j]).squaredNorm() <= radius_m * radius_m &&
+           std::abs(WrapAngle(samples_[i].T_plan_slam.theta - samples_[j].T_plan_slam.theta)) <=
+               radius_rad;
+  };
+  // Candidates: the heaviest samples and an even spread of the rest, at most 64.
+  std::vector<size_t> order(samples_.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  const size_t heavy = std::min<size_t>(32, order.size());
+  std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(heavy), order.end(),
+                    [&](size_t a, size_t b) { return w[a] > w[b]; });
+  std::vector<size_t> candidates(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(heavy));
+  const size_t stride = std::max<size_t>(1, samples_.size() / 32);
+  for (size_t i = 0; i < samples_.size(); i += stride) candidates.push_back(i);
+  size_t centre = candidates[0];
+  for (size_t c : candidates) {
+    double mass = 0;
+    for (size_t j = 0; j < samples_.size(); ++j)
+      if (near(c, j)) mass += w[j];
+    if (mass > best.mass) {
+      best.mass = mass;
+      centre = c;
+    }
+  }
+  // The weighted mean about the centre sample, as a perturbation at the wearer.
+  const Se2& T0 = samples_[centre].T_plan_slam;
+  const Eigen::Vector2d pivot = at[centre];
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  double sum = 0;
+  for (size_t j = 0; j < samples_.size(); ++j) {
+    if (!near(centre, j)) continue;
+    mean += w[j] * Difference(samples_[j].T_plan_slam, T0, pivot);
+    sum += w[j];
+  }
+  best.T_plan_slam = sum > 0 ? Perturb(T0, mean / sum, pivot) : T0;
+  return best;
+}
+
+double Belief::MassWithin(const Eigen::Vector2d& wearer_slam, const Eigen::Vector2d& plan_point,
+                          double radius_m) const {
+  const std::vector<double> w = Weights();
+  double mass = 0;
+  for (size_t i = 0; i < w.size(); ++i)
+    if ((samples_[i].T_plan_slam * wearer_slam - plan_point).squaredNorm() <= radius_m * radius_m)
+      mass += w[i];
+  return mass;
+}
+
+Eigen::Matrix3d Belief::Covariance(const Se2& mean, const Eigen::Vector2d& wearer_slam) const {
+  const std::vector<double> w = Weights();
+  const Eigen::Vector2d pivot = mean * wearer_slam;
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (size_t i = 0; i < w.size(); ++i) {
+    const Eigen::Vector3d d = Difference(samples_[i].T_plan_slam, mean, pivot);
+    C += w[i] * d * d.transpose();
+  }
+  return C;
+}
+
+}  // namespace floorpose::tracking

@@ -1,0 +1,78 @@
+// The belief over the alignment T_plan_slam: weighted samples that can hold several
+// places at once (Monte Carlo localization, Probabilistic Robotics chapter 8), resampled
+// with KLD-sampling (Fox 2003) so that a belief spread over many places keeps many
+// samples and a converged one few.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <vector>
+
+#include "core/random.h"
+#include "core/se2.h"
+
+namespace floorpose::tracking {
+
+struct Sample {
+  Se2 T_plan_slam;
+  double log_weight = 0;
+};
+
+struct SampleBounds {
+  size_t min_samples = 200;
+  size_t max_samples = 3000;
+  // KLD-sampling: the error bound and the histogram its count is taken over (the wearer's
+  // plan position and heading, at these bins).
+  double kld_error = 0.05;
+  double bin_m = 0.5;
+  double bin_rad = 10.0 * M_PI / 180;
+};
+
+// One place the belief holds: the weighted mean of the samples near its best, and their
+// weight.
+struct Mode {
+  Se2 T_plan_slam;
+  double mass = 0;
+};
+
+class Belief {
+ public:
+  bool empty() const { return samples_.empty(); }
+  size_t size() const { return samples_.size(); }
+  const std::vector<Sample>& samples() const { return samples_; }
+  std::vector<Sample>& samples() { return samples_; }
+  void Clear() { samples_.clear(); }
+
+  // n samples about T, Gaussian with covariance P of (heading, x, y) about `pivot` (plan).
+  void AddGaussian(const Se2& T, const Eigen::Matrix3d& P, const Eigen::Vector2d& pivot, size_t n,
+                   double log_weight, SplitMix64& rng);
+
+  // Weights summing to 1 from the log weights (the largest made 0 first).
+  std::vector<double> Weights() const;
+  // Sets the log weights from normalized weights (after a resample: all equal).
+  void Normalize();
+  // The effective sample size, 1 / sum w^2, of normalized weights.
+  double EffectiveSize() const;
+
+  // Low-variance resampling (Probabilistic Robotics table 4.4) to as many samples as
+  // KLD-sampling asks for the histogram of the wearer's plan pose (`wearer_slam` under
+  // each sample), within the bounds.
+  void Resample(const SampleBounds& bounds, const Eigen::Vector2d& wearer_slam, SplitMix64& rng);
+
+  // The place with the most weight within radius_m (at the wearer) and radius_rad of one
+  // of its samples, and the weighted mean of the samples there.
+  Mode LeadingMode(const Eigen::Vector2d& wearer_slam, double radius_m, double radius_rad) const;
+  // The weight of the samples that put the wearer within radius_m of `plan_point`.
+  double MassWithin(const Eigen::Vector2d& wearer_slam, const Eigen::Vector2d& plan_point,
+                    double radius_m) const;
+  // The weighted covariance of (heading, x, y) about `mean` at the wearer.
+  Eigen::Matrix3d Covariance(const Se2& mean, const Eigen::Vector2d& wearer_slam) const;
+
+ private:
+  std::vector<Sample> samples_;
+};
+
+// KLD-sampling's sample count for k occupied bins (Fox 2003, eq. 12, z for 99%).
+size_t KldSamples(size_t bins, double error);
+
+}  // namespace floorpose::tracking

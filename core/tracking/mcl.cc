@@ -1,0 +1,350 @@
+#include "core/tracking/mcl.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+
+#include "core/alignment_filter.h"
+
+namespace floorpose::tracking {
+namespace {
+
+Eigen::Matrix3d PriorCovariance(double sigma_m, double sigma_rad) {
+  return Eigen::Vector3d(sigma_rad * sigma_rad, sigma_m * sigma_m, sigma_m * sigma_m).asDiagonal();
+}
+
+// How many distinct places hold at least `share` of the belief: leading modes taken out
+// one after another.
+size_t CountPlaces(const Belief& belief, const Eigen::Vector2d& wearer_slam, double radius_m,
+                   double radius_rad, double share) {
+  Belief rest = belief;
+  size_t places = 0;
+  double left = 1.0;
+  for (int i = 0; i < 4 && !rest.empty() && left >= share; ++i) {
+    const Mode m = rest.LeadingMode(wearer_slam, radius_m, radius_rad);
+    const double mass = m.mass * left;
+    if (mass < share) break;
+    ++places;
+    left -= mass;
+    const Eigen::Vector2d at = m.T_plan_slam * wearer_slam;
+    std::vector<Sample>& s = rest.samples();
+    s.erase(std::remove_if(s.begin(), s.end(),
+                           [&](const Sample& x) {
+                             return (x.T_plan_slam * wearer_slam - at).norm() <= radius_m &&
+                                    std::abs(WrapAngle(x.T_plan_slam.theta -
+                                                       m.T_plan_slam.theta)) <= radius_rad;
+                           }),
+            s.end());
+  }
+  return std::max<size_t>(places, 1);
+}
+
+}  // namespace
+
+MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cloud,
+                             const ClosestWallIndex& index, const MclOptions& options) {
+  MclUpdateResult out;
+  out.dt_s = u.dt_s;
+  out.belief_version = u.belief_version;
+  SplitMix64 rng(u.seed);
+  Belief& belief = u.belief;
+  const double reach = index.max_distance_m();
+  // Motion: each sample drifts about where it puts the wearer.
+  for (Sample& s : belief.samples())
+    s.T_plan_slam = options.motion.Sample(s.T_plan_slam, s.T_plan_slam * u.wearer_slam,
+                                          u.motion_sigmas, rng);
+  // Measurement: the window's new share of evidence.
+  const std::vector<Eigen::Vector2d> points = ThinCloud(cloud, 0.1, options.weigh_points);
+  const std::vector<double> prior = belief.Weights();
+  double fit = 0;
+  for (size_t i = 0; i < belief.size(); ++i) {
+    Sample& s = belief.samples()[i];
+    const double mll = options.measurement.MeanLogLikelihood(points, s.T_plan_slam, index, reach);
+    fit += prior[i] * mll;
+    s.log_weight += u.evidence * options.measurement.independent_points * mll;
+  }
+  out.fit = fit;
+  belief.Normalize();
+  if (belief.EffectiveSize() < 0.5 * static_cast<double>(belief.size()) ||
+      belief.size() > options.samples.max_samples)
+    belief.Resample(options.samples, u.wearer_slam, rng);
+  // The leading place, polished by ICP on the whole window; the polish moves the place's
+  // samples with it when it fits the walls better (a scan-matched proposal).
+  const double radius_m = options.publish.within_m;
+  const double radius_rad = 10.0 * M_PI / 180;
+  const Mode mode = belief.LeadingMode(u.wearer_slam, radius_m, radius_rad);
+  out.mode_mass = mode.mass;
+  out.published = mode.T_plan_slam;
+  out.icp = RegisterIcp(cloud, index, mode.T_plan_slam, options.icp);
+  const Eigen::Vector2d pivot = mode.T_plan_slam * u.wearer_slam;
+  const Eigen::Vector3d shift = Difference(out.icp.T_plan_slam, mode.T_plan_slam, pivot);
+  if (out.icp.converged && shift.tail<2>().norm() <= radius_m &&
+      std::abs(shift(0)) <= radius_rad &&
+      options.measurement.MeanLogLikelihood(points, out.icp.T_plan_slam, index, reach) >=
+          options.measurement.MeanLogLikelihood(points, mode.T_plan_slam, index, reach)) {
+    out.polished = true;
+    out.published = out.icp.T_plan_slam;
+    for (Sample& s : belief.samples()) {
+      const Eigen::Vector2d at = s.T_plan_slam * u.wearer_slam;
+      if ((at - pivot).norm() <= radius_m &&
+          std::abs(WrapAngle(s.T_plan_slam.theta - mode.T_plan_slam.theta)) <= radius_rad)
+        s.T_plan_slam = Perturb(s.T_plan_slam, shift, pivot);
+    }
+  }
+  out.places = CountPlaces(belief, u.wearer_slam, radius_m, radius_rad, 0.05);
+  out.belief = std::move(belief);
+  return out;
+}
+
+MclTracker::MclTracker(MclOptions options) : options_(std::move(options)) {}
+
+void MclTracker::SetPlan(std::shared_ptr<const ClosestWallIndex> index) {
+  index_ = std::move(index);
+  if (index_)
+    recovery_ = Recovery(options_.recovery, options_.measurement, index_->max_distance_m());
+  Reset();
+}
+
+void MclTracker::ChangeFloor(std::shared_ptr<const ClosestWallIndex> index) {
+  // The same x-y frame: the belief stays, but is checked on the new floor's walls.
+  index_ = std::move(index);
+  if (!index_) return Reset();
+  alignment_.version = next_version_++;
+  ++belief_version_;
+  checked_ = false;
+  last_update_ns_.reset();
+  recovery_.Reset();
+}
+
+void MclTracker::Reset() {
+  belief_.Clear();
+  ++belief_version_;
+  alignment_ = {};
+  pick_plan_point_.reset();
+  last_update_ns_.reset();
+  last_search_ns_.reset();
+  checked_ = false;
+  places_ = 0;
+  recovery_.Reset();
+}
+
+void MclTracker::StartBelief(const Se2& published, AlignmentSource source, int64_t stamp_ns) {
+  ++belief_version_;
+  alignment_.T_plan_slam = published;
+  alignment_.version = next_version_++;
+  alignment_.source = source;
+  alignment_.stamp_ns = stamp_ns;
+  alignment_.registration.reset();
+  last_update_ns_.reset();
+  checked_ = false;
+  places_ = 1;
+  recovery_.Reset();
+  belief_.Normalize();
+}
+
+std::string MclTracker::ApplyWallPick(const WallPick& pick, int64_t stamp_ns) {
+  if (!index_) return "no floor plan loaded";
+  const auto T = AlignFromWallPick(pick);
+  if (!T) return "wall pick needs finite points and non-zero normals";
+  pick_plan_point_ = pick.plan_point;
+  belief_.Clear();
+  belief_.AddGaussian(*T, PriorCovariance(options_.pick_sigma_m, options_.pick_sigma_rad),
+                      pick.plan_point, options_.samples.max_samples, 0.0, rng_);
+  StartBelief(*T, AlignmentSource::kWallPick, stamp_ns);
+  return {};
+}
+
+std::string MclTracker::Flip(int64_t stamp_ns) {
+  if (!has_alignment()) return "no alignment to flip";
+  const Eigen::Vector2d pivot =
+      pick_plan_point_.value_or(alignment_.T_plan_slam * odometry_.position.value_or(Eigen::Vector2d::Zero()));
+  const Se2 flip{M_PI, 2.0 * pivot};
+  for (Sample& s : belief_.samples()) s.T_plan_slam = flip * s.T_plan_slam;
+  StartBelief(flip * alignment_.T_plan_slam, AlignmentSource::kFlip, stamp_ns);
+  return {};
+}
+
+PlanPoseEstimate MclTracker::Correct(const Pose2& pose_slam) {
+  if (pose_slam.position.allFinite()) {
+    if (odometry_.position) {
+      const double step = (pose_slam.position - *odometry_.position).norm();
+      // Steps over 5 m between poses 0.3 s apart are a SLAM relocalisation, not a walk.
+      if (step < 5.0) {
+        odometry_.walked_m += step;
+        if (std::isfinite(pose_slam.heading))
+          odometry_.turned_rad += WrapAngle(pose_slam.heading - odometry_.heading);
+      }
+    }
+    odometry_.position = pose_slam.position;
+    if (std::isfinite(pose_slam.heading)) odometry_.heading = pose_slam.heading;
+  }
+  return Project(pose_slam);
+}
+
+BeliefSummary MclTracker::Summary(const Eigen::Vector2d& wearer_slam, const Se2& T) const {
+  BeliefSummary s;
+  s.mass_within = belief_.MassWithin(wearer_slam, T * wearer_slam, options_.publish.within_m);
+  s.elsewhere = recovery_.observed() ? recovery_.Elsewhere() : 0.0;
+  s.fit_ratio = recovery_.FitRatio();
+  s.places = places_;
+  s.checked = checked_;
+  return s;
+}
+
+PlanPoseEstimate MclTracker::Project(const Pose2& pose_slam) const {
+  PlanPoseEstimate out;
+  out.alignment_version = alignment_.version;
+  if (!has_alignment()) {
+    out.pose = pose_slam;
+    out.reliability = CurrentReliability();
+    return out;
+  }
+  out.pose = Apply(alignment_.T_plan_slam, pose_slam);
+  out.reliability = pose_slam.position.allFinite()
+                        ? Assess(Summary(pose_slam.position, alignment_.T_plan_slam), options_.publish)
+                        : CurrentReliability();
+  return out;
+}
+
+Reliability MclTracker::CurrentReliability() const {
+  Reliability r;
+  if (!index_) {
+    r.reason = "no floor plan";
+    return r;
+  }
+  if (!has_alignment()) {
+    r.reason = "no alignment: searching the plan";
+    return r;
+  }
+  return Assess(Summary(odometry_.position.value_or(Eigen::Vector2d::Zero()), alignment_.T_plan_slam),
+                options_.publish);
+}
+
+TrackState MclTracker::state() const {
+  if (!index_) return TrackState::kWaitingForPlan;
+  if (!has_alignment()) return TrackState::kWaitingForAlignment;
+  switch (CurrentReliability().flag) {
+    case ReliabilityFlag::kReliable: return TrackState::kTracking;
+    case ReliabilityFlag::kDegraded: return TrackState::kDegraded;
+    case ReliabilityFlag::kUnreliable: return TrackState::kLost;
+  }
+  return TrackState::kLost;
+}
+
+TrackerState MclTracker::SaveState() const {
+  TrackerState s;
+  s.alignment = alignment_;
+  s.alignment.registration.reset();
+  s.next_version = next_version_;
+  const Eigen::Vector2d wearer = odometry_.position.value_or(Eigen::Vector2d::Zero());
+  s.pivot = alignment_.T_plan_slam * wearer;
+  s.P = belief_.empty() ? PriorCovariance(options_.pick_sigma_m, options_.pick_sigma_rad)
+                        : belief_.Covariance(alignment_.T_plan_slam, wearer);
+  s.start_pivot = s.pivot;
+  if (pick_plan_point_) s.pick_plan_point = *pick_plan_point_;
+  return s;
+}
+
+std::string MclTracker::RestoreState(const TrackerState& state) {
+  if (!index_) return "no floor plan";
+  const Se2& T = state.alignment.T_plan_slam;
+  if (!std::isfinite(T.theta) || !T.t.allFinite() || !state.P.allFinite() || !state.pivot.allFinite())
+    return "values that are not finite";
+  Eigen::LLT<Eigen::Matrix3d> llt(state.P);
+  if (llt.info() != Eigen::Success) return "a covariance that is not positive";
+  if (state.alignment.version == 0) return {};
+  // At least the drift of a restart's few metres: the saved belief was at the wearer then.
+  const Eigen::Matrix3d P =
+      state.P + PriorCovariance(options_.place_sigma_m, options_.place_sigma_rad);
+  belief_.Clear();
+  belief_.AddGaussian(T, P, state.pivot, options_.samples.max_samples, 0.0, rng_);
+  next_version_ = std::max(next_version_, state.next_version);
+  pick_plan_point_ = state.pick_plan_point;
+  StartBelief(T, state.alignment.source, state.alignment.stamp_ns);
+  return {};
+}
+
+bool MclTracker::UpdateDue(int64_t now_ns, size_t window_points) const {
+  if (!index_ || belief_.empty() || window_points < options_.min_points) return false;
+  return !last_update_ns_ ||
+         static_cast<double>(now_ns - *last_update_ns_) * 1e-9 >= options_.update_interval_s;
+}
+
+MclUpdate MclTracker::PrepareUpdate(int64_t now_ns) {
+  MclUpdate u;
+  u.belief = belief_;
+  u.wearer_slam = odometry_.position.value_or(Eigen::Vector2d::Zero());
+  u.motion_sigmas = options_.motion.Sigmas(odometry_.walked_m, odometry_.turned_rad);
+  u.dt_s = last_update_ns_ ? static_cast<double>(now_ns - *last_update_ns_) * 1e-9 : options_.window_s;
+  u.evidence = std::clamp(u.dt_s / options_.window_s, 0.0, 1.0);
+  u.seed = rng_.Next();
+  u.belief_version = belief_version_;
+  odometry_.walked_m = odometry_.turned_rad = 0;
+  last_update_ns_ = now_ns;
+  return u;
+}
+
+bool MclTracker::FinishUpdate(MclUpdateResult result, int64_t stamp_ns) {
+  if (result.belief_version != belief_version_ || result.belief.empty()) return false;
+  belief_ = std::move(result.belief);
+  recovery_.Observe(result.fit, result.dt_s);
+  places_ = result.places;
+  checked_ = true;
+  alignment_.T_plan_slam = result.published;
+  alignment_.version = next_version_++;
+  alignment_.source = AlignmentSource::kRegistration;
+  alignment_.stamp_ns = stamp_ns;
+  alignment_.registration = result.icp;
+  return true;
+}
+
+bool MclTracker::SearchDue(int64_t now_ns, size_t window_points) const {
+  if (!index_ || window_points < options_.search_min_points) return false;
+  if (last_search_ns_ &&
+      static_cast<double>(now_ns - *last_search_ns_) * 1e-9 < options_.recovery.search_interval_s)
+    return false;
+  if (belief_.empty()) return true;
+  if (!checked_) return false;
+  const BeliefSummary s = Summary(odometry_.position.value_or(Eigen::Vector2d::Zero()),
+                                  alignment_.T_plan_slam);
+  return s.elsewhere >= options_.recovery.search_share || s.mass_within < options_.publish.degraded;
+}
+
+std::string MclTracker::OfferPlaces(const std::vector<GlobalPlace>& places, int64_t stamp_ns) {
+  std::vector<const GlobalPlace*> fit;
+  for (const GlobalPlace& p : places)
+    if (p.rank < 2 && fit.size() < 8) fit.push_back(&p);
+  if (fit.empty()) return "no place fits";
+  const Eigen::Vector2d wearer = odometry_.position.value_or(Eigen::Vector2d::Zero());
+  const Eigen::Matrix3d P = PriorCovariance(options_.place_sigma_m, options_.place_sigma_rad);
+  const size_t k = fit.size();
+  if (belief_.empty()) {
+    const size_t n = std::max<size_t>(1, options_.samples.max_samples / k);
+    for (const GlobalPlace* p : fit)
+      belief_.AddGaussian(p->T_plan_slam, P, p->T_plan_slam * wearer, n, 0.0, rng_);
+    StartBelief(fit[0]->T_plan_slam, AlignmentSource::kGlobalSearch, stamp_ns);
+    return "seeded with " + std::to_string(k) + " place(s)";
+  }
+  // Recovery: the places the belief does not hold get the mass the belief may be missing.
+  const double share = std::max(0.05, recovery_.observed() ? recovery_.Elsewhere() : 0.0);
+  const Mode lead = belief_.LeadingMode(wearer, options_.publish.within_m, 10.0 * M_PI / 180);
+  std::vector<const GlobalPlace*> fresh;
+  for (const GlobalPlace* p : fit)
+    if ((p->T_plan_slam * wearer - lead.T_plan_slam * wearer).norm() > options_.publish.within_m ||
+        std::abs(WrapAngle(p->T_plan_slam.theta - lead.T_plan_slam.theta)) > 10.0 * M_PI / 180)
+      fresh.push_back(p);
+  if (fresh.empty()) return "the belief holds every place found";
+  belief_.Normalize();
+  for (Sample& s : belief_.samples()) s.log_weight += std::log(1.0 - share);
+  const size_t n = std::max<size_t>(options_.samples.min_samples / 4,
+                                    static_cast<size_t>(share * static_cast<double>(belief_.size())) /
+                                        fresh.size());
+  const double lw = std::log(share / static_cast<double>(fresh.size() * n));
+  for (const GlobalPlace* p : fresh) belief_.AddGaussian(p->T_plan_slam, P, p->T_plan_slam * wearer, n, lw, rng_);
+  belief_.Normalize();
+  ++belief_version_;  // an update running on the belief without them is void
+  return "mixed in " + std::to_string(fresh.size()) + " place(s) at " +
+         std::to_string(static_cast<int>(100 * share)) + "%";
+}
+
+}  // namespace floorpose::tracking

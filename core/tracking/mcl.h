@@ -1,0 +1,141 @@
+// Monte Carlo localization of the alignment T_plan_slam (tracking.estimator MCL): one
+// belief that can hold several places, moved by the SLAM's drift (MotionModel), weighted
+// by how the recent wall points fit the plan (MeasurementModel), resampled to as many
+// samples as it needs (Belief), reseeded from searches of the whole plan when the walls
+// stop fitting (Recovery), and published with the share of its mass near the published
+// pose (Assess). ICP polishes the leading place to centimetres. A wall pick and a flip are
+// priors for the belief; without one, a search of the plan seeds it.
+//
+// The daemon and the tools drive it as they drive the Tracker: poses on the io thread,
+// updates prepared there, run on a worker (RunMclUpdate), and finished back there.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/closest_wall_index.h"
+#include "core/global_search.h"
+#include "core/registration.h"
+#include "core/tracker.h"
+#include "core/tracking/belief.h"
+#include "core/tracking/measurement_model.h"
+#include "core/tracking/motion_model.h"
+#include "core/tracking/recovery.h"
+#include "core/tracking/reliability.h"
+
+namespace floorpose::tracking {
+
+struct MclOptions {
+  MotionModel motion;
+  MeasurementModel measurement;
+  SampleBounds samples;
+  RecoveryOptions recovery;
+  PublishOptions publish;
+  double window_s = 10.0;           // the wall points of the last this many seconds weigh
+  double update_interval_s = 1.0;   // an update this often while walls come, seconds
+  uint32_t min_points = 50;         // ...with at least this many wall points in the window
+  size_t weigh_points = 300;        // thinned (0.1 m voxels) to at most this many to weigh
+  double pick_sigma_m = 1.5;        // a wall pick's uncertainty at its point, metres...
+  double pick_sigma_rad = 5.0 * M_PI / 180;  // ...and of its heading
+  double place_sigma_m = 0.3;                // a searched place's, metres...
+  double place_sigma_rad = 2.0 * M_PI / 180;  // ...and radians
+  uint32_t search_min_points = 150;          // a search of the plan needs this many points
+  IcpOptions icp;
+};
+
+// An update to run: a copy of the belief and what moves and weighs it.
+struct MclUpdate {
+  Belief belief;
+  Eigen::Vector2d wearer_slam = Eigen::Vector2d::Zero();
+  Eigen::Vector2d motion_sigmas = Eigen::Vector2d::Zero();  // MotionModel::Sigmas since the last
+  double evidence = 0;  // the tempering exponent: the window's share that is new
+  double dt_s = 0;
+  uint64_t seed = 0;
+  uint64_t belief_version = 0;
+};
+
+struct MclUpdateResult {
+  Belief belief;
+  Se2 published;
+  double fit = 0;          // the belief's mean log-likelihood per point (before weighing)
+  double mode_mass = 0;    // of the leading place
+  size_t places = 0;       // places holding at least 5% of the belief
+  RegistrationResult icp;  // the polish of the leading place
+  bool polished = false;   // ...taken
+  double dt_s = 0;
+  uint64_t belief_version = 0;
+};
+
+// Moves, weighs, resamples and polishes; touches nothing but its arguments.
+MclUpdateResult RunMclUpdate(MclUpdate update, const std::vector<Eigen::Vector2d>& cloud,
+                             const ClosestWallIndex& index, const MclOptions& options);
+
+class MclTracker {
+ public:
+  explicit MclTracker(MclOptions options);
+
+  void SetPlan(std::shared_ptr<const ClosestWallIndex> index);
+  void ChangeFloor(std::shared_ptr<const ClosestWallIndex> index);
+  void Reset();
+
+  bool has_plan() const { return index_ != nullptr; }
+  bool has_alignment() const { return alignment_.version > 0; }
+  const AlignmentState& alignment() const { return alignment_; }
+  const MclOptions& options() const { return options_; }
+  const Belief& belief() const { return belief_; }
+
+  std::string ApplyWallPick(const WallPick& pick, int64_t stamp_ns);
+  std::string Flip(int64_t stamp_ns);
+
+  PlanPoseEstimate Correct(const Pose2& pose_slam);
+  PlanPoseEstimate Project(const Pose2& pose_slam) const;
+  TrackState state() const;
+  Reliability CurrentReliability() const;
+
+  TrackerState SaveState() const;
+  std::string RestoreState(const TrackerState& state);
+
+  // An update is due with a belief, min_points in the window, and update_interval_s
+  // since the last.
+  bool UpdateDue(int64_t now_ns, size_t window_points) const;
+  MclUpdate PrepareUpdate(int64_t now_ns);
+  // Takes an update's belief when no pick, flip, place or reset came since it was
+  // prepared; returns whether it did.
+  bool FinishUpdate(MclUpdateResult result, int64_t stamp_ns);
+
+  // A search of the whole plan is due without a belief, or while the wearer may be
+  // elsewhere or the belief is not sure of a place, every search_interval_s.
+  bool SearchDue(int64_t now_ns, size_t window_points) const;
+  void MarkSearchStarted(int64_t now_ns) { last_search_ns_ = now_ns; }
+  // Seeds the belief with a search's refined places (RefinePlaces' order), or mixes them
+  // into it as recovery does; returns what it did.
+  std::string OfferPlaces(const std::vector<GlobalPlace>& places, int64_t stamp_ns);
+
+ private:
+  // A new belief from a prior (pick, flip, place, restore): a new alignment version, and
+  // nothing of the old belief's fit.
+  void StartBelief(const Se2& published, AlignmentSource source, int64_t stamp_ns);
+  BeliefSummary Summary(const Eigen::Vector2d& wearer_slam, const Se2& T) const;
+
+  MclOptions options_;
+  std::shared_ptr<const ClosestWallIndex> index_;
+  Belief belief_;
+  uint64_t belief_version_ = 0;
+  Recovery recovery_;
+  AlignmentState alignment_;
+  uint64_t next_version_ = 1;
+  SplitMix64 rng_{0x6d636c};
+  struct Odometry {  // the wearer's walk since the last update was prepared
+    std::optional<Eigen::Vector2d> position;
+    double heading = 0, walked_m = 0, turned_rad = 0;
+  } odometry_;
+  std::optional<Eigen::Vector2d> pick_plan_point_;
+  std::optional<int64_t> last_update_ns_, last_search_ns_;
+  size_t places_ = 0;      // of the latest update
+  bool checked_ = false;   // an update weighed the belief since it was started
+};
+
+}  // namespace floorpose::tracking

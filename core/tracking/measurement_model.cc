@@ -1,0 +1,50 @@
+#include "core/tracking/measurement_model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_set>
+
+namespace floorpose::tracking {
+
+double MeasurementModel::PointLogLikelihood(double d, double reach_m) const {
+  // A half-normal density about the wall, mixed with a uniform one over the reach.
+  const double hit = std::sqrt(2.0 / M_PI) / sigma_m * std::exp(-0.5 * d * d / (sigma_m * sigma_m));
+  const double in_reach = d <= reach_m ? 1.0 : 0.0;
+  return std::log((1.0 - clutter) * hit * in_reach + clutter / reach_m);
+}
+
+double MeasurementModel::MeanLogLikelihood(const std::vector<Eigen::Vector2d>& points_slam,
+                                           const Se2& T, const ClosestWallIndex& index,
+                                           double reach_m) const {
+  if (points_slam.empty()) return 0.0;
+  const Eigen::Matrix2d R = T.R();
+  const double far = PointLogLikelihood(2 * reach_m, reach_m);
+  double sum = 0;
+  for (const Eigen::Vector2d& p : points_slam) {
+    const auto hit = index.Query(R * p + T.t);
+    sum += hit ? PointLogLikelihood(hit->distance, reach_m) : far;
+  }
+  return sum / static_cast<double>(points_slam.size());
+}
+
+std::vector<Eigen::Vector2d> ThinCloud(const std::vector<Eigen::Vector2d>& points, double voxel_m,
+                                       size_t max_points) {
+  std::vector<Eigen::Vector2d> kept;
+  std::unordered_set<uint64_t> seen;
+  for (const Eigen::Vector2d& p : points) {
+    if (!p.allFinite()) continue;
+    const auto ix = static_cast<int64_t>(std::floor(p.x() / voxel_m));
+    const auto iy = static_cast<int64_t>(std::floor(p.y() / voxel_m));
+    const uint64_t key = (static_cast<uint64_t>(ix) << 32) ^ static_cast<uint32_t>(iy);
+    if (seen.insert(key).second) kept.push_back(p);
+  }
+  if (kept.size() <= max_points || max_points == 0) return kept;
+  std::vector<Eigen::Vector2d> strided;
+  strided.reserve(max_points);
+  const double step = static_cast<double>(kept.size()) / static_cast<double>(max_points);
+  for (size_t i = 0; i < max_points; ++i)
+    strided.push_back(kept[static_cast<size_t>(static_cast<double>(i) * step)]);
+  return strided;
+}
+
+}  // namespace floorpose::tracking
