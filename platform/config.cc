@@ -107,18 +107,21 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
           std::pair{m.measurement().independent_points(),
                     "tracking.mcl.measurement.independent_points"},
           std::pair{m.measurement().window_s(), "tracking.mcl.measurement.window_s"},
-          std::pair{m.measurement().update_interval_s(), "tracking.mcl.measurement.update_interval_s"},
+          std::pair{m.measurement().update_interval_s(),
+                    "tracking.mcl.measurement.update_interval_s"},
           std::pair{m.samples().kld_error(), "tracking.mcl.samples.kld_error"},
           std::pair{m.recovery().pick_sigma_m(), "tracking.mcl.recovery.pick_sigma_m"},
           std::pair{m.recovery().pick_sigma_deg(), "tracking.mcl.recovery.pick_sigma_deg"},
-          std::pair{m.recovery().slow_s(), "tracking.mcl.recovery.slow_s"},
-          std::pair{m.recovery().fast_s(), "tracking.mcl.recovery.fast_s"},
+          std::pair{m.recovery().lost_s(), "tracking.mcl.recovery.lost_s"},
           std::pair{m.recovery().search_interval_s(), "tracking.mcl.recovery.search_interval_s"},
           std::pair{m.publish().within_m(), "tracking.mcl.publish.within_m"}})
       if (!(value > 0 && std::isfinite(value))) return std::string(name) + " must be positive";
+    if (!(m.recovery().start_doubt() > 0 && m.recovery().start_doubt() < 1))
+      return "tracking.mcl.recovery.start_doubt must be in (0, 1)";
     if (!(m.measurement().clutter() > 0 && m.measurement().clutter() < 1))
       return "tracking.mcl.measurement.clutter must be in (0, 1)";
-    if (!(m.samples().min_samples() >= 1 && m.samples().min_samples() <= m.samples().max_samples() &&
+    if (!(m.samples().min_samples() >= 1 &&
+          m.samples().min_samples() <= m.samples().max_samples() &&
           m.samples().max_samples() <= 100000))
       return "tracking.mcl.samples must have 1 <= min_samples <= max_samples <= 100000";
     if (!(m.publish().degraded() >= 0 && m.publish().degraded() <= m.publish().reliable() &&
@@ -291,8 +294,8 @@ tracking::MclOptions ToMclOptions(const v1::FloorposedConfig& c) {
   o.samples.kld_error = m.samples().kld_error();
   o.pick_sigma_m = m.recovery().pick_sigma_m();
   o.pick_sigma_rad = m.recovery().pick_sigma_deg() * M_PI / 180;
-  o.recovery.slow_s = m.recovery().slow_s();
-  o.recovery.fast_s = m.recovery().fast_s();
+  o.recovery.lost_s = m.recovery().lost_s();
+  o.recovery.start_doubt = m.recovery().start_doubt();
   o.recovery.search_share = m.recovery().search_share();
   o.recovery.search_interval_s = m.recovery().search_interval_s();
   o.publish.within_m = m.publish().within_m();

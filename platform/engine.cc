@@ -869,8 +869,8 @@ std::optional<Engine::Job> Engine::SearchJob(int64_t since, size_t min_points) {
   Job job;
   job.cloud = store_.Snapshot(config_.tracking().max_points(), nullptr, 0, since);
   if (job.cloud.size() < min_points) return std::nullopt;
-    // Nothing scanned or dropped since the last search (the wearer stands, or walks
-    // where the headset has meshed everything): the same places again, no new evidence.
+  // Nothing scanned or dropped since the last search (the wearer stands, or walks
+  // where the headset has meshed everything): the same places again, no new evidence.
   SearchedWalls walls{job.cloud.size(), Eigen::Vector2d::Zero(), alignment().version};
   for (const Eigen::Vector2d& p : job.cloud) walls.sum += p;
   if (last_searched_ == walls) return std::nullopt;
@@ -1045,9 +1045,7 @@ void Engine::OnRegistrationDone(Done done) {
   }
 }
 
-void Engine::PublishAlignment() {
-  publish_(Topic::kAlignment, ToProto(alignment(), floor_));
-}
+void Engine::PublishAlignment() { publish_(Topic::kAlignment, ToProto(alignment(), floor_)); }
 
 void Engine::PublishStatus(const std::string& message) {
   publish_(Topic::kStatus, Status(message));

@@ -121,18 +121,24 @@ Mode Belief::LeadingMode(const Eigen::Vector2d& wearer_slam, double radius_m,
       centre = c;
     }
   }
-  // The weighted mean about the centre sample, as a perturbation at the wearer.
-  const Se2& T0 = samples_[centre].T_plan_slam;
-  const Eigen::Vector2d pivot = at[centre];
+  return ModeAt(samples_[centre].T_plan_slam, wearer_slam, radius_m, radius_rad);
+}
+
+Mode Belief::ModeAt(const Se2& T0, const Eigen::Vector2d& wearer_slam, double radius_m,
+                    double radius_rad) const {
+  // The weighted mean about T0, as a perturbation at the wearer.
+  const std::vector<double> w = Weights();
+  const Eigen::Vector2d pivot = T0 * wearer_slam;
+  Mode mode;
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  double sum = 0;
   for (size_t j = 0; j < samples_.size(); ++j) {
-    if (!near(centre, j)) continue;
-    mean += w[j] * Difference(samples_[j].T_plan_slam, T0, pivot);
-    sum += w[j];
+    const Eigen::Vector3d d = Difference(samples_[j].T_plan_slam, T0, pivot);
+    if (d.tail<2>().squaredNorm() > radius_m * radius_m || std::abs(d(0)) > radius_rad) continue;
+    mean += w[j] * d;
+    mode.mass += w[j];
   }
-  best.T_plan_slam = sum > 0 ? Perturb(T0, mean / sum, pivot) : T0;
-  return best;
+  mode.T_plan_slam = mode.mass > 0 ? Perturb(T0, mean / mode.mass, pivot) : T0;
+  return mode;
 }
 
 double Belief::MassWithin(const Eigen::Vector2d& wearer_slam, const Eigen::Vector2d& plan_point,

@@ -62,6 +62,9 @@ class Belief {
   // The place with the most weight within radius_m (at the wearer) and radius_rad of one
   // of its samples, and the weighted mean of the samples there.
   Mode LeadingMode(const Eigen::Vector2d& wearer_slam, double radius_m, double radius_rad) const;
+  // The same about a given alignment: the weighted mean of the samples near it.
+  Mode ModeAt(const Se2& T, const Eigen::Vector2d& wearer_slam, double radius_m,
+              double radius_rad) const;
   // The weight of the samples that put the wearer within radius_m of `plan_point`.
   double MassWithin(const Eigen::Vector2d& wearer_slam, const Eigen::Vector2d& plan_point,
                     double radius_m) const;

@@ -9,6 +9,8 @@
 namespace floorpose::tracking {
 namespace {
 
+constexpr double kSwitchRatio = 2.0;
+
 Eigen::Matrix3d PriorCovariance(double sigma_m, double sigma_rad) {
   return Eigen::Vector3d(sigma_rad * sigma_rad, sigma_m * sigma_m, sigma_m * sigma_m).asDiagonal();
 }
@@ -49,21 +51,21 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
   SplitMix64 rng(u.seed);
   Belief& belief = u.belief;
   const double reach = index.max_distance_m();
-  // Motion: each sample drifts about where it puts the wearer.
-  for (Sample& s : belief.samples())
-    s.T_plan_slam = options.motion.Sample(s.T_plan_slam, s.T_plan_slam * u.wearer_slam,
-                                          u.motion_sigmas, rng);
-  // Measurement: the window's new share of evidence.
+  // Measurement: the window's new share of evidence, and no more than one independent
+  // measurement per point of a sparse window.
   const std::vector<Eigen::Vector2d> points = ThinCloud(cloud, 0.1, options.weigh_points);
+  const double exponent = u.evidence * std::min(options.measurement.independent_points,
+                                                static_cast<double>(points.size()));
   const std::vector<double> prior = belief.Weights();
   double fit = 0;
   for (size_t i = 0; i < belief.size(); ++i) {
     Sample& s = belief.samples()[i];
     const double mll = options.measurement.MeanLogLikelihood(points, s.T_plan_slam, index, reach);
     fit += prior[i] * mll;
-    s.log_weight += u.evidence * options.measurement.independent_points * mll;
+    s.log_weight += exponent * mll;
   }
   out.fit = fit;
+  out.exponent = exponent;
   belief.Normalize();
   if (belief.EffectiveSize() < 0.5 * static_cast<double>(belief.size()) ||
       belief.size() > options.samples.max_samples)
@@ -72,14 +74,19 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
   // samples with it when it fits the walls better (a scan-matched proposal).
   const double radius_m = options.publish.within_m;
   const double radius_rad = 10.0 * M_PI / 180;
-  const Mode mode = belief.LeadingMode(u.wearer_slam, radius_m, radius_rad);
+  Mode mode = belief.LeadingMode(u.wearer_slam, radius_m, radius_rad);
+  if (u.published) {
+    // The published place stays until another holds kSwitchRatio times its mass: a belief
+    // split about evenly must not make the published pose jump between its places.
+    const Mode kept = belief.ModeAt(*u.published, u.wearer_slam, radius_m, radius_rad);
+    if (kept.mass * kSwitchRatio >= mode.mass) mode = kept;
+  }
   out.mode_mass = mode.mass;
   out.published = mode.T_plan_slam;
   out.icp = RegisterIcp(cloud, index, mode.T_plan_slam, options.icp);
   const Eigen::Vector2d pivot = mode.T_plan_slam * u.wearer_slam;
   const Eigen::Vector3d shift = Difference(out.icp.T_plan_slam, mode.T_plan_slam, pivot);
-  if (out.icp.converged && shift.tail<2>().norm() <= radius_m &&
-      std::abs(shift(0)) <= radius_rad &&
+  if (out.icp.converged && shift.tail<2>().norm() <= radius_m && std::abs(shift(0)) <= radius_rad &&
       options.measurement.MeanLogLikelihood(points, out.icp.T_plan_slam, index, reach) >=
           options.measurement.MeanLogLikelihood(points, mode.T_plan_slam, index, reach)) {
     out.polished = true;
@@ -100,8 +107,7 @@ MclTracker::MclTracker(MclOptions options) : options_(std::move(options)) {}
 
 void MclTracker::SetPlan(std::shared_ptr<const ClosestWallIndex> index) {
   index_ = std::move(index);
-  if (index_)
-    recovery_ = Recovery(options_.recovery, options_.measurement, index_->max_distance_m());
+  if (index_) recovery_ = Recovery(options_.recovery, options_.measurement, *index_);
   Reset();
 }
 
@@ -156,8 +162,8 @@ std::string MclTracker::ApplyWallPick(const WallPick& pick, int64_t stamp_ns) {
 
 std::string MclTracker::Flip(int64_t stamp_ns) {
   if (!has_alignment()) return "no alignment to flip";
-  const Eigen::Vector2d pivot =
-      pick_plan_point_.value_or(alignment_.T_plan_slam * odometry_.position.value_or(Eigen::Vector2d::Zero()));
+  const Eigen::Vector2d pivot = pick_plan_point_.value_or(
+      alignment_.T_plan_slam * odometry_.position.value_or(Eigen::Vector2d::Zero()));
   const Se2 flip{M_PI, 2.0 * pivot};
   for (Sample& s : belief_.samples()) s.T_plan_slam = flip * s.T_plan_slam;
   StartBelief(flip * alignment_.T_plan_slam, AlignmentSource::kFlip, stamp_ns);
@@ -170,9 +176,16 @@ PlanPoseEstimate MclTracker::Correct(const Pose2& pose_slam) {
       const double step = (pose_slam.position - *odometry_.position).norm();
       // Steps over 5 m between poses 0.3 s apart are a SLAM relocalisation, not a walk.
       if (step < 5.0) {
+        const double turn = std::isfinite(pose_slam.heading)
+                                ? WrapAngle(pose_slam.heading - odometry_.heading)
+                                : 0.0;
         odometry_.walked_m += step;
-        if (std::isfinite(pose_slam.heading))
-          odometry_.turned_rad += WrapAngle(pose_slam.heading - odometry_.heading);
+        odometry_.turned_rad += turn;
+        // The belief drifts with every step, about where each sample puts the wearer.
+        const Eigen::Vector2d sigmas = options_.motion.Sigmas(step, turn);
+        for (Sample& s : belief_.samples())
+          s.T_plan_slam = options_.motion.Sample(s.T_plan_slam, s.T_plan_slam * pose_slam.position,
+                                                 sigmas, rng_);
       }
     }
     odometry_.position = pose_slam.position;
@@ -184,7 +197,7 @@ PlanPoseEstimate MclTracker::Correct(const Pose2& pose_slam) {
 BeliefSummary MclTracker::Summary(const Eigen::Vector2d& wearer_slam, const Se2& T) const {
   BeliefSummary s;
   s.mass_within = belief_.MassWithin(wearer_slam, T * wearer_slam, options_.publish.within_m);
-  s.elsewhere = recovery_.observed() ? recovery_.Elsewhere() : 0.0;
+  s.elsewhere = recovery_.Elsewhere();
   s.fit_ratio = recovery_.FitRatio();
   s.places = places_;
   s.checked = checked_;
@@ -200,9 +213,10 @@ PlanPoseEstimate MclTracker::Project(const Pose2& pose_slam) const {
     return out;
   }
   out.pose = Apply(alignment_.T_plan_slam, pose_slam);
-  out.reliability = pose_slam.position.allFinite()
-                        ? Assess(Summary(pose_slam.position, alignment_.T_plan_slam), options_.publish)
-                        : CurrentReliability();
+  out.reliability =
+      pose_slam.position.allFinite()
+          ? Assess(Summary(pose_slam.position, alignment_.T_plan_slam), options_.publish)
+          : CurrentReliability();
   return out;
 }
 
@@ -216,8 +230,9 @@ Reliability MclTracker::CurrentReliability() const {
     r.reason = "no alignment: searching the plan";
     return r;
   }
-  return Assess(Summary(odometry_.position.value_or(Eigen::Vector2d::Zero()), alignment_.T_plan_slam),
-                options_.publish);
+  return Assess(
+      Summary(odometry_.position.value_or(Eigen::Vector2d::Zero()), alignment_.T_plan_slam),
+      options_.publish);
 }
 
 TrackState MclTracker::state() const {
@@ -248,7 +263,8 @@ TrackerState MclTracker::SaveState() const {
 std::string MclTracker::RestoreState(const TrackerState& state) {
   if (!index_) return "no floor plan";
   const Se2& T = state.alignment.T_plan_slam;
-  if (!std::isfinite(T.theta) || !T.t.allFinite() || !state.P.allFinite() || !state.pivot.allFinite())
+  if (!std::isfinite(T.theta) || !T.t.allFinite() || !state.P.allFinite() ||
+      !state.pivot.allFinite())
     return "values that are not finite";
   Eigen::LLT<Eigen::Matrix3d> llt(state.P);
   if (llt.info() != Eigen::Success) return "a covariance that is not positive";
@@ -274,12 +290,13 @@ MclUpdate MclTracker::PrepareUpdate(int64_t now_ns) {
   MclUpdate u;
   u.belief = belief_;
   u.wearer_slam = odometry_.position.value_or(Eigen::Vector2d::Zero());
-  u.motion_sigmas = options_.motion.Sigmas(odometry_.walked_m, odometry_.turned_rad);
-  u.dt_s = last_update_ns_ ? static_cast<double>(now_ns - *last_update_ns_) * 1e-9 : options_.window_s;
+  u.dt_s =
+      last_update_ns_ ? static_cast<double>(now_ns - *last_update_ns_) * 1e-9 : options_.window_s;
   u.evidence = std::clamp(u.dt_s / options_.window_s, 0.0, 1.0);
   u.seed = rng_.Next();
   u.belief_version = belief_version_;
-  odometry_.walked_m = odometry_.turned_rad = 0;
+  if (has_alignment()) u.published = alignment_.T_plan_slam;
+  odometry_.walked_m = odometry_.turned_rad = 0;  // from here: the walk since prepared
   last_update_ns_ = now_ns;
   return u;
 }
@@ -287,7 +304,14 @@ MclUpdate MclTracker::PrepareUpdate(int64_t now_ns) {
 bool MclTracker::FinishUpdate(MclUpdateResult result, int64_t stamp_ns) {
   if (result.belief_version != belief_version_ || result.belief.empty()) return false;
   belief_ = std::move(result.belief);
-  recovery_.Observe(result.fit, result.dt_s);
+  // The drift of the walk since the update was prepared (none when it ran inline).
+  const Eigen::Vector2d sigmas = options_.motion.Sigmas(odometry_.walked_m, odometry_.turned_rad);
+  if (sigmas.squaredNorm() > 0)
+    for (Sample& s : belief_.samples())
+      s.T_plan_slam = options_.motion.Sample(
+          s.T_plan_slam, s.T_plan_slam * odometry_.position.value_or(Eigen::Vector2d::Zero()),
+          sigmas, rng_);
+  recovery_.Observe(result.fit, result.exponent, result.dt_s);
   places_ = result.places;
   checked_ = true;
   alignment_.T_plan_slam = result.published;
@@ -305,9 +329,9 @@ bool MclTracker::SearchDue(int64_t now_ns, size_t window_points) const {
     return false;
   if (belief_.empty()) return true;
   if (!checked_) return false;
-  const BeliefSummary s = Summary(odometry_.position.value_or(Eigen::Vector2d::Zero()),
-                                  alignment_.T_plan_slam);
-  return s.elsewhere >= options_.recovery.search_share || s.mass_within < options_.publish.degraded;
+  const BeliefSummary s =
+      Summary(odometry_.position.value_or(Eigen::Vector2d::Zero()), alignment_.T_plan_slam);
+  return s.elsewhere >= options_.recovery.search_share;
 }
 
 std::string MclTracker::OfferPlaces(const std::vector<GlobalPlace>& places, int64_t stamp_ns) {
@@ -326,7 +350,7 @@ std::string MclTracker::OfferPlaces(const std::vector<GlobalPlace>& places, int6
     return "seeded with " + std::to_string(k) + " place(s)";
   }
   // Recovery: the places the belief does not hold get the mass the belief may be missing.
-  const double share = std::max(0.05, recovery_.observed() ? recovery_.Elsewhere() : 0.0);
+  const double share = std::max(0.05, recovery_.Elsewhere());
   const Mode lead = belief_.LeadingMode(wearer, options_.publish.within_m, 10.0 * M_PI / 180);
   std::vector<const GlobalPlace*> fresh;
   for (const GlobalPlace* p : fit)
@@ -336,11 +360,12 @@ std::string MclTracker::OfferPlaces(const std::vector<GlobalPlace>& places, int6
   if (fresh.empty()) return "the belief holds every place found";
   belief_.Normalize();
   for (Sample& s : belief_.samples()) s.log_weight += std::log(1.0 - share);
-  const size_t n = std::max<size_t>(options_.samples.min_samples / 4,
-                                    static_cast<size_t>(share * static_cast<double>(belief_.size())) /
-                                        fresh.size());
+  const size_t n = std::max<size_t>(
+      options_.samples.min_samples / 4,
+      static_cast<size_t>(share * static_cast<double>(belief_.size())) / fresh.size());
   const double lw = std::log(share / static_cast<double>(fresh.size() * n));
-  for (const GlobalPlace* p : fresh) belief_.AddGaussian(p->T_plan_slam, P, p->T_plan_slam * wearer, n, lw, rng_);
+  for (const GlobalPlace* p : fresh)
+    belief_.AddGaussian(p->T_plan_slam, P, p->T_plan_slam * wearer, n, lw, rng_);
   belief_.Normalize();
   ++belief_version_;  // an update running on the belief without them is void
   return "mixed in " + std::to_string(fresh.size()) + " place(s) at " +

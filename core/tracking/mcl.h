@@ -34,15 +34,15 @@ struct MclOptions {
   SampleBounds samples;
   RecoveryOptions recovery;
   PublishOptions publish;
-  double window_s = 10.0;           // the wall points of the last this many seconds weigh
-  double update_interval_s = 1.0;   // an update this often while walls come, seconds
-  uint32_t min_points = 50;         // ...with at least this many wall points in the window
-  size_t weigh_points = 300;        // thinned (0.1 m voxels) to at most this many to weigh
-  double pick_sigma_m = 1.5;        // a wall pick's uncertainty at its point, metres...
+  double window_s = 20.0;                    // the wall points of the last this many seconds weigh
+  double update_interval_s = 1.0;            // an update this often while walls come, seconds
+  uint32_t min_points = 50;                  // ...with at least this many wall points in the window
+  size_t weigh_points = 300;                 // thinned (0.1 m voxels) to at most this many to weigh
+  double pick_sigma_m = 1.5;                 // a wall pick's uncertainty at its point, metres...
   double pick_sigma_rad = 5.0 * M_PI / 180;  // ...and of its heading
   double place_sigma_m = 0.3;                // a searched place's, metres...
   double place_sigma_rad = 2.0 * M_PI / 180;  // ...and radians
-  uint32_t search_min_points = 150;          // a search of the plan needs this many points
+  uint32_t search_min_points = 150;           // a search of the plan needs this many points
   IcpOptions icp;
 };
 
@@ -50,17 +50,18 @@ struct MclOptions {
 struct MclUpdate {
   Belief belief;
   Eigen::Vector2d wearer_slam = Eigen::Vector2d::Zero();
-  Eigen::Vector2d motion_sigmas = Eigen::Vector2d::Zero();  // MotionModel::Sigmas since the last
   double evidence = 0;  // the tempering exponent: the window's share that is new
   double dt_s = 0;
   uint64_t seed = 0;
   uint64_t belief_version = 0;
+  std::optional<Se2> published;  // the alignment published now, if any
 };
 
 struct MclUpdateResult {
   Belief belief;
   Se2 published;
   double fit = 0;          // the belief's mean log-likelihood per point (before weighing)
+  double exponent = 0;     // ...and the tempering exponent it was weighed with
   double mode_mass = 0;    // of the leading place
   size_t places = 0;       // places holding at least 5% of the belief
   RegistrationResult icp;  // the polish of the leading place
@@ -107,7 +108,7 @@ class MclTracker {
   bool FinishUpdate(MclUpdateResult result, int64_t stamp_ns);
 
   // A search of the whole plan is due without a belief, or while the wearer may be
-  // elsewhere or the belief is not sure of a place, every search_interval_s.
+  // elsewhere (RecoveryOptions::search_share), every search_interval_s.
   bool SearchDue(int64_t now_ns, size_t window_points) const;
   void MarkSearchStarted(int64_t now_ns) { last_search_ns_ = now_ns; }
   // Seeds the belief with a search's refined places (RefinePlaces' order), or mixes them
@@ -128,14 +129,14 @@ class MclTracker {
   AlignmentState alignment_;
   uint64_t next_version_ = 1;
   SplitMix64 rng_{0x6d636c};
-  struct Odometry {  // the wearer's walk since the last update was prepared
+  struct Odometry {  // the wearer now, and the walk since the last update was prepared
     std::optional<Eigen::Vector2d> position;
     double heading = 0, walked_m = 0, turned_rad = 0;
   } odometry_;
   std::optional<Eigen::Vector2d> pick_plan_point_;
   std::optional<int64_t> last_update_ns_, last_search_ns_;
-  size_t places_ = 0;      // of the latest update
-  bool checked_ = false;   // an update weighed the belief since it was started
+  size_t places_ = 0;     // of the latest update
+  bool checked_ = false;  // an update weighed the belief since it was started
 };
 
 }  // namespace floorpose::tracking

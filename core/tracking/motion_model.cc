@@ -8,8 +8,8 @@ namespace floorpose::tracking {
 
 Eigen::Vector2d MotionModel::Sigmas(double metres, double turned_rad) const {
   const double m = std::max(0.0, metres);
-  const double heading = std::hypot(heading_rad_per_sqrt_m * std::sqrt(m),
-                                    heading_per_turn * std::abs(turned_rad));
+  const double heading =
+      std::hypot(heading_rad_per_sqrt_m * std::sqrt(m), heading_per_turn * std::abs(turned_rad));
   return {heading, position_m_per_sqrt_m * std::sqrt(m)};
 }
 

@@ -3,14 +3,22 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/random.h"
+
 namespace floorpose::tracking {
+namespace {
+
+constexpr int kSteps = 2000;  // midpoint rule over [0, reach]
+
+double Logit(double p) { return std::log(p / (1 - p)); }
+double Logistic(double x) { return 1 / (1 + std::exp(-x)); }
+
+}  // namespace
 
 double ExpectedLogLikelihood(const MeasurementModel& model, double reach_m) {
-  // E[log p(d)] by the midpoint rule over [0, reach]: hits half-normal, clutter uniform.
-  const int n = 2000;
-  const double step = reach_m / n;
+  const double step = reach_m / kSteps;
   double e = 0;
-  for (int i = 0; i < n; ++i) {
+  for (int i = 0; i < kSteps; ++i) {
     const double d = (i + 0.5) * step;
     const double hit = std::sqrt(2.0 / M_PI) / model.sigma_m *
                        std::exp(-0.5 * d * d / (model.sigma_m * model.sigma_m));
@@ -20,33 +28,48 @@ double ExpectedLogLikelihood(const MeasurementModel& model, double reach_m) {
   return e;
 }
 
-Recovery::Recovery(const RecoveryOptions& options, const MeasurementModel& model, double reach_m)
-    : options_(options), expected_(ExpectedLogLikelihood(model, reach_m)) {
+double RandomLogLikelihood(const MeasurementModel& model, const ClosestWallIndex& index) {
+  const FloorPlan& plan = index.plan();
+  const double reach = index.max_distance_m();
+  SplitMix64 rng(0x72616e64);
+  double e = 0;
+  int n = 0;
+  for (int i = 0; i < 20 * kSteps && n < kSteps; ++i) {
+    const Eigen::Vector2d p(rng.Uniform(plan.min.x(), plan.max.x()),
+                            rng.Uniform(plan.min.y(), plan.max.y()));
+    if (const auto hit = index.Query(p)) {
+      e += model.PointLogLikelihood(hit->distance, reach);
+      ++n;
+    }
+  }
+  return n > 0 ? e / n : model.PointLogLikelihood(2 * reach, reach);
+}
+
+Recovery::Recovery(const RecoveryOptions& options, const MeasurementModel& model,
+                   const ClosestWallIndex& index)
+    : options_(options),
+      expected_(ExpectedLogLikelihood(model, index.max_distance_m())),
+      random_(RandomLogLikelihood(model, index)) {
   Reset();
 }
 
 void Recovery::Reset() {
-  slow_ = fast_ = expected_;
-  observed_ = false;
+  log_odds_ = Logit(std::clamp(options_.start_doubt, 1e-6, 1 - 1e-6));
+  fit_ = expected_;
 }
 
-void Recovery::Observe(double mean_log_likelihood, double dt_s) {
+void Recovery::Observe(double mean_log_likelihood, double exponent, double dt_s) {
   if (!std::isfinite(mean_log_likelihood)) return;
-  const double dt = std::max(0.0, dt_s);
-  // The slow average never rises above the expected fit: a place fitting better than the
-  // model expects does not make an ordinary fit look like a loss.
-  slow_ += std::min(1.0, dt / options_.slow_s) * (mean_log_likelihood - slow_);
-  slow_ = std::min(slow_, expected_);
-  // The first fit after a start is taken whole: a wrong start shows at once.
-  fast_ += (observed_ ? std::min(1.0, dt / options_.fast_s) : 1.0) * (mean_log_likelihood - fast_);
-  observed_ = true;
+  fit_ = mean_log_likelihood;
+  // A loss since the last update, then the evidence of this one.
+  double p = Logistic(log_odds_);
+  p += (1 - p) * (1 - std::exp(-std::max(0.0, dt_s) / options_.lost_s));
+  log_odds_ = Logit(std::clamp(p, 1e-9, 1 - 1e-9)) + exponent * (random_ - mean_log_likelihood);
+  log_odds_ = std::clamp(log_odds_, -30.0, 30.0);
 }
 
-double Recovery::FitRatio() const { return std::exp(fast_ - expected_); }
+double Recovery::Elsewhere() const { return Logistic(log_odds_); }
 
-double Recovery::Elsewhere() const {
-  // Likelihoods per point: exp of the averages of log-likelihoods.
-  return std::clamp(1.0 - std::exp(fast_ - slow_), 0.0, 1.0);
-}
+double Recovery::FitRatio() const { return std::exp(fit_ - expected_); }
 
 }  // namespace floorpose::tracking

@@ -1,24 +1,30 @@
-// When the walls stop fitting the belief: augmented MCL (Probabilistic Robotics, table
-// 8.3). Two running averages of how well the wall points fit the belief, a slow one and a
-// fast one; when the fast falls below the slow, the wearer is likely elsewhere, with
-// probability 1 - fast / slow. That probability is published as mass the belief's samples
-// do not hold, and it draws new samples from the places a search of the whole plan finds
-// (sensor resetting, Lenser and Veloso 2000), not from the whole plan at random.
+// Whether the wearer is at any of the belief's places at all: a filter over two
+// hypotheses, "here" (the belief) and "elsewhere" (the belief lost the wearer: a wrong
+// start, a SLAM jump). Under "elsewhere" the plan is placed at random under the walls, and
+// a wall point lies as far from the nearest plan wall as a random point of the building
+// does (measured on the plan: RandomLogLikelihood); under "here" it fits as the belief
+// says. Each update
+// weighs the two by the same tempered likelihood the belief uses, after the chance of a
+// loss since the last (one per lost_s). A start (pick, place, restore) begins at
+// start_doubt.
 //
-// The slow average starts at the fit the measurement model itself expects of a right
-// alignment, so a wrong start (a pick on the wrong wall) is seen at its first update, and
-// it adapts over slow_s to a building the plan describes worse than the model thinks.
+// The probability of "elsewhere" is published as mass the belief's samples do not hold,
+// and while it is high a search of the whole plan reseeds the belief (augmented MCL,
+// Probabilistic Robotics table 8.3, with samples drawn from the places the search finds,
+// as sensor resetting does, Lenser and Veloso 2000). A building unlike its plan lowers
+// the fit of the right place, but not to that of a random one: it is not read as a loss.
 #pragma once
 
+#include "core/closest_wall_index.h"
 #include "core/tracking/measurement_model.h"
 
 namespace floorpose::tracking {
 
 struct RecoveryOptions {
-  double slow_s = 60.0;  // time constant of the slow average, seconds
-  double fast_s = 3.0;   // ...of the fast one
-  // Search the plan for other places while the probability of being elsewhere is at
-  // least this, or the belief is not yet sure of one place; at most every search_interval_s.
+  double lost_s = 600.0;     // mean time between losses of the wearer, seconds
+  double start_doubt = 0.5;  // probability that a pick, place or restore is wrong
+  // Search the plan for other places while "elsewhere" is at least this likely, or the
+  // belief holds under half its mass near the published pose; every search_interval_s.
   double search_share = 0.2;
   double search_interval_s = 3.0;
 };
@@ -26,28 +32,33 @@ struct RecoveryOptions {
 class Recovery {
  public:
   Recovery() = default;
-  Recovery(const RecoveryOptions& options, const MeasurementModel& model, double reach_m);
+  Recovery(const RecoveryOptions& options, const MeasurementModel& model,
+           const ClosestWallIndex& index);
 
-  // Starts over at the expected fit (a new pick, place or plan).
+  // Starts over at start_doubt (a new pick, place or plan).
   void Reset();
-  // One update's fit: the belief's mean log-likelihood per wall point, dt_s after the last.
-  void Observe(double mean_log_likelihood, double dt_s);
+  // One update: the belief's mean log-likelihood per wall point, the tempering exponent
+  // it was weighed with, dt_s after the last.
+  void Observe(double mean_log_likelihood, double exponent, double dt_s);
   // The probability that the wearer is at none of the belief's places.
   double Elsewhere() const;
-  // The fast average over the expected fit, as a likelihood ratio per point (1: as
-  // expected).
+  // The latest fit over the fit expected of a right alignment, as a likelihood ratio per
+  // point (1: as expected).
   double FitRatio() const;
-  bool observed() const { return observed_; }
 
  private:
   RecoveryOptions options_;
-  double expected_ = 0;  // mean log-likelihood per point of a right alignment
-  double slow_ = 0, fast_ = 0;
-  bool observed_ = false;
+  double expected_ = 0;  // mean log-likelihood per point of a right alignment...
+  double random_ = 0;    // ...and of a random one
+  double log_odds_ = 0;  // of elsewhere against here
+  double fit_ = 0;       // the latest
 };
 
 // The mean log-likelihood per point the model expects of a right alignment: points at the
 // model's own noise about a wall, clutter at its own rate.
 double ExpectedLogLikelihood(const MeasurementModel& model, double reach_m);
+// ...and of a random one: the mean over random points of the plan within the index's
+// reach of a wall (seeded: the same plan gives the same value).
+double RandomLogLikelihood(const MeasurementModel& model, const ClosestWallIndex& index);
 
 }  // namespace floorpose::tracking

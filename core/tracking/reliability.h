@@ -11,9 +11,9 @@
 namespace floorpose::tracking {
 
 struct PublishOptions {
-  double within_m = 1.0;     // the radius the probability is of, metres
-  double reliable = 0.9;     // RELIABLE at or above this probability
-  double degraded = 0.5;     // DEGRADED at or above this, else UNRELIABLE
+  double within_m = 1.0;  // the radius the probability is of, metres
+  double reliable = 0.9;  // RELIABLE at or above this probability
+  double degraded = 0.5;  // DEGRADED at or above this, else UNRELIABLE
 };
 
 // What the belief says at a pose.

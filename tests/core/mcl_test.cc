@@ -1,0 +1,177 @@
+// The MCL estimator's parts (core/tracking/): KLD-sampling's count, resampling, the
+// measurement model and its expected fit, and the estimator placing, tracking and
+// recovering on a room, driven with injected stamps.
+#include "core/tracking/mcl.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "core/random.h"
+#include "tests/test_util.h"
+
+namespace floorpose::tracking {
+namespace {
+
+using floorpose::testing::Deg;
+
+TEST(KldSamplesTest, GrowsWithTheBinsTheBeliefCovers) {
+  EXPECT_EQ(KldSamples(1, 0.05), 1u);
+  // Fox 2003 eq. 12 for k = 100 bins: 99 / 0.1 (1 - 2/891 + sqrt(2/891) 2.326)^3.
+  EXPECT_NEAR(static_cast<double>(KldSamples(100, 0.05)), 1347, 1);
+  EXPECT_LT(KldSamples(10, 0.05), KldSamples(100, 0.05));
+  EXPECT_GT(KldSamples(10, 0.01), KldSamples(10, 0.05));
+}
+
+TEST(BeliefTest, ResamplingKeepsTheWeightAndShrinksWhenConverged) {
+  SplitMix64 rng(3);
+  Belief b;
+  // Two places 5 m apart, each well inside one KLD bin, the second three times as heavy.
+  const Se2 a{0.1, {0.25, 0.25}}, c{0.1, {5.25, 0.25}};
+  b.AddGaussian(a, Eigen::Vector3d(1e-6, 1e-4, 1e-4).asDiagonal(), a.t, 1000, std::log(1.0), rng);
+  b.AddGaussian(c, Eigen::Vector3d(1e-6, 1e-4, 1e-4).asDiagonal(), c.t, 1000, std::log(3.0), rng);
+  b.Normalize();
+  EXPECT_NEAR(b.MassWithin({0, 0}, c.t, 1.0), 0.75, 1e-9);
+  SampleBounds bounds;
+  bounds.min_samples = 50;
+  b.Resample(bounds, {0, 0}, rng);
+  // Both places lie within a few bins: far fewer samples, the same split.
+  EXPECT_EQ(b.size(), std::max(bounds.min_samples, KldSamples(2, bounds.kld_error)));
+  EXPECT_NEAR(b.MassWithin({0, 0}, c.t, 1.0), 0.75, 0.1);
+  const Mode m = b.LeadingMode({0, 0}, 1.0, Deg(10));
+  EXPECT_NEAR(m.T_plan_slam.t.x(), 5.25, 0.05);
+  EXPECT_NEAR(m.mass, 0.75, 0.1);
+}
+
+TEST(MeasurementModelTest, NearWallsIsLikelierAndFarIsClutter) {
+  MeasurementModel m;
+  EXPECT_GT(m.PointLogLikelihood(0.0, 3.0), m.PointLogLikelihood(0.2, 3.0));
+  EXPECT_GT(m.PointLogLikelihood(0.2, 3.0), m.PointLogLikelihood(1.0, 3.0));
+  // Beyond a few sigmas only clutter explains a point, at its rate over the reach.
+  EXPECT_NEAR(m.PointLogLikelihood(1.0, 3.0), std::log(m.clutter / 3.0), 1e-6);
+  EXPECT_NEAR(m.PointLogLikelihood(10.0, 3.0), std::log(m.clutter / 3.0), 1e-12);
+  // The fit expected of a right alignment lies between a perfect one and clutter alone.
+  const double expected = ExpectedLogLikelihood(m, 3.0);
+  EXPECT_LT(expected, m.PointLogLikelihood(0.0, 3.0));
+  EXPECT_GT(expected, m.PointLogLikelihood(1.0, 3.0));
+}
+
+TEST(RecoveryTest, AFitLikeARandomPlaceKeepsTheDoubtAndARightOneClearsIt) {
+  MeasurementModel m;
+  const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
+  const double random = RandomLogLikelihood(m, index);
+  const double expected = ExpectedLogLikelihood(m, index.max_distance_m());
+  EXPECT_LT(random, expected);
+  Recovery right({}, m, index);
+  EXPECT_NEAR(right.Elsewhere(), 0.5, 1e-9) << "a start is doubted";
+  right.Observe(expected, 10.0, 1.0);
+  EXPECT_LT(right.Elsewhere(), 1e-6);
+  Recovery wrong({}, m, index);
+  for (int i = 0; i < 5; ++i) wrong.Observe(random, 1.0, 1.0);
+  EXPECT_GT(wrong.Elsewhere(), 0.5) << "a fit no better than chance never clears the doubt";
+  // A plan half unlike the building: worse than expected, far better than chance.
+  Recovery stale({}, m, index);
+  for (int i = 0; i < 5; ++i) stale.Observe(0.5 * (expected + random), 1.0, 1.0);
+  EXPECT_LT(stale.Elsewhere(), 0.01);
+}
+
+// A walk in the asymmetric room: wall points seen from the wearer within 4 m (slam
+// frame, T_plan_slam = truth), stamped a second apart.
+struct RoomWalk {
+  FloorPlan plan = floorpose::testing::AsymmetricRoom();
+  std::shared_ptr<const ClosestWallIndex> index = std::make_shared<ClosestWallIndex>(plan);
+  Se2 truth{Deg(30), {3, -2}};
+  std::vector<Eigen::Vector2d> walls_plan = floorpose::testing::SampleWalls(plan, 0.05);
+
+  std::vector<Eigen::Vector2d> SeenFrom(const Eigen::Vector2d& wearer_plan) const {
+    std::vector<Eigen::Vector2d> out;
+    for (const Eigen::Vector2d& p : walls_plan)
+      if ((p - wearer_plan).norm() < 4.0) out.push_back(truth.Inverse() * p);
+    return out;
+  }
+};
+
+// Drives the estimator along the room's path, an update per second, as the engine does.
+void Walk(MclTracker& mcl, const RoomWalk& room, int64_t* t_ns) {
+  const std::vector<Eigen::Vector2d> path = {{2, 2}, {2, 5}, {3, 6}, {6, 6}, {8, 5}, {8, 2}};
+  for (const Eigen::Vector2d& at : path) {
+    *t_ns += 1000000000;
+    const Pose2 pose{room.truth.Inverse() * at, 0, 1.6};
+    mcl.Correct(pose);
+    if (mcl.UpdateDue(*t_ns, 1000)) {
+      MclUpdate u = mcl.PrepareUpdate(*t_ns);
+      mcl.FinishUpdate(RunMclUpdate(std::move(u), room.SeenFrom(at), *room.index, mcl.options()),
+                       *t_ns);
+    }
+  }
+}
+
+TEST(MclTrackerTest, AWallPickOffByAMetreEndsOnTheTruthAndReliable) {
+  RoomWalk room;
+  MclTracker mcl({});
+  mcl.SetPlan(room.index);
+  // A pick on the inner wall, 0.8 m along it and 3 degrees off.
+  const Se2 off = Se2{Deg(3), {0, 0.8}} * room.truth;
+  const Eigen::Vector2d plan_point{4, 2};
+  WallPick pick{
+      off.Inverse() * plan_point, off.Inverse().R() * Eigen::Vector2d(-1, 0), plan_point, {-1, 0}};
+  ASSERT_EQ(mcl.ApplyWallPick(pick, 0), "");
+  EXPECT_NE(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable) << "not yet checked";
+  int64_t t = 0;
+  Walk(mcl, room, &t);
+  EXPECT_THAT(mcl.alignment().T_plan_slam,
+              floorpose::testing::IsNearlySe2(room.truth, Deg(0.5), 0.05));
+  const Reliability r = mcl.CurrentReliability();
+  EXPECT_EQ(r.flag, ReliabilityFlag::kReliable) << r.reason;
+  EXPECT_GT(r.probability, 0.9);
+  EXPECT_LE(mcl.belief().size(), 3000u);
+}
+
+TEST(MclTrackerTest, APickOnTheWrongWallIsNotReliableAndTheSearchPlacesTheWearer) {
+  RoomWalk room;
+  MclTracker mcl({});
+  mcl.SetPlan(room.index);
+  // A pick 4 m and 90 degrees off.
+  const Se2 wrong = Se2{Deg(90), {4, 0}} * room.truth;
+  const Eigen::Vector2d plan_point{10, 3};
+  WallPick pick{wrong.Inverse() * plan_point,
+                wrong.Inverse().R() * Eigen::Vector2d(-1, 0),
+                plan_point,
+                {-1, 0}};
+  ASSERT_EQ(mcl.ApplyWallPick(pick, 0), "");
+  int64_t t = 0;
+  Walk(mcl, room, &t);
+  EXPECT_NE(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable);
+  EXPECT_TRUE(mcl.SearchDue(t, 1000)) << "the walls do not fit: search the plan";
+  // The search finds the truth; the belief takes it as the walk goes on.
+  GlobalPlace found;
+  found.T_plan_slam = room.truth;
+  EXPECT_THAT(mcl.OfferPlaces({found}, t), ::testing::HasSubstr("mixed in"));
+  Walk(mcl, room, &t);
+  Walk(mcl, room, &t);
+  EXPECT_THAT(mcl.alignment().T_plan_slam,
+              floorpose::testing::IsNearlySe2(room.truth, Deg(0.5), 0.05));
+  EXPECT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable)
+      << mcl.CurrentReliability().reason;
+}
+
+TEST(MclTrackerTest, WithoutAPickTheSearchSeedsTheBelief) {
+  RoomWalk room;
+  MclTracker mcl({});
+  mcl.SetPlan(room.index);
+  EXPECT_FALSE(mcl.has_alignment());
+  EXPECT_TRUE(mcl.SearchDue(0, 1000));
+  GlobalPlace right, twin;
+  right.T_plan_slam = room.truth;
+  twin.T_plan_slam = Se2{M_PI, {10, 7}} * room.truth;  // the room turned half round
+  EXPECT_THAT(mcl.OfferPlaces({twin, right}, 0), ::testing::HasSubstr("seeded with 2"));
+  int64_t t = 0;
+  Walk(mcl, room, &t);
+  Walk(mcl, room, &t);
+  EXPECT_THAT(mcl.alignment().T_plan_slam,
+              floorpose::testing::IsNearlySe2(room.truth, Deg(0.5), 0.05));
+  EXPECT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable)
+      << mcl.CurrentReliability().reason;
+}
+
+}  // namespace
+}  // namespace floorpose::tracking
