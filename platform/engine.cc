@@ -992,14 +992,14 @@ void Engine::OnMclDone(Done done) {
   }
   if (!done.mcl) return;
   counters_.set_registrations(counters_.registrations() + 1);
-  const tracking::MclUpdateResult& u = *done.mcl;
-  const size_t samples = u.belief.size();
+  const size_t samples = done.mcl->belief.size(), places = done.mcl->places;
+  const double fit = done.mcl->fit;
+  const bool polished = done.mcl->polished;
   const bool taken = mcl_->FinishUpdate(std::move(*done.mcl), done.job.stamp_ns);
   const Reliability r = mcl_->CurrentReliability();
   last_registration_ = {done.result, taken, taken ? r.reason : "a new prior came meanwhile"};
   spdlog::debug("belief: {} samples, {} place(s), fit {:.2f}, polished {}, {:.1f} ms: {:.0f}% {}",
-                samples, u.places, u.fit, u.polished, done.result.time_ms, 100 * r.probability,
-                r.reason);
+                samples, places, fit, polished, done.result.time_ms, 100 * r.probability, r.reason);
   if (!taken) return;
   counters_.set_registrations_accepted(counters_.registrations_accepted() + 1);
   PublishAlignment();
