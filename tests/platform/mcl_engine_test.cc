@@ -36,9 +36,10 @@ class MclEngineTest : public testing::TempDirTest {
     std::string error;
     EXPECT_TRUE(Evaluate(config, recording, Baseline::kNone, &report, &error, nullptr, no_pick))
         << error;
-    std::printf("%zu poses: error mean %.2f m, max %.2f m; RELIABLE %.1f%%, %zu more than 1 m off\n",
-                report.poses, report.mean_error_m, report.max_error_m,
-                100 * report.reliable_fraction, report.false_reliable_poses);
+    std::printf(
+        "%zu poses: error mean %.2f m, max %.2f m; RELIABLE %.1f%%, %zu more than 1 m off\n",
+        report.poses, report.mean_error_m, report.max_error_m, 100 * report.reliable_fraction,
+        report.false_reliable_poses);
     return report;
   }
 };
