@@ -786,15 +786,19 @@ Reliability Tracker::CurrentReliability() const {
   return r;
 }
 
-TrackState Tracker::state() const {
-  if (!index_) return TrackState::kWaitingForPlan;
-  if (!has_alignment()) return TrackState::kWaitingForAlignment;
-  switch (CurrentReliability().flag) {
+TrackState StateOf(bool has_plan, bool has_alignment, ReliabilityFlag flag) {
+  if (!has_plan) return TrackState::kWaitingForPlan;
+  if (!has_alignment) return TrackState::kWaitingForAlignment;
+  switch (flag) {
     case ReliabilityFlag::kReliable: return TrackState::kTracking;
     case ReliabilityFlag::kDegraded: return TrackState::kDegraded;
     case ReliabilityFlag::kUnreliable: return TrackState::kLost;
   }
   return TrackState::kLost;
+}
+
+TrackState Tracker::state() const {
+  return StateOf(has_plan(), has_alignment(), CurrentReliability().flag);
 }
 
 const char* ToString(ReliabilityFlag flag) {

@@ -445,6 +445,9 @@ class Tracker {
                                 // of the walk under a first place refused for them (Offer)
 };
 
+// The state an estimator is in: waiting for a plan or an alignment, else as its flag says.
+TrackState StateOf(bool has_plan, bool has_alignment, ReliabilityFlag flag);
+
 const char* ToString(ReliabilityFlag flag);
 const char* ToString(TrackState state);
 

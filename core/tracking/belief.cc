@@ -90,6 +90,12 @@ void Belief::Resample(const SampleBounds& bounds, const Eigen::Vector2d& wearer_
   samples_ = std::move(out);
 }
 
+bool SamePlace(const Se2& a, const Se2& b, const Eigen::Vector2d& wearer_slam, double radius_m,
+               double radius_rad) {
+  return (a * wearer_slam - b * wearer_slam).squaredNorm() <= radius_m * radius_m &&
+         std::abs(WrapAngle(a.theta - b.theta)) <= radius_rad;
+}
+
 Mode Belief::LeadingMode(const Eigen::Vector2d& wearer_slam, double radius_m,
                          double radius_rad) const {
   Mode best;

@@ -75,6 +75,11 @@ class Belief {
   std::vector<Sample> samples_;
 };
 
+// Whether two alignments put the wearer within radius_m of each other and differ by at
+// most radius_rad in heading: one place of the belief.
+bool SamePlace(const Se2& a, const Se2& b, const Eigen::Vector2d& wearer_slam, double radius_m,
+               double radius_rad);
+
 // KLD-sampling's sample count for k occupied bins (Fox 2003, eq. 12, z for 99%).
 size_t KldSamples(size_t bins, double error);
 

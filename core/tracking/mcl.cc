@@ -10,6 +10,8 @@ namespace floorpose::tracking {
 namespace {
 
 constexpr double kSwitchRatio = 2.0;
+// Samples within publish.within_m at the wearer and this in heading are one place.
+constexpr double kPlaceRad = 10.0 * M_PI / 180;
 
 Eigen::Matrix3d PriorCovariance(double sigma_m, double sigma_rad) {
   return Eigen::Vector3d(sigma_rad * sigma_rad, sigma_m * sigma_m, sigma_m * sigma_m).asDiagonal();
@@ -28,13 +30,11 @@ size_t CountPlaces(const Belief& belief, const Eigen::Vector2d& wearer_slam, dou
     if (mass < share) break;
     ++places;
     left -= mass;
-    const Eigen::Vector2d at = m.T_plan_slam * wearer_slam;
     std::vector<Sample>& s = rest.samples();
     s.erase(std::remove_if(s.begin(), s.end(),
                            [&](const Sample& x) {
-                             return (x.T_plan_slam * wearer_slam - at).norm() <= radius_m &&
-                                    std::abs(WrapAngle(x.T_plan_slam.theta -
-                                                       m.T_plan_slam.theta)) <= radius_rad;
+                             return SamePlace(x.T_plan_slam, m.T_plan_slam, wearer_slam, radius_m,
+                                              radius_rad);
                            }),
             s.end());
   }
@@ -73,7 +73,7 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
   // The leading place, polished by ICP on the whole window; the polish moves the place's
   // samples with it when it fits the walls better (a scan-matched proposal).
   const double radius_m = options.publish.within_m;
-  const double radius_rad = 10.0 * M_PI / 180;
+  const double radius_rad = kPlaceRad;
   Mode mode = belief.LeadingMode(u.wearer_slam, radius_m, radius_rad);
   if (u.published) {
     // The published place stays until another holds kSwitchRatio times its mass: a belief
@@ -91,12 +91,9 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
           options.measurement.MeanLogLikelihood(points, mode.T_plan_slam, index, reach)) {
     out.polished = true;
     out.published = out.icp.T_plan_slam;
-    for (Sample& s : belief.samples()) {
-      const Eigen::Vector2d at = s.T_plan_slam * u.wearer_slam;
-      if ((at - pivot).norm() <= radius_m &&
-          std::abs(WrapAngle(s.T_plan_slam.theta - mode.T_plan_slam.theta)) <= radius_rad)
+    for (Sample& s : belief.samples())
+      if (SamePlace(s.T_plan_slam, mode.T_plan_slam, u.wearer_slam, radius_m, radius_rad))
         s.T_plan_slam = Perturb(s.T_plan_slam, shift, pivot);
-    }
   }
   out.places = CountPlaces(belief, u.wearer_slam, radius_m, radius_rad, 0.05);
   out.belief = std::move(belief);
@@ -236,14 +233,7 @@ Reliability MclTracker::CurrentReliability() const {
 }
 
 TrackState MclTracker::state() const {
-  if (!index_) return TrackState::kWaitingForPlan;
-  if (!has_alignment()) return TrackState::kWaitingForAlignment;
-  switch (CurrentReliability().flag) {
-    case ReliabilityFlag::kReliable: return TrackState::kTracking;
-    case ReliabilityFlag::kDegraded: return TrackState::kDegraded;
-    case ReliabilityFlag::kUnreliable: return TrackState::kLost;
-  }
-  return TrackState::kLost;
+  return StateOf(has_plan(), has_alignment(), CurrentReliability().flag);
 }
 
 TrackerState MclTracker::SaveState() const {
@@ -351,11 +341,10 @@ std::string MclTracker::OfferPlaces(const std::vector<GlobalPlace>& places, int6
   }
   // Recovery: the places the belief does not hold get the mass the belief may be missing.
   const double share = std::max(0.05, recovery_.Elsewhere());
-  const Mode lead = belief_.LeadingMode(wearer, options_.publish.within_m, 10.0 * M_PI / 180);
+  const Mode lead = belief_.LeadingMode(wearer, options_.publish.within_m, kPlaceRad);
   std::vector<const GlobalPlace*> fresh;
   for (const GlobalPlace* p : fit)
-    if ((p->T_plan_slam * wearer - lead.T_plan_slam * wearer).norm() > options_.publish.within_m ||
-        std::abs(WrapAngle(p->T_plan_slam.theta - lead.T_plan_slam.theta)) > 10.0 * M_PI / 180)
+    if (!SamePlace(p->T_plan_slam, lead.T_plan_slam, wearer, options_.publish.within_m, kPlaceRad))
       fresh.push_back(p);
   if (fresh.empty()) return "the belief holds every place found";
   belief_.Normalize();

@@ -6,11 +6,14 @@
 
 namespace floorpose::tracking {
 
+double MeasurementModel::HitDensity(double d) const {
+  return std::sqrt(2.0 / M_PI) / sigma_m * std::exp(-0.5 * d * d / (sigma_m * sigma_m));
+}
+
 double MeasurementModel::PointLogLikelihood(double d, double reach_m) const {
-  // A half-normal density about the wall, mixed with a uniform one over the reach.
-  const double hit = std::sqrt(2.0 / M_PI) / sigma_m * std::exp(-0.5 * d * d / (sigma_m * sigma_m));
+  // The hit density mixed with a uniform one over the reach.
   const double in_reach = d <= reach_m ? 1.0 : 0.0;
-  return std::log((1.0 - clutter) * hit * in_reach + clutter / reach_m);
+  return std::log((1.0 - clutter) * HitDensity(d) * in_reach + clutter / reach_m);
 }
 
 double MeasurementModel::MeanLogLikelihood(const std::vector<Eigen::Vector2d>& points_slam,

@@ -31,6 +31,8 @@ struct MeasurementModel {
   // The mean log-likelihood of the points (slam frame) under T_plan_slam, per point.
   double MeanLogLikelihood(const std::vector<Eigen::Vector2d>& points_slam, const Se2& T_plan_slam,
                            const ClosestWallIndex& index, double reach_m) const;
+  // The density of a point explained by a wall at distance d: a half-normal of sigma_m.
+  double HitDensity(double d) const;
   // The log-likelihood of one point at distance d from the nearest plan wall (beyond
   // reach_m: clutter alone).
   double PointLogLikelihood(double d, double reach_m) const;

@@ -20,9 +20,7 @@ double ExpectedLogLikelihood(const MeasurementModel& model, double reach_m) {
   double e = 0;
   for (int i = 0; i < kSteps; ++i) {
     const double d = (i + 0.5) * step;
-    const double hit = std::sqrt(2.0 / M_PI) / model.sigma_m *
-                       std::exp(-0.5 * d * d / (model.sigma_m * model.sigma_m));
-    const double density = (1 - model.clutter) * hit + model.clutter / reach_m;
+    const double density = (1 - model.clutter) * model.HitDensity(d) + model.clutter / reach_m;
     e += density * model.PointLogLikelihood(d, reach_m) * step;
   }
   return e;
