@@ -114,7 +114,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
           std::pair{m.recovery().pick_sigma_deg(), "tracking.mcl.recovery.pick_sigma_deg"},
           std::pair{m.recovery().lost_s(), "tracking.mcl.recovery.lost_s"},
           std::pair{m.recovery().search_interval_s(), "tracking.mcl.recovery.search_interval_s"},
-          std::pair{m.publish().within_m(), "tracking.mcl.publish.within_m"}})
+          std::pair{m.publish().within_m(), "tracking.mcl.publish.within_m"},
+          std::pair{m.motion().lost_after_s(), "tracking.mcl.motion.lost_after_s"}})
       if (!(value > 0 && std::isfinite(value))) return std::string(name) + " must be positive";
     if (!(m.recovery().start_doubt() > 0 && m.recovery().start_doubt() < 1))
       return "tracking.mcl.recovery.start_doubt must be in (0, 1)";
@@ -159,7 +160,11 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
         std::pair{c.tracking().refine_window_s(), "tracking.refine_window_s"},
         std::pair{c.tracking().wheel_odometry().window_s(), "tracking.wheel_odometry.window_s"},
         std::pair{c.tracking().wheel_odometry().refine_window_s(),
-                  "tracking.wheel_odometry.refine_window_s"}}) {
+                  "tracking.wheel_odometry.refine_window_s"},
+        std::pair{c.tracking().mcl().motion().relocalization_m(),
+                  "tracking.mcl.motion.relocalization_m"},
+        std::pair{c.tracking().mcl().motion().relocalization_deg(),
+                  "tracking.mcl.motion.relocalization_deg"}}) {
     if (!(value >= 0 && std::isfinite(value))) return std::string(name) + " must be >= 0";
   }
   for (const auto& [value, name] :
@@ -284,6 +289,9 @@ tracking::MclOptions ToMclOptions(const v1::FloorposedConfig& c) {
   o.motion.position_m_per_sqrt_m = m.motion().position_m_per_sqrt_m();
   o.motion.heading_rad_per_sqrt_m = m.motion().heading_deg_per_sqrt_m() * M_PI / 180;
   o.motion.heading_per_turn = m.motion().heading_per_turn();
+  o.motion.lost_after_s = m.motion().lost_after_s();
+  o.motion.relocalization_m = m.motion().relocalization_m();
+  o.motion.relocalization_rad = m.motion().relocalization_deg() * M_PI / 180;
   o.measurement.sigma_m = m.measurement().sigma_m();
   o.measurement.clutter = m.measurement().clutter();
   o.measurement.independent_points = m.measurement().independent_points();

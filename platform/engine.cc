@@ -623,7 +623,12 @@ void Engine::OnHeadsetPose(const Envelope& e) {
     last_pose_stamp_ns_ = pose.stamp_ns;
     eye_z_ = pose.pose_slam.z;
     FollowFloors(pose);
-    est = mcl_ ? mcl_->Correct(pose.pose_slam) : tracker_.Correct(pose.pose_slam);
+    if (!mcl_)
+      est = tracker_.Correct(pose.pose_slam);
+    else if (pose.tracking == v1::HeadsetPose::TRACKING_LOST)
+      mcl_->LoseTracking(), est = mcl_->Project(pose.pose_slam);
+    else
+      est = mcl_->Correct(pose.pose_slam, pose.stamp_ns);
   }
   if (!tracker_.has_plan()) {
     counters_.set_poses_without_plan(counters_.poses_without_plan() + 1);
@@ -956,13 +961,16 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
 std::optional<Engine::Job> Engine::TakeMclJob() {
   const int64_t now = clock_.newest_ns();
   const tracking::MclOptions& options = mcl_->options();
-  const auto since = [&](double window_s) { return now - static_cast<int64_t>(window_s * 1e9); };
+  // Wall points from before a loss of tracking are in another frame.
+  const auto since = [&](double window_s) {
+    return std::max(mcl_->frame_since_ns(),
+                    window_s > 0 ? now - static_cast<int64_t>(window_s * 1e9) : INT64_MIN);
+  };
   if (plan_.global && mcl_->SearchDue(now, store_.points())) {
     // Where on the whole plan do the walls fit: to seed the belief, or to reseed it.
     mcl_->MarkSearchStarted(now);
     const double window_s = tracker_.options().global_window_s;
-    std::optional<Job> job =
-        SearchJob(window_s > 0 ? since(window_s) : INT64_MIN, options.search_min_points);
+    std::optional<Job> job = SearchJob(since(window_s), options.search_min_points);
     if (job) {
       running_ = true;
       return job;

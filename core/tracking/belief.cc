@@ -90,6 +90,25 @@ void Belief::Resample(const SampleBounds& bounds, const Eigen::Vector2d& wearer_
   samples_ = std::move(out);
 }
 
+void Belief::Spread(size_t n, const Eigen::Vector2d& sigmas, const Eigen::Vector2d& wearer_slam,
+                    SplitMix64& rng) {
+  if (samples_.empty() || n == 0) return;
+  const std::vector<double> w = Weights();
+  std::vector<Sample> out;
+  out.reserve(n);
+  const double step = 1.0 / static_cast<double>(n), lw = -std::log(static_cast<double>(n));
+  double u = rng.Uniform() * step, c = w[0];
+  size_t i = 0;
+  for (size_t m = 0; m < n; ++m, u += step) {
+    while (u > c && i + 1 < w.size()) c += w[++i];
+    const Se2& T = samples_[i].T_plan_slam;
+    const Eigen::Vector3d delta(sigmas(0) * rng.Gaussian(), sigmas(1) * rng.Gaussian(),
+                                sigmas(1) * rng.Gaussian());
+    out.push_back({Perturb(T, delta, T * wearer_slam), lw});
+  }
+  samples_ = std::move(out);
+}
+
 bool SamePlace(const Se2& a, const Se2& b, const Eigen::Vector2d& wearer_slam, double radius_m,
                double radius_rad) {
   return (a * wearer_slam - b * wearer_slam).squaredNorm() <= radius_m * radius_m &&

@@ -167,9 +167,15 @@ std::string MclTracker::Flip(int64_t stamp_ns) {
   return {};
 }
 
-PlanPoseEstimate MclTracker::Correct(const Pose2& pose_slam) {
+PlanPoseEstimate MclTracker::Correct(const Pose2& pose_slam, int64_t stamp_ns) {
+  const bool gap =
+      odometry_.stamp_ns &&
+      static_cast<double>(stamp_ns - *odometry_.stamp_ns) * 1e-9 > options_.motion.lost_after_s;
+  odometry_.stamp_ns = stamp_ns;
   if (pose_slam.position.allFinite()) {
-    if (odometry_.position) {
+    if (gap || odometry_.lost) {
+      Relocalize(pose_slam.position, stamp_ns);
+    } else if (odometry_.position) {
       const double step = (pose_slam.position - *odometry_.position).norm();
       // Steps over 5 m between poses 0.3 s apart are a SLAM relocalisation, not a walk.
       if (step < 5.0) {
@@ -189,6 +195,18 @@ PlanPoseEstimate MclTracker::Correct(const Pose2& pose_slam) {
     if (std::isfinite(pose_slam.heading)) odometry_.heading = pose_slam.heading;
   }
   return Project(pose_slam);
+}
+
+void MclTracker::Relocalize(const Eigen::Vector2d& wearer_slam, int64_t stamp_ns) {
+  odometry_.lost = false;
+  frame_since_ns_ = stamp_ns;
+  if (belief_.empty()) return;
+  const Eigen::Vector2d sigmas(options_.motion.relocalization_rad,
+                               options_.motion.relocalization_m);
+  belief_.Spread(options_.samples.max_samples, sigmas, wearer_slam, rng_);
+  ++belief_version_;  // an update running on the belief from before is void
+  last_update_ns_.reset();
+  checked_ = false;
 }
 
 BeliefSummary MclTracker::Summary(const Eigen::Vector2d& wearer_slam, const Se2& T) const {

@@ -91,7 +91,13 @@ class MclTracker {
   std::string ApplyWallPick(const WallPick& pick, int64_t stamp_ns);
   std::string Flip(int64_t stamp_ns);
 
-  PlanPoseEstimate Correct(const Pose2& pose_slam);
+  // A pose the headset tracked, at stamp_ns: the belief drifts with the step from the
+  // last, or spreads by the relocalization model after a loss of tracking.
+  PlanPoseEstimate Correct(const Pose2& pose_slam, int64_t stamp_ns);
+  // The headset says it lost tracking: its next pose may be in a jumped frame.
+  void LoseTracking() { odometry_.lost = true; }
+  // The wall points since this stamp are in the SLAM frame of now (after the last loss).
+  int64_t frame_since_ns() const { return frame_since_ns_; }
   PlanPoseEstimate Project(const Pose2& pose_slam) const;
   TrackState state() const;
   Reliability CurrentReliability() const;
@@ -129,10 +135,17 @@ class MclTracker {
   AlignmentState alignment_;
   uint64_t next_version_ = 1;
   SplitMix64 rng_{0x6d636c};
+  // After a loss of tracking, the frame may have jumped: the belief spreads and the walls
+  // from before stop weighing.
+  void Relocalize(const Eigen::Vector2d& wearer_slam, int64_t stamp_ns);
+
   struct Odometry {  // the wearer now, and the walk since the last update was prepared
     std::optional<Eigen::Vector2d> position;
     double heading = 0, walked_m = 0, turned_rad = 0;
+    std::optional<int64_t> stamp_ns;  // of the last pose
+    bool lost = false;                // the headset said it lost tracking since
   } odometry_;
+  int64_t frame_since_ns_ = INT64_MIN;
   std::optional<Eigen::Vector2d> pick_plan_point_;
   std::optional<int64_t> last_update_ns_, last_search_ns_;
   size_t places_ = 0;     // of the latest update

@@ -20,6 +20,13 @@ struct MotionModel {
   double heading_rad_per_sqrt_m = 0.3 * M_PI / 180;
   // ...and per radian turned: the SLAM's error measuring its own turning, a fraction.
   double heading_per_turn = 0.005;
+  // A headset that loses tracking relocalizes in a frame that may have jumped: poses that
+  // stop for longer than lost_after_s (or say so) spread the alignment by this much at the
+  // wearer, metres and radians (one standard deviation), and the wall points from before
+  // are of the old frame.
+  double lost_after_s = 1.5;
+  double relocalization_m = 1.0;
+  double relocalization_rad = 10.0 * M_PI / 180;
 
   // Standard deviations (heading rad, position m) of the drift of a walk of `metres`
   // with `turned_rad` of turning.

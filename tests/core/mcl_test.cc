@@ -96,7 +96,7 @@ void Walk(MclTracker& mcl, const RoomWalk& room, int64_t* t_ns) {
   for (const Eigen::Vector2d& at : path) {
     *t_ns += 1000000000;
     const Pose2 pose{room.truth.Inverse() * at, 0, 1.6};
-    mcl.Correct(pose);
+    mcl.Correct(pose, *t_ns);
     if (mcl.UpdateDue(*t_ns, 1000)) {
       MclUpdate u = mcl.PrepareUpdate(*t_ns);
       mcl.FinishUpdate(RunMclUpdate(std::move(u), room.SeenFrom(at), *room.index, mcl.options()),
@@ -165,6 +165,38 @@ TEST(MclTrackerTest, WithoutAPickTheSearchSeedsTheBelief) {
   twin.T_plan_slam = Se2{M_PI, {10, 7}} * room.truth;  // the room turned half round
   EXPECT_THAT(mcl.OfferPlaces({twin, right}, 0), ::testing::HasSubstr("seeded with 2"));
   int64_t t = 0;
+  Walk(mcl, room, &t);
+  Walk(mcl, room, &t);
+  EXPECT_THAT(mcl.alignment().T_plan_slam,
+              floorpose::testing::IsNearlySe2(room.truth, Deg(0.5), 0.05));
+  EXPECT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable)
+      << mcl.CurrentReliability().reason;
+}
+
+TEST(MclTrackerTest, AfterALossOfTrackingTheJumpedFrameIsNotTrustedUntilFoundAgain) {
+  RoomWalk room;
+  MclTracker mcl({});
+  mcl.SetPlan(room.index);
+  const Eigen::Vector2d plan_point{4, 2};
+  WallPick pick{room.truth.Inverse() * plan_point,
+                room.truth.Inverse().R() * Eigen::Vector2d(-1, 0),
+                plan_point,
+                {-1, 0}};
+  ASSERT_EQ(mcl.ApplyWallPick(pick, 0), "");
+  int64_t t = 0;
+  Walk(mcl, room, &t);
+  ASSERT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable);
+  EXPECT_EQ(mcl.frame_since_ns(), INT64_MIN) << "no loss yet: every wall point counts";
+  // Five seconds without a pose, then the headset's frame has jumped 1.5 m and 15 degrees
+  // about the wearer.
+  const Eigen::Vector2d wearer{8, 2};
+  room.truth = Se2{0, wearer} * Se2{Deg(15), {1.2, -0.9}} * Se2{0, -wearer} * room.truth;
+  t += 5000000000;
+  mcl.Correct({room.truth.Inverse() * wearer, 0, 1.6}, t);
+  EXPECT_EQ(mcl.frame_since_ns(), t) << "the walls from before are of the old frame";
+  EXPECT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kUnreliable)
+      << "the frame may have jumped: " << mcl.CurrentReliability().reason;
+  EXPECT_EQ(mcl.belief().size(), mcl.options().samples.max_samples);
   Walk(mcl, room, &t);
   Walk(mcl, room, &t);
   EXPECT_THAT(mcl.alignment().T_plan_slam,
