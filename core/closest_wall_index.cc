@@ -127,6 +127,35 @@ std::optional<ClosestWall> ClosestWallIndex::Query(const Eigen::Vector2d& p) con
   return hit;
 }
 
+bool ClosestWallIndex::StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Vector2d& q) const {
+  if (!p.allFinite() || !q.allFinite()) return false;
+  auto cross = [](const Eigen::Vector2d& u, const Eigen::Vector2d& v) {
+    return u.x() * v.y() - u.y() * v.x();
+  };
+  const Eigen::Vector2d step = q - p;
+  // A wall across a piece is within half its length of the piece's middle: a piece no
+  // longer than a cell (or than twice the reach) keeps it in the middle cell's list.
+  const double piece_m = std::min(options_.cell_m, 2 * options_.max_distance_m);
+  const int pieces = static_cast<int>(std::clamp(std::ceil(step.norm() / piece_m), 1.0, 1e4));
+  for (int k = 0; k < pieces; ++k) {
+    const Eigen::Vector2d a = p + step * (static_cast<double>(k) / pieces);
+    const Eigen::Vector2d b = p + step * (static_cast<double>(k + 1) / pieces);
+    const Eigen::Vector2d m = 0.5 * (a + b);
+    const double fx = (m.x() - origin_.x()) / options_.cell_m;
+    const double fy = (m.y() - origin_.y()) / options_.cell_m;
+    if (!(fx >= 0 && fy >= 0 && fx < nx_ && fy < ny_)) continue;
+    const size_t i = static_cast<size_t>(static_cast<int>(fy)) * nx_ + static_cast<int>(fx);
+    for (uint32_t j = cell_begin_[i]; j < cell_begin_[i + 1]; ++j) {
+      const SegmentData& s = data_[candidates_[j]];
+      const Eigen::Vector2d ab = b - a;
+      const double d1 = cross(ab, s.a - a), d2 = cross(ab, s.a + s.d - a);
+      const double d3 = cross(s.d, a - s.a), d4 = cross(s.d, b - s.a);
+      if (d1 * d2 < 0 && d3 * d4 < 0) return true;
+    }
+  }
+  return false;
+}
+
 size_t ClosestWallIndex::MemoryBytes() const {
   return cell_begin_.size() * sizeof(uint32_t) + candidates_.size() * sizeof(uint32_t) +
          plan_.segments.size() * (sizeof(Segment) + sizeof(SegmentData));

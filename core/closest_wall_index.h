@@ -37,6 +37,12 @@ class ClosestWallIndex {
   // The closest wall within max_distance_m, or nothing.
   std::optional<ClosestWall> Query(const Eigen::Vector2d& p) const;
 
+  // Whether the step p -> q properly crosses a wall (touching does not count), from the
+  // candidate lists: exact, in pieces no longer than a cell (any wall across a piece is
+  // close enough to its middle for the middle's cell to list it). For every sample of the
+  // belief at every step.
+  bool StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Vector2d& q) const;
+
   const FloorPlan& plan() const { return plan_; }
   double max_distance_m() const { return options_.max_distance_m; }
   size_t MemoryBytes() const;

@@ -119,6 +119,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
       if (!(value > 0 && std::isfinite(value))) return std::string(name) + " must be positive";
     if (!(m.recovery().start_doubt() > 0 && m.recovery().start_doubt() < 1))
       return "tracking.mcl.recovery.start_doubt must be in (0, 1)";
+    if (!(m.motion().through_wall() > 0 && m.motion().through_wall() <= 1))
+      return "tracking.mcl.motion.through_wall must be in (0, 1]";
     if (!(m.measurement().clutter() > 0 && m.measurement().clutter() < 1))
       return "tracking.mcl.measurement.clutter must be in (0, 1)";
     if (!(m.samples().min_samples() >= 1 &&
@@ -292,6 +294,7 @@ tracking::MclOptions ToMclOptions(const v1::FloorposedConfig& c) {
   o.motion.lost_after_s = m.motion().lost_after_s();
   o.motion.relocalization_m = m.motion().relocalization_m();
   o.motion.relocalization_rad = m.motion().relocalization_deg() * M_PI / 180;
+  o.motion.through_wall = m.motion().through_wall();
   o.measurement.sigma_m = m.measurement().sigma_m();
   o.measurement.clutter = m.measurement().clutter();
   o.measurement.independent_points = m.measurement().independent_points();

@@ -10,6 +10,8 @@ namespace floorpose::tracking {
 namespace {
 
 constexpr double kSwitchRatio = 2.0;
+// The walk kept for the next update: a minute of poses, should updates stall.
+constexpr size_t kMaxPath = 200;
 // Samples within publish.within_m at the wearer and this in heading are one place.
 constexpr double kPlaceRad = 10.0 * M_PI / 180;
 
@@ -62,7 +64,7 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
     Sample& s = belief.samples()[i];
     const double mll = options.measurement.MeanLogLikelihood(points, s.T_plan_slam, index, reach);
     fit += prior[i] * mll;
-    s.log_weight += exponent * mll;
+    s.log_weight += exponent * mll + options.motion.PathLogPrior(u.path_slam, s.T_plan_slam, index);
   }
   out.fit = fit;
   out.exponent = exponent;
@@ -70,8 +72,9 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
   if (belief.EffectiveSize() < 0.5 * static_cast<double>(belief.size()) ||
       belief.size() > options.samples.max_samples)
     belief.Resample(options.samples, u.wearer_slam, rng);
-  // The leading place, polished by ICP on the whole window; the polish moves the place's
-  // samples with it when it fits the walls better (a scan-matched proposal).
+  // The leading place, polished by ICP on the whole window when that fits the walls
+  // better. The polish is published; the samples stay where the belief put them (moving
+  // them with it collapses the belief onto whatever ICP settles on, right or not).
   const double radius_m = options.publish.within_m;
   const double radius_rad = kPlaceRad;
   Mode mode = belief.LeadingMode(u.wearer_slam, radius_m, radius_rad);
@@ -91,9 +94,6 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
           options.measurement.MeanLogLikelihood(points, mode.T_plan_slam, index, reach)) {
     out.polished = true;
     out.published = out.icp.T_plan_slam;
-    for (Sample& s : belief.samples())
-      if (SamePlace(s.T_plan_slam, mode.T_plan_slam, u.wearer_slam, radius_m, radius_rad))
-        s.T_plan_slam = Perturb(s.T_plan_slam, shift, pivot);
   }
   out.places = CountPlaces(belief, u.wearer_slam, radius_m, radius_rad, 0.05);
   out.belief = std::move(belief);
@@ -189,9 +189,12 @@ PlanPoseEstimate MclTracker::Correct(const Pose2& pose_slam, int64_t stamp_ns) {
         for (Sample& s : belief_.samples())
           s.T_plan_slam = options_.motion.Sample(s.T_plan_slam, s.T_plan_slam * pose_slam.position,
                                                  sigmas, rng_);
+      } else {
+        odometry_.path.clear();  // not a step the wearer walked
       }
     }
     odometry_.position = pose_slam.position;
+    if (odometry_.path.size() < kMaxPath) odometry_.path.push_back(pose_slam.position);
     if (std::isfinite(pose_slam.heading)) odometry_.heading = pose_slam.heading;
   }
   return Project(pose_slam);
@@ -199,6 +202,7 @@ PlanPoseEstimate MclTracker::Correct(const Pose2& pose_slam, int64_t stamp_ns) {
 
 void MclTracker::Relocalize(const Eigen::Vector2d& wearer_slam, int64_t stamp_ns) {
   odometry_.lost = false;
+  odometry_.path.clear();  // of the old frame
   frame_since_ns_ = stamp_ns;
   if (belief_.empty()) return;
   const Eigen::Vector2d sigmas(options_.motion.relocalization_rad,
@@ -304,7 +308,11 @@ MclUpdate MclTracker::PrepareUpdate(int64_t now_ns) {
   u.seed = rng_.Next();
   u.belief_version = belief_version_;
   if (has_alignment()) u.published = alignment_.T_plan_slam;
-  odometry_.walked_m = odometry_.turned_rad = 0;  // from here: the walk since prepared
+  // From here: the walk since prepared, from where the wearer is.
+  u.path_slam = std::move(odometry_.path);
+  odometry_.path.clear();
+  if (odometry_.position) odometry_.path.push_back(*odometry_.position);
+  odometry_.walked_m = odometry_.turned_rad = 0;
   last_update_ns_ = now_ns;
   return u;
 }

@@ -50,7 +50,8 @@ struct MclOptions {
 struct MclUpdate {
   Belief belief;
   Eigen::Vector2d wearer_slam = Eigen::Vector2d::Zero();
-  double evidence = 0;  // the tempering exponent: the window's share that is new
+  std::vector<Eigen::Vector2d> path_slam;  // the wearer's walk since the last update
+  double evidence = 0;                     // the tempering exponent: the window's share that is new
   double dt_s = 0;
   uint64_t seed = 0;
   uint64_t belief_version = 0;
@@ -142,8 +143,9 @@ class MclTracker {
   struct Odometry {  // the wearer now, and the walk since the last update was prepared
     std::optional<Eigen::Vector2d> position;
     double heading = 0, walked_m = 0, turned_rad = 0;
-    std::optional<int64_t> stamp_ns;  // of the last pose
-    bool lost = false;                // the headset said it lost tracking since
+    std::vector<Eigen::Vector2d> path;  // positions since the last update was prepared
+    std::optional<int64_t> stamp_ns;    // of the last pose
+    bool lost = false;                  // the headset said it lost tracking since
   } odometry_;
   int64_t frame_since_ns_ = INT64_MIN;
   std::optional<Eigen::Vector2d> pick_plan_point_;

@@ -26,7 +26,7 @@ struct MeasurementModel {
   // reach: clutter and walls the plan lacks.
   double clutter = 0.2;
   // What a whole window of wall points is worth in independent measurements.
-  double independent_points = 10.0;
+  double independent_points = 5.0;
 
   // The mean log-likelihood of the points (slam frame) under T_plan_slam, per point.
   double MeanLogLikelihood(const std::vector<Eigen::Vector2d>& points_slam, const Se2& T_plan_slam,

@@ -20,4 +20,12 @@ Se2 MotionModel::Sample(const Se2& T, const Eigen::Vector2d& pivot, const Eigen:
   return Perturb(T, delta, pivot);
 }
 
+double MotionModel::PathLogPrior(const std::vector<Eigen::Vector2d>& path_slam, const Se2& T,
+                                 const ClosestWallIndex& index) const {
+  int crossings = 0;
+  for (size_t i = 1; i < path_slam.size(); ++i)
+    crossings += index.StepCrossesWall(T * path_slam[i - 1], T * path_slam[i]);
+  return crossings * std::log(through_wall);
+}
+
 }  // namespace floorpose::tracking

@@ -7,6 +7,9 @@
 
 #include <Eigen/Core>
 
+#include <vector>
+
+#include "core/closest_wall_index.h"
 #include "core/random.h"
 #include "core/se2.h"
 
@@ -27,6 +30,10 @@ struct MotionModel {
   double lost_after_s = 1.5;
   double relocalization_m = 1.0;
   double relocalization_rad = 10.0 * M_PI / 180;
+  // The map's part of the motion model (Probabilistic Robotics, section 5.7): a wearer
+  // walks through a plan line only where the line is not there (a door drawn closed, a
+  // wall since removed); the probability of that, per line walked through.
+  double through_wall = 0.1;
 
   // Standard deviations (heading rad, position m) of the drift of a walk of `metres`
   // with `turned_rad` of turning.
@@ -36,6 +43,11 @@ struct MotionModel {
   // wearer), with `sigmas` as Sigmas gives them.
   Se2 Sample(const Se2& T, const Eigen::Vector2d& pivot, const Eigen::Vector2d& sigmas,
              SplitMix64& rng) const;
+
+  // The log-probability of the wearer's path (slam frame, in order) under T: through_wall
+  // for every step that crosses a plan wall.
+  double PathLogPrior(const std::vector<Eigen::Vector2d>& path_slam, const Se2& T,
+                      const ClosestWallIndex& index) const;
 };
 
 }  // namespace floorpose::tracking

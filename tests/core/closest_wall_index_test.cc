@@ -104,6 +104,32 @@ TEST_P(ClosestWallIndexRandomTest, AgreesWithBruteForce) {
   }
 }
 
+TEST_P(ClosestWallIndexRandomTest, StepCrossingsAgreeWithEveryWall) {
+  const GridCase c = GetParam();
+  ClosestWallIndex::Options options;
+  options.cell_m = c.cell_m;
+  options.max_distance_m = c.max_distance_m;
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    const FloorPlan plan = RandomPlan(seed, 10 + 25 * static_cast<int>(seed));
+    const ClosestWallIndex index(plan, options);
+    SplitMix64 rng(200 + seed);
+    const Eigen::Vector2d lo = plan.min.array() - 2.0, hi = plan.max.array() + 2.0;
+    int crossing = 0;
+    for (int i = 0; i < 3000; ++i) {
+      const Eigen::Vector2d p(rng.Uniform(lo.x(), hi.x()), rng.Uniform(lo.y(), hi.y()));
+      // Steps from a few centimetres to a few metres, in every direction.
+      const double length = std::exp(rng.Uniform(std::log(0.02), std::log(4.0)));
+      const double angle = rng.Uniform(-M_PI, M_PI);
+      const Eigen::Vector2d q = p + length * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+      const bool want = StepCrossesPlan(p, q, plan);
+      EXPECT_EQ(index.StepCrossesWall(p, q), want)
+          << "step (" << p.transpose() << ") -> (" << q.transpose() << ")";
+      crossing += want;
+    }
+    EXPECT_GT(crossing, 100) << "both outcomes exercised";
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Grids, ClosestWallIndexRandomTest,
                          ::testing::Values(GridCase{0.25, 3.0},  // the defaults
                                            GridCase{0.1, 0.5}, GridCase{0.5, 1.5},
