@@ -10,7 +10,8 @@ namespace floorpose::tracking {
 namespace {
 
 constexpr double kSwitchRatio = 2.0;
-// The walk kept for the next update: a minute of poses, should updates stall.
+// The walk kept for the next update: the last minute of poses (a belief seeded by a
+// search weighs the walk that led there; updates that stall keep the latest).
 constexpr size_t kMaxPath = 200;
 // Samples within publish.within_m at the wearer and this in heading are one place.
 constexpr double kPlaceRad = 10.0 * M_PI / 180;
@@ -194,7 +195,8 @@ PlanPoseEstimate MclTracker::Correct(const Pose2& pose_slam, int64_t stamp_ns) {
       }
     }
     odometry_.position = pose_slam.position;
-    if (odometry_.path.size() < kMaxPath) odometry_.path.push_back(pose_slam.position);
+    if (odometry_.path.size() >= kMaxPath) odometry_.path.erase(odometry_.path.begin());
+    odometry_.path.push_back(pose_slam.position);
     if (std::isfinite(pose_slam.heading)) odometry_.heading = pose_slam.heading;
   }
   return Project(pose_slam);
