@@ -20,19 +20,19 @@ Eigen::Matrix3d PriorCovariance(double sigma_m, double sigma_rad) {
   return Eigen::Vector3d(sigma_rad * sigma_rad, sigma_m * sigma_m, sigma_m * sigma_m).asDiagonal();
 }
 
-// How many distinct places hold at least `share` of the belief: leading modes taken out
-// one after another.
-size_t CountPlaces(const Belief& belief, const Eigen::Vector2d& wearer_slam, double radius_m,
-                   double radius_rad, double share) {
+// The distinct places holding at least `share` of the belief, heaviest first (at most 4):
+// leading modes taken out one after another.
+std::vector<Mode> Places(const Belief& belief, const Eigen::Vector2d& wearer_slam, double radius_m,
+                         double radius_rad, double share) {
   Belief rest = belief;
-  size_t places = 0;
+  std::vector<Mode> places;
   double left = 1.0;
   for (int i = 0; i < 4 && !rest.empty() && left >= share; ++i) {
-    const Mode m = rest.LeadingMode(wearer_slam, radius_m, radius_rad);
-    const double mass = m.mass * left;
-    if (mass < share) break;
-    ++places;
-    left -= mass;
+    Mode m = rest.LeadingMode(wearer_slam, radius_m, radius_rad);
+    m.mass *= left;
+    if (m.mass < share) break;
+    places.push_back(m);
+    left -= m.mass;
     std::vector<Sample>& s = rest.samples();
     s.erase(std::remove_if(s.begin(), s.end(),
                            [&](const Sample& x) {
@@ -41,7 +41,7 @@ size_t CountPlaces(const Belief& belief, const Eigen::Vector2d& wearer_slam, dou
                            }),
             s.end());
   }
-  return std::max<size_t>(places, 1);
+  return places;
 }
 
 }  // namespace
@@ -69,6 +69,8 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
   }
   out.fit = fit;
   out.exponent = exponent;
+  const double radius_m = options.publish.within_m;
+  const double radius_rad = kPlaceRad;
   belief.Normalize();
   if (belief.EffectiveSize() < 0.5 * static_cast<double>(belief.size()) ||
       belief.size() > options.samples.max_samples)
@@ -76,8 +78,6 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
   // The leading place, polished by ICP on the whole window when that fits the walls
   // better. The polish is published; the samples stay where the belief put them (moving
   // them with it collapses the belief onto whatever ICP settles on, right or not).
-  const double radius_m = options.publish.within_m;
-  const double radius_rad = kPlaceRad;
   Mode mode = belief.LeadingMode(u.wearer_slam, radius_m, radius_rad);
   if (u.published) {
     // The published place stays until another holds kSwitchRatio times its mass: a belief
@@ -96,7 +96,8 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
     out.polished = true;
     out.published = out.icp.T_plan_slam;
   }
-  out.places = CountPlaces(belief, u.wearer_slam, radius_m, radius_rad, 0.05);
+  out.places =
+      std::max<size_t>(1, Places(belief, u.wearer_slam, radius_m, radius_rad, 0.05).size());
   out.belief = std::move(belief);
   return out;
 }
@@ -365,6 +366,10 @@ std::string MclTracker::OfferPlaces(const std::vector<GlobalPlace>& places, int6
     for (const GlobalPlace* p : fit)
       belief_.AddGaussian(p->T_plan_slam, P, p->T_plan_slam * wearer, n, 0.0, rng_);
     StartBelief(fit[0]->T_plan_slam, AlignmentSource::kGlobalSearch, stamp_ns);
+    // The search chose these places for fitting the window's walls: those walls say
+    // nothing more about them (the best of many random places fits them well too). Only
+    // walls that come after the search weigh the belief and its doubt.
+    last_update_ns_ = stamp_ns;
     return "seeded with " + std::to_string(k) + " place(s)";
   }
   // Recovery: the places the belief does not hold get the mass the belief may be missing.
