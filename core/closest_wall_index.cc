@@ -145,11 +145,12 @@ bool ClosestWallIndex::StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Ve
     const double fy = (m.y() - origin_.y()) / options_.cell_m;
     if (!(fx >= 0 && fy >= 0 && fx < nx_ && fy < ny_)) continue;
     const size_t i = static_cast<size_t>(static_cast<int>(fy)) * nx_ + static_cast<int>(fx);
+    // The piece finds the candidates; each is tried against the whole step, so that a
+    // wall crossed where two pieces meet counts.
     for (uint32_t j = cell_begin_[i]; j < cell_begin_[i + 1]; ++j) {
       const SegmentData& s = data_[candidates_[j]];
-      const Eigen::Vector2d ab = b - a;
-      const double d1 = cross(ab, s.a - a), d2 = cross(ab, s.a + s.d - a);
-      const double d3 = cross(s.d, a - s.a), d4 = cross(s.d, b - s.a);
+      const double d1 = cross(step, s.a - p), d2 = cross(step, s.a + s.d - p);
+      const double d3 = cross(s.d, p - s.a), d4 = cross(s.d, q - s.a);
       if (d1 * d2 < 0 && d3 * d4 < 0) return true;
     }
   }

@@ -55,6 +55,19 @@ TEST(MeasurementModelTest, NearWallsIsLikelierAndFarIsClutter) {
   EXPECT_GT(expected, m.PointLogLikelihood(1.0, 3.0));
 }
 
+TEST(MotionModelTest, AWalkThroughAPlanWallCostsThroughWallPerWall) {
+  const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
+  MotionModel motion;
+  // Three metres along the room's left part: short of the inner wall at x = 4 under one
+  // alignment, across it under another a metre to the right.
+  const std::vector<Eigen::Vector2d> path_slam = {{0.5, 1}, {1.5, 1}, {2.5, 1}, {3.5, 1}};
+  const Se2 beside{0, {0, 0}}, through{0, {1, 0}};
+  EXPECT_EQ(motion.PathLogPrior(path_slam, beside, index), 0.0);
+  EXPECT_NEAR(motion.PathLogPrior(path_slam, through, index), std::log(motion.through_wall), 1e-12)
+      << "one wall crossed, once";
+  EXPECT_EQ(motion.PathLogPrior({{0.5, 1}}, through, index), 0.0) << "no step";
+}
+
 TEST(RecoveryTest, AFitLikeARandomPlaceKeepsTheDoubtAndARightOneClearsIt) {
   MeasurementModel m;
   const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
@@ -201,6 +214,31 @@ TEST(MclTrackerTest, AfterALossOfTrackingTheJumpedFrameIsNotTrustedUntilFoundAga
   Walk(mcl, room, &t);
   EXPECT_THAT(mcl.alignment().T_plan_slam,
               floorpose::testing::IsNearlySe2(room.truth, Deg(0.5), 0.05));
+  EXPECT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable)
+      << mcl.CurrentReliability().reason;
+}
+
+TEST(MclTrackerTest, ASearchedPlaceIsNotVouchedForByTheWallsItWasFoundWith) {
+  RoomWalk room;
+  MclTracker mcl({});
+  mcl.SetPlan(room.index);
+  int64_t t = 20000000000;
+  mcl.Correct({room.truth.Inverse() * Eigen::Vector2d(2, 2), 0, 1.6}, t);
+  GlobalPlace right;
+  right.T_plan_slam = room.truth;
+  ASSERT_THAT(mcl.OfferPlaces({right}, t), ::testing::HasSubstr("seeded with 1"));
+  EXPECT_FALSE(mcl.UpdateDue(t, 1000)) << "nothing new since the search";
+  t += 1000000000;
+  ASSERT_TRUE(mcl.UpdateDue(t, 1000));
+  MclUpdate u = mcl.PrepareUpdate(t);
+  EXPECT_NEAR(u.evidence, 1.0 / mcl.options().window_s, 1e-9) << "only the walls since the search";
+  mcl.FinishUpdate(RunMclUpdate(std::move(u), room.SeenFrom({2, 2}), *room.index, mcl.options()),
+                   t);
+  EXPECT_NE(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable)
+      << "the best of many places fits the walls it was chosen for, right or not";
+  // The walls that come after the search do vouch for it.
+  Walk(mcl, room, &t);
+  Walk(mcl, room, &t);
   EXPECT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable)
       << mcl.CurrentReliability().reason;
 }
