@@ -118,7 +118,7 @@ void MclTracker::ChangeFloor(std::shared_ptr<const ClosestWallIndex> index) {
   ++belief_version_;
   checked_ = false;
   last_update_ns_.reset();
-  recovery_.Reset();
+  recovery_ = Recovery(options_.recovery, options_.measurement, *index_);  // this floor's walls
 }
 
 void MclTracker::Reset() {
