@@ -981,7 +981,12 @@ std::optional<Engine::Job> Engine::TakeMclJob() {
   job.cloud = store_.Snapshot(config_.tracking().max_points(), nullptr, 0, since(options.window_s));
   if (job.cloud.size() < options.min_points) return std::nullopt;
   store_.TakeNewPoints();
+  const int64_t fresh_since =
+      std::max(since(options.window_s), mcl_->last_update_ns().value_or(INT64_MIN));
+  std::vector<Eigen::Vector2d> fresh =
+      store_.Snapshot(config_.tracking().max_points(), nullptr, 0, fresh_since);
   job.mcl = mcl_->PrepareUpdate(now);
+  job.mcl->fresh_slam = std::move(fresh);
   job.mcl_options = options;
   job.index = tracker_.index();
   job.version = alignment().version;

@@ -59,12 +59,19 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
   const std::vector<Eigen::Vector2d> points = ThinCloud(cloud, 0.1, options.weigh_points);
   const double exponent = u.evidence * std::min(options.measurement.independent_points,
                                                 static_cast<double>(points.size()));
+  // The fit the recovery filter weighs is predictive: of the walls the belief has not
+  // been weighed on yet, under the belief before this update. The walls that shaped the
+  // belief fit it well wherever it settled, right or wrong.
+  const std::vector<Eigen::Vector2d> fresh =
+      u.fresh_slam.empty() ? points : ThinCloud(u.fresh_slam, 0.1, options.weigh_points);
   const std::vector<double> prior = belief.Weights();
   double fit = 0;
   for (size_t i = 0; i < belief.size(); ++i) {
     Sample& s = belief.samples()[i];
     const double mll = options.measurement.MeanLogLikelihood(points, s.T_plan_slam, index, reach);
-    fit += prior[i] * mll;
+    fit += prior[i] * (u.fresh_slam.empty() ? mll
+                                            : options.measurement.MeanLogLikelihood(
+                                                  fresh, s.T_plan_slam, index, reach));
     s.log_weight += exponent * mll + options.motion.PathLogPrior(u.path_slam, s.T_plan_slam, index);
   }
   out.fit = fit;

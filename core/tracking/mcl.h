@@ -51,7 +51,9 @@ struct MclUpdate {
   Belief belief;
   Eigen::Vector2d wearer_slam = Eigen::Vector2d::Zero();
   std::vector<Eigen::Vector2d> path_slam;  // the wearer's walk since the last update
-  double evidence = 0;                     // the tempering exponent: the window's share that is new
+  // The window's wall points that came since the last update (none: the whole window).
+  std::vector<Eigen::Vector2d> fresh_slam;
+  double evidence = 0;  // the tempering exponent: the window's share that is new
   double dt_s = 0;
   uint64_t seed = 0;
   uint64_t belief_version = 0;
@@ -109,6 +111,7 @@ class MclTracker {
   // An update is due with a belief, min_points in the window, and update_interval_s
   // since the last.
   bool UpdateDue(int64_t now_ns, size_t window_points) const;
+  std::optional<int64_t> last_update_ns() const { return last_update_ns_; }
   MclUpdate PrepareUpdate(int64_t now_ns);
   // Takes an update's belief when no pick, flip, place or reset came since it was
   // prepared; returns whether it did.
