@@ -623,12 +623,14 @@ void Engine::OnHeadsetPose(const Envelope& e) {
     last_pose_stamp_ns_ = pose.stamp_ns;
     eye_z_ = pose.pose_slam.z;
     FollowFloors(pose);
-    if (!mcl_)
+    if (!mcl_) {
       est = tracker_.Correct(pose.pose_slam);
-    else if (pose.tracking == v1::HeadsetPose::TRACKING_LOST)
-      mcl_->LoseTracking(), est = mcl_->Project(pose.pose_slam);
-    else
+    } else if (pose.tracking == v1::HeadsetPose::TRACKING_LOST) {
+      mcl_->LoseTracking();
+      est = mcl_->Project(pose.pose_slam);
+    } else {
       est = mcl_->Correct(pose.pose_slam, pose.stamp_ns);
+    }
   }
   if (!tracker_.has_plan()) {
     counters_.set_poses_without_plan(counters_.poses_without_plan() + 1);

@@ -10,6 +10,23 @@
 
 namespace floorpose::tracking {
 
+namespace {
+
+// Low-variance resampling (Probabilistic Robotics table 4.4): n picks of the normalized
+// weights w at one random offset and even steps, each handed to take(index).
+template <typename Take>
+void DrawLowVariance(const std::vector<double>& w, size_t n, SplitMix64& rng, Take&& take) {
+  const double step = 1.0 / static_cast<double>(n);
+  double u = rng.Uniform() * step, c = w[0];
+  size_t i = 0;
+  for (size_t m = 0; m < n; ++m, u += step) {
+    while (u > c && i + 1 < w.size()) c += w[++i];
+    take(i);
+  }
+}
+
+}  // namespace
+
 void Belief::AddGaussian(const Se2& T, const Eigen::Matrix3d& P, const Eigen::Vector2d& pivot,
                          size_t n, double log_weight, SplitMix64& rng) {
   Eigen::LLT<Eigen::Matrix3d> llt(P);
@@ -75,14 +92,10 @@ void Belief::Resample(const SampleBounds& bounds, const Eigen::Vector2d& wearer_
   size_t target = bounds.min_samples;
   while (out.size() < std::min(target, bounds.max_samples)) {
     const size_t pass = std::min(target, bounds.max_samples) - out.size();
-    const double step = 1.0 / static_cast<double>(pass);
-    double u = rng.Uniform() * step, c = w[0];
-    size_t i = 0;
-    for (size_t m = 0; m < pass; ++m, u += step) {
-      while (u > c && i + 1 < w.size()) c += w[++i];
+    DrawLowVariance(w, pass, rng, [&](size_t i) {
       out.push_back({samples_[i].T_plan_slam, 0.0});
       bins.insert(bin_of(samples_[i].T_plan_slam));
-    }
+    });
     target = std::max(bounds.min_samples, KldSamples(bins.size(), bounds.kld_error));
   }
   const double lw = -std::log(static_cast<double>(out.size()));
@@ -90,22 +103,13 @@ void Belief::Resample(const SampleBounds& bounds, const Eigen::Vector2d& wearer_
   samples_ = std::move(out);
 }
 
-void Belief::Spread(size_t n, const Eigen::Vector2d& sigmas, const Eigen::Vector2d& wearer_slam,
-                    SplitMix64& rng) {
+void Belief::Draw(size_t n, SplitMix64& rng) {
   if (samples_.empty() || n == 0) return;
   const std::vector<double> w = Weights();
   std::vector<Sample> out;
   out.reserve(n);
-  const double step = 1.0 / static_cast<double>(n), lw = -std::log(static_cast<double>(n));
-  double u = rng.Uniform() * step, c = w[0];
-  size_t i = 0;
-  for (size_t m = 0; m < n; ++m, u += step) {
-    while (u > c && i + 1 < w.size()) c += w[++i];
-    const Se2& T = samples_[i].T_plan_slam;
-    const Eigen::Vector3d delta(sigmas(0) * rng.Gaussian(), sigmas(1) * rng.Gaussian(),
-                                sigmas(1) * rng.Gaussian());
-    out.push_back({Perturb(T, delta, T * wearer_slam), lw});
-  }
+  const double lw = -std::log(static_cast<double>(n));
+  DrawLowVariance(w, n, rng, [&](size_t i) { out.push_back({samples_[i].T_plan_slam, lw}); });
   samples_ = std::move(out);
 }
 

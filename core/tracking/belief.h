@@ -59,11 +59,8 @@ class Belief {
   // each sample), within the bounds.
   void Resample(const SampleBounds& bounds, const Eigen::Vector2d& wearer_slam, SplitMix64& rng);
 
-  // n samples drawn by weight (low-variance), each then moved by a Gaussian of the given
-  // standard deviations (heading rad, position m) about where it puts the wearer: the
-  // belief after the frame may have jumped, all samples weighing the same.
-  void Spread(size_t n, const Eigen::Vector2d& sigmas, const Eigen::Vector2d& wearer_slam,
-              SplitMix64& rng);
+  // n samples drawn by weight (low-variance, as Resample draws), all weighing the same.
+  void Draw(size_t n, SplitMix64& rng);
 
   // The place with the most weight within radius_m (at the wearer) and radius_rad of one
   // of its samples, and the weighted mean of the samples there.

@@ -62,16 +62,18 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
   // The fit the recovery filter weighs is predictive: of the walls the belief has not
   // been weighed on yet, under the belief before this update. The walls that shaped the
   // belief fit it well wherever it settled, right or wrong.
+  const bool predictive = !u.fresh_slam.empty();
   const std::vector<Eigen::Vector2d> fresh =
-      u.fresh_slam.empty() ? points : ThinCloud(u.fresh_slam, 0.1, options.weigh_points);
+      predictive ? ThinCloud(u.fresh_slam, 0.1, options.weigh_points)
+                 : std::vector<Eigen::Vector2d>{};
   const std::vector<double> prior = belief.Weights();
   double fit = 0;
   for (size_t i = 0; i < belief.size(); ++i) {
     Sample& s = belief.samples()[i];
     const double mll = options.measurement.MeanLogLikelihood(points, s.T_plan_slam, index, reach);
-    fit += prior[i] * (u.fresh_slam.empty() ? mll
-                                            : options.measurement.MeanLogLikelihood(
-                                                  fresh, s.T_plan_slam, index, reach));
+    fit += prior[i] *
+           (predictive ? options.measurement.MeanLogLikelihood(fresh, s.T_plan_slam, index, reach)
+                       : mll);
     s.log_weight += exponent * mll + options.motion.PathLogPrior(u.path_slam, s.T_plan_slam, index);
   }
   out.fit = fit;
@@ -217,7 +219,10 @@ void MclTracker::Relocalize(const Eigen::Vector2d& wearer_slam, int64_t stamp_ns
   if (belief_.empty()) return;
   const Eigen::Vector2d sigmas(options_.motion.relocalization_rad,
                                options_.motion.relocalization_m);
-  belief_.Spread(options_.samples.max_samples, sigmas, wearer_slam, rng_);
+  belief_.Draw(options_.samples.max_samples, rng_);
+  for (Sample& s : belief_.samples())
+    s.T_plan_slam =
+        options_.motion.Sample(s.T_plan_slam, s.T_plan_slam * wearer_slam, sigmas, rng_);
   ++belief_version_;  // an update running on the belief from before is void
   last_update_ns_.reset();
   checked_ = false;
