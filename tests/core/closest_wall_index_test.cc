@@ -88,13 +88,18 @@ void PrintTo(const GridCase& c, std::ostream* os) {
   *os << "cell " << c.cell_m << " m, max distance " << c.max_distance_m << " m";
 }
 
+ClosestWallIndex::Options OptionsOf(const GridCase& c) {
+  ClosestWallIndex::Options options;
+  options.cell_m = c.cell_m;
+  options.max_distance_m = c.max_distance_m;
+  return options;
+}
+
 class ClosestWallIndexRandomTest : public ::testing::TestWithParam<GridCase> {};
 
 TEST_P(ClosestWallIndexRandomTest, AgreesWithBruteForce) {
   const GridCase c = GetParam();
-  ClosestWallIndex::Options options;
-  options.cell_m = c.cell_m;
-  options.max_distance_m = c.max_distance_m;
+  const ClosestWallIndex::Options options = OptionsOf(c);
   for (uint64_t seed = 1; seed <= 4; ++seed) {
     const FloorPlan plan = RandomPlan(seed, 10 + 25 * static_cast<int>(seed));
     const Agreement a = ExpectAgreement(plan, options, 100 + seed, 5000, c.max_distance_m + 2.0);
@@ -106,9 +111,7 @@ TEST_P(ClosestWallIndexRandomTest, AgreesWithBruteForce) {
 
 TEST_P(ClosestWallIndexRandomTest, StepCrossingsAgreeWithEveryWall) {
   const GridCase c = GetParam();
-  ClosestWallIndex::Options options;
-  options.cell_m = c.cell_m;
-  options.max_distance_m = c.max_distance_m;
+  const ClosestWallIndex::Options options = OptionsOf(c);
   for (uint64_t seed = 1; seed <= 4; ++seed) {
     const FloorPlan plan = RandomPlan(seed, 10 + 25 * static_cast<int>(seed));
     const ClosestWallIndex index(plan, options);

@@ -95,6 +95,13 @@ struct RoomWalk {
   Se2 truth{Deg(30), {3, -2}};
   std::vector<Eigen::Vector2d> walls_plan = floorpose::testing::SampleWalls(plan, 0.05);
 
+  // A gaze pick at plan_point on a wall facing -x, as the headset sees it under T.
+  static WallPick PickOn(const Se2& T_plan_slam, const Eigen::Vector2d& plan_point) {
+    const Eigen::Vector2d normal(-1, 0);
+    return {T_plan_slam.Inverse() * plan_point, T_plan_slam.Inverse().R() * normal, plan_point,
+            normal};
+  }
+
   std::vector<Eigen::Vector2d> SeenFrom(const Eigen::Vector2d& wearer_plan) const {
     std::vector<Eigen::Vector2d> out;
     for (const Eigen::Vector2d& p : walls_plan)
@@ -125,9 +132,7 @@ TEST(MclTrackerTest, AWallPickOffByAMetreEndsOnTheTruthAndReliable) {
   // A pick on the inner wall, 0.8 m along it and 3 degrees off.
   const Se2 off = Se2{Deg(3), {0, 0.8}} * room.truth;
   const Eigen::Vector2d plan_point{4, 2};
-  WallPick pick{
-      off.Inverse() * plan_point, off.Inverse().R() * Eigen::Vector2d(-1, 0), plan_point, {-1, 0}};
-  ASSERT_EQ(mcl.ApplyWallPick(pick, 0), "");
+  ASSERT_EQ(mcl.ApplyWallPick(RoomWalk::PickOn(off, plan_point), 0), "");
   EXPECT_NE(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable) << "not yet checked";
   int64_t t = 0;
   Walk(mcl, room, &t);
@@ -146,11 +151,7 @@ TEST(MclTrackerTest, APickOnTheWrongWallIsNotReliableAndTheSearchPlacesTheWearer
   // A pick 4 m and 90 degrees off.
   const Se2 wrong = Se2{Deg(90), {4, 0}} * room.truth;
   const Eigen::Vector2d plan_point{10, 3};
-  WallPick pick{wrong.Inverse() * plan_point,
-                wrong.Inverse().R() * Eigen::Vector2d(-1, 0),
-                plan_point,
-                {-1, 0}};
-  ASSERT_EQ(mcl.ApplyWallPick(pick, 0), "");
+  ASSERT_EQ(mcl.ApplyWallPick(RoomWalk::PickOn(wrong, plan_point), 0), "");
   int64_t t = 0;
   Walk(mcl, room, &t);
   EXPECT_NE(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable);
@@ -191,11 +192,7 @@ TEST(MclTrackerTest, AfterALossOfTrackingTheJumpedFrameIsNotTrustedUntilFoundAga
   MclTracker mcl({});
   mcl.SetPlan(room.index);
   const Eigen::Vector2d plan_point{4, 2};
-  WallPick pick{room.truth.Inverse() * plan_point,
-                room.truth.Inverse().R() * Eigen::Vector2d(-1, 0),
-                plan_point,
-                {-1, 0}};
-  ASSERT_EQ(mcl.ApplyWallPick(pick, 0), "");
+  ASSERT_EQ(mcl.ApplyWallPick(RoomWalk::PickOn(room.truth, plan_point), 0), "");
   int64_t t = 0;
   Walk(mcl, room, &t);
   ASSERT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable);
