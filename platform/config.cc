@@ -107,6 +107,7 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
           std::pair{m.measurement().independent_points(),
                     "tracking.mcl.measurement.independent_points"},
           std::pair{m.measurement().window_s(), "tracking.mcl.measurement.window_s"},
+          std::pair{m.wheel().window_s(), "tracking.mcl.wheel.window_s"},
           std::pair{m.measurement().update_interval_s(),
                     "tracking.mcl.measurement.update_interval_s"},
           std::pair{m.samples().kld_error(), "tracking.mcl.samples.kld_error"},
@@ -166,7 +167,17 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
         std::pair{c.tracking().mcl().motion().relocalization_m(),
                   "tracking.mcl.motion.relocalization_m"},
         std::pair{c.tracking().mcl().motion().relocalization_deg(),
-                  "tracking.mcl.motion.relocalization_deg"}}) {
+                  "tracking.mcl.motion.relocalization_deg"},
+        std::pair{c.tracking().mcl().motion().position_m_per_sqrt_m(),
+                  "tracking.mcl.motion.position_m_per_sqrt_m"},
+        std::pair{c.tracking().mcl().motion().heading_deg_per_sqrt_m(),
+                  "tracking.mcl.motion.heading_deg_per_sqrt_m"},
+        std::pair{c.tracking().mcl().motion().heading_per_turn(),
+                  "tracking.mcl.motion.heading_per_turn"},
+        std::pair{c.tracking().mcl().wheel().heading_deg_per_sqrt_m(),
+                  "tracking.mcl.wheel.heading_deg_per_sqrt_m"},
+        std::pair{c.tracking().mcl().wheel().heading_per_turn(),
+                  "tracking.mcl.wheel.heading_per_turn"}}) {
     if (!(value >= 0 && std::isfinite(value))) return std::string(name) + " must be >= 0";
   }
   for (const auto& [value, name] :
@@ -426,6 +437,10 @@ v1::FloorposedConfig ForOdometry(v1::FloorposedConfig config, v1::HeadsetPose::O
     t.set_confirm_walk_m(w.confirm_walk_m());
     t.set_jump_clear_ratio(w.jump_clear_ratio());
     t.set_search_recent(w.search_recent());
+    v1::MclConfig& m = *t.mutable_mcl();
+    m.mutable_motion()->set_heading_deg_per_sqrt_m(m.wheel().heading_deg_per_sqrt_m());
+    m.mutable_motion()->set_heading_per_turn(m.wheel().heading_per_turn());
+    m.mutable_measurement()->set_window_s(m.wheel().window_s());
   }
   return config;
 }

@@ -683,6 +683,16 @@ void Engine::UseOdometry(v1::HeadsetPose::Odometry odometry) {
   config_ = ForOdometry(base_config_, odometry);
   const v1::TrackingConfig& t = config_.tracking();
   tracker_.SetOdometryOptions(ToTrackerOptions(config_));
+  if (mcl_) {
+    const tracking::MclOptions o = ToMclOptions(config_);
+    mcl_->SetDrift(o.motion, o.window_s);
+    spdlog::info(
+        "device {} moves on {} odometry: heading drift {:.2f} deg/sqrt(m), {:.3f} per turn, "
+        "window {} s",
+        config_.dds().device_id(), v1::HeadsetPose::Odometry_Name(odometry),
+        o.motion.heading_rad_per_sqrt_m * 180 / M_PI, o.motion.heading_per_turn, o.window_s);
+    return;
+  }
   spdlog::info(
       "device {} moves on {} odometry: drift_window {}, window_s {}, refine_window_s {}, "
       "confirm_walk_m {}, jump_clear_ratio {}, search_recent {}",

@@ -151,6 +151,7 @@ class Engine {
     return mcl_ ? mcl_->alignment() : tracker_.alignment();
   }
   TrackState state() const { return mcl_ ? mcl_->state() : tracker_.state(); }
+  const tracking::MclTracker* mcl() const { return mcl_.get(); }  // tracking.estimator MCL
   Reliability reliability() const {
     return mcl_ ? mcl_->CurrentReliability() : tracker_.CurrentReliability();
   }

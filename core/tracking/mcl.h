@@ -89,6 +89,12 @@ class MclTracker {
   bool has_alignment() const { return alignment_.version > 0; }
   const AlignmentState& alignment() const { return alignment_; }
   const MclOptions& options() const { return options_; }
+  // The device's drift and the window its walls stay rigid over: a headset's, or a
+  // wheel's (tracking.mcl.wheel) once its poses say WHEEL.
+  void SetDrift(const MotionModel& motion, double window_s) {
+    options_.motion = motion;
+    options_.window_s = window_s;
+  }
   const Belief& belief() const { return belief_; }
 
   std::string ApplyWallPick(const WallPick& pick, int64_t stamp_ns);

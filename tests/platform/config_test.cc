@@ -212,6 +212,17 @@ TEST(ConfigTest, WheelOdometryReplacesTheHeadsetsDriftAndWindows) {
   EXPECT_TRUE(wheel.tracking().search_recent());
   EXPECT_EQ(ToTrackerOptions(wheel).filter.drift_window, 9);
   EXPECT_EQ(wheel.tracking().drift_heading_deg(), headset.tracking().drift_heading_deg());
+  // The belief's drift and window: a wheel's (tracking.mcl.wheel), else a headset's.
+  const tracking::MclOptions mcl_headset = ToMclOptions(headset);
+  const tracking::MclOptions mcl_wheel = ToMclOptions(wheel);
+  EXPECT_DOUBLE_EQ(mcl_headset.motion.heading_rad_per_sqrt_m, 0.3 * M_PI / 180);
+  EXPECT_DOUBLE_EQ(mcl_wheel.motion.heading_rad_per_sqrt_m, 4.0 * M_PI / 180);
+  EXPECT_DOUBLE_EQ(mcl_headset.motion.heading_per_turn, 0.005);
+  EXPECT_DOUBLE_EQ(mcl_wheel.motion.heading_per_turn, 0.05);
+  EXPECT_DOUBLE_EQ(mcl_headset.window_s, 20);
+  EXPECT_DOUBLE_EQ(mcl_wheel.window_s, 4);
+  EXPECT_DOUBLE_EQ(mcl_wheel.motion.position_m_per_sqrt_m,
+                   mcl_headset.motion.position_m_per_sqrt_m);
 }
 
 // Every field of a message type and of its sub-messages, depth first.

@@ -251,6 +251,21 @@ TEST_F(EngineInputTest, AWheeledDeviceIsTrackedWithTheWheelOdometrysDrift) {
 
 // The whole-plan search runs on new walls only: a search on the walls of the last one
 // finds the same places, and would count twice towards their lead (issue 7).
+TEST_F(EngineInputTest, AWheeledDeviceMovesTheBeliefWithTheWheelsDrift) {
+  config_.mutable_tracking()->set_estimator(v1::TrackingConfig::MCL);
+  Start(/*with_plan=*/true);
+  ASSERT_NE(engine_->mcl(), nullptr);
+  const double headset = engine_->mcl()->options().motion.heading_rad_per_sqrt_m;
+  v1::HeadsetPose wheel = Pose(1);
+  wheel.set_odometry(v1::HeadsetPose::WHEEL);
+  engine_->OnHeadsetPose(Wrap(wheel));
+  EXPECT_GT(engine_->mcl()->options().motion.heading_rad_per_sqrt_m, 10 * headset);
+  EXPECT_LT(engine_->mcl()->options().window_s, 20);
+  engine_->OnHeadsetPose(Wrap(Pose(2)));  // unset again: a headset's SLAM
+  EXPECT_EQ(engine_->mcl()->options().motion.heading_rad_per_sqrt_m, headset);
+  EXPECT_EQ(engine_->mcl()->options().window_s, 20);
+}
+
 TEST_F(EngineInputTest, TheSearchWaitsForNewWalls) {
   config_.mutable_tracking()->set_global_search(true);
   config_.mutable_tracking()->set_global_min_points(50);
