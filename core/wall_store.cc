@@ -87,22 +87,39 @@ std::vector<Eigen::Vector2d> WallStore::Snapshot(size_t max_points,
                                                  std::vector<Eigen::Vector2d>* normals,
                                                  uint64_t since_generation,
                                                  int64_t min_stamp_ns) const {
-  // Sorted voxel order makes the snapshot independent of hash-map iteration order, so
-  // that the daemon and the offline evaluator register the same points.
+  // One point per voxel, the first of the lowest mesh id, in sorted voxel order: the
+  // snapshot is independent of hash-map iteration order, so that the daemon and the
+  // offline evaluator register the same points.
   std::vector<std::pair<VoxelKey, const WallPoint*>> cells;
-  cells.reserve(voxels_.size());
-  for (const auto& [key, refs] : voxels_) {
-    const Ref* best = nullptr;
-    for (const Ref& r : refs) {
-      const Mesh& mesh = meshes_.at(r.mesh_id);
-      if (since_generation && mesh.generation <= since_generation) continue;
-      if (mesh.stamp_ns < min_stamp_ns) continue;
-      if (!best || std::tie(r.mesh_id, r.index) < std::tie(best->mesh_id, best->index)) best = &r;
+  const auto wanted = [&](const Mesh& mesh) {
+    return !(since_generation && mesh.generation <= since_generation) &&
+           mesh.stamp_ns >= min_stamp_ns;
+  };
+  if (since_generation || min_stamp_ns != INT64_MIN) {
+    // A window: from its meshes alone, not every voxel of the store.
+    std::vector<std::tuple<VoxelKey, uint64_t, uint32_t>> refs;
+    for (const auto& [id, mesh] : meshes_) {
+      if (!wanted(mesh)) continue;
+      for (uint32_t i = 0; i < mesh.points.size(); ++i)
+        refs.emplace_back(KeyOf(mesh.points[i].p), id, i);
     }
-    if (best) cells.emplace_back(key, &meshes_.at(best->mesh_id).points[best->index]);
+    std::sort(refs.begin(), refs.end());
+    for (size_t i = 0; i < refs.size(); ++i) {
+      const auto& [key, id, index] = refs[i];
+      if (i == 0 || std::get<0>(refs[i - 1]) != key)
+        cells.emplace_back(key, &meshes_.at(id).points[index]);
+    }
+  } else {
+    cells.reserve(voxels_.size());
+    for (const auto& [key, refs] : voxels_) {
+      const Ref* best = nullptr;
+      for (const Ref& r : refs)
+        if (!best || std::tie(r.mesh_id, r.index) < std::tie(best->mesh_id, best->index)) best = &r;
+      if (best) cells.emplace_back(key, &meshes_.at(best->mesh_id).points[best->index]);
+    }
+    std::sort(cells.begin(), cells.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
   }
-  std::sort(cells.begin(), cells.end(),
-            [](const auto& a, const auto& b) { return a.first < b.first; });
   const size_t n = cells.size();
   const size_t take = (max_points == 0 || max_points >= n) ? n : max_points;
   std::vector<Eigen::Vector2d> out;

@@ -153,6 +153,35 @@ TEST(WallStoreTest, SnapshotIsOnePointPerVoxelBoundedAndDeterministic) {
   EXPECT_NE(ten.back(), full[9]);
 }
 
+// A windowed snapshot (by generation or stamp) is built from the window's meshes only;
+// it is what the whole store's snapshot would be had it held those meshes alone.
+TEST(WallStoreTest, WindowedSnapshotIsTheSnapshotOfTheWindowsMeshes) {
+  SplitMix64 rng(45);
+  const double voxel = 0.1;
+  WallStore store(voxel);
+  std::map<uint64_t, std::pair<std::vector<WallPoint>, int64_t>> live;  // id: points, stamp
+  for (uint64_t m = 0; m < 12; ++m) {
+    const uint64_t id = (m * 7) % 10;  // some ids written twice
+    live[id] = {RandomPoints(rng, 200, -2, 2), static_cast<int64_t>(m) * 10};
+    store.Upsert(id, live[id].first, live[id].second);
+  }
+  store.Remove(3);
+  live.erase(3);
+  for (const int64_t since : {INT64_MIN, int64_t{0}, int64_t{45}, int64_t{80}, int64_t{200}}) {
+    WallStore window(voxel);
+    for (const auto& [id, mesh] : live)
+      if (mesh.second >= since) window.Upsert(id, mesh.first, mesh.second);
+    for (const size_t max : {size_t{0}, size_t{50}})
+      EXPECT_EQ(store.Snapshot(max, nullptr, 0, since), window.Snapshot(max)) << since;
+  }
+  // By generation: the meshes written after it.
+  const uint64_t half = store.generation() / 2;
+  WallStore later(voxel);
+  for (const auto& [id, mesh] : live)
+    if (mesh.second / 10 >= static_cast<int64_t>(half)) later.Upsert(id, mesh.first, mesh.second);
+  EXPECT_EQ(store.Snapshot(0, nullptr, half), later.Snapshot(0));
+}
+
 TEST(WallStoreTest, QueryRadiusMatchesBruteForce) {
   SplitMix64 rng(44);
   WallStore store(0.05);
