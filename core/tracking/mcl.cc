@@ -360,12 +360,19 @@ bool MclTracker::SearchDue(int64_t now_ns, size_t window_points) const {
     return false;
   if (belief_.empty()) return true;
   if (!checked_) return false;
+  if (!recovery_.searched()) return true;  // a start is checked against the whole plan
   const BeliefSummary s =
       Summary(odometry_.position.value_or(Eigen::Vector2d::Zero()), alignment_.T_plan_slam);
   return s.elsewhere >= options_.recovery.search_share;
 }
 
 std::string MclTracker::OfferPlaces(const std::vector<GlobalPlace>& places, int64_t stamp_ns) {
+  std::string what = MixPlaces(places, stamp_ns);
+  recovery_.Searched();
+  return what;
+}
+
+std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places, int64_t stamp_ns) {
   std::vector<const GlobalPlace*> fit;
   for (const GlobalPlace& p : places)
     if (p.rank < 2 && fit.size() < 8) fit.push_back(&p);

@@ -123,8 +123,9 @@ class MclTracker {
   // prepared; returns whether it did.
   bool FinishUpdate(MclUpdateResult result, int64_t stamp_ns);
 
-  // A search of the whole plan is due without a belief, or while the wearer may be
-  // elsewhere (RecoveryOptions::search_share), every search_interval_s.
+  // A search of the whole plan is due without a belief, once after every start (pick,
+  // flip, place, restore) to check it, or while the wearer may be elsewhere
+  // (RecoveryOptions::search_share); at most every search_interval_s.
   bool SearchDue(int64_t now_ns, size_t window_points) const;
   void MarkSearchStarted(int64_t now_ns) { last_search_ns_ = now_ns; }
   // Seeds the belief with a search's refined places (RefinePlaces' order), or mixes them
@@ -136,6 +137,7 @@ class MclTracker {
   // nothing of the old belief's fit.
   void StartBelief(const Se2& published, AlignmentSource source, int64_t stamp_ns);
   BeliefSummary Summary(const Eigen::Vector2d& wearer_slam, const Se2& T) const;
+  std::string MixPlaces(const std::vector<GlobalPlace>& places, int64_t stamp_ns);
 
   MclOptions options_;
   std::shared_ptr<const ClosestWallIndex> index_;

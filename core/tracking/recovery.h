@@ -37,6 +37,12 @@ class Recovery {
 
   // Starts over at start_doubt (a new pick, place or plan).
   void Reset();
+  // A search of the whole plan has been offered to the belief since the start. A wrong
+  // start (a pick off by a room) fits its walls better than a random place does, as a
+  // right one does: only the other places that fit tell the two apart, so every start is
+  // checked by one search.
+  void Searched() { searched_ = true; }
+  bool searched() const { return searched_; }
   // One update: the belief's mean log-likelihood per wall point, the tempering exponent
   // it was weighed with, dt_s after the last.
   void Observe(double mean_log_likelihood, double exponent, double dt_s);
@@ -52,6 +58,7 @@ class Recovery {
   double random_ = 0;    // ...and of a random one
   double log_odds_ = 0;  // of elsewhere against here
   double fit_ = 0;       // the latest
+  bool searched_ = false;
 };
 
 // The mean log-likelihood per point the model expects of a right alignment: points at the

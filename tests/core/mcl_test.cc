@@ -76,8 +76,12 @@ TEST(RecoveryTest, AFitLikeARandomPlaceKeepsTheDoubtAndARightOneClearsIt) {
   EXPECT_LT(random, expected);
   Recovery right({}, m, index);
   EXPECT_NEAR(right.Elsewhere(), 0.5, 1e-9) << "a start is doubted";
+  EXPECT_FALSE(right.searched());
   right.Observe(expected, 10.0, 1.0);
   EXPECT_LT(right.Elsewhere(), 1e-6);
+  right.Searched();
+  right.Reset();
+  EXPECT_FALSE(right.searched()) << "every start is checked by a search of its own";
   Recovery wrong({}, m, index);
   for (int i = 0; i < 5; ++i) wrong.Observe(random, 1.0, 1.0);
   EXPECT_GT(wrong.Elsewhere(), 0.5) << "a fit no better than chance never clears the doubt";
@@ -125,6 +129,17 @@ void Walk(MclTracker& mcl, const RoomWalk& room, int64_t* t_ns) {
   }
 }
 
+// The search that checks a start (a pick, a flip), once an update has weighed it, finds
+// only the truth's place.
+void CheckStart(MclTracker& mcl, const RoomWalk& room, int64_t t_ns) {
+  ASSERT_TRUE(mcl.SearchDue(t_ns, 1000)) << "a start is checked against the whole plan";
+  mcl.MarkSearchStarted(t_ns);
+  GlobalPlace right;
+  right.T_plan_slam = room.truth;
+  mcl.OfferPlaces({right}, t_ns);
+  EXPECT_FALSE(mcl.SearchDue(t_ns + 10'000'000'000, 1000)) << "once";
+}
+
 TEST(MclTrackerTest, AWallPickOffByAMetreEndsOnTheTruthAndReliable) {
   RoomWalk room;
   MclTracker mcl({});
@@ -138,6 +153,8 @@ TEST(MclTrackerTest, AWallPickOffByAMetreEndsOnTheTruthAndReliable) {
   Walk(mcl, room, &t);
   EXPECT_THAT(mcl.alignment().T_plan_slam,
               floorpose::testing::IsNearlySe2(room.truth, Deg(0.5), 0.05));
+  CheckStart(mcl, room, t);
+  Walk(mcl, room, &t);
   const Reliability r = mcl.CurrentReliability();
   EXPECT_EQ(r.flag, ReliabilityFlag::kReliable) << r.reason;
   EXPECT_GT(r.probability, 0.9);
@@ -195,6 +212,7 @@ TEST(MclTrackerTest, AfterALossOfTrackingTheJumpedFrameIsNotTrustedUntilFoundAga
   ASSERT_EQ(mcl.ApplyWallPick(RoomWalk::PickOn(room.truth, plan_point), 0), "");
   int64_t t = 0;
   Walk(mcl, room, &t);
+  CheckStart(mcl, room, t);
   ASSERT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable);
   EXPECT_EQ(mcl.frame_since_ns(), INT64_MIN) << "no loss yet: every wall point counts";
   // Five seconds without a pose, then the headset's frame has jumped 1.5 m and 15 degrees
