@@ -1023,8 +1023,8 @@ void Engine::OnMclDone(Done done) {
   const bool taken = mcl_->FinishUpdate(std::move(*done.mcl), done.job.stamp_ns);
   const Reliability r = mcl_->CurrentReliability();
   last_registration_ = {done.result, taken, taken ? r.reason : "a new prior came meanwhile"};
-  spdlog::debug("belief: {} samples, {} place(s), fit {:.2f}, polished {}, {:.1f} ms: {:.0f}% {}",
-                samples, places, fit, polished, done.result.time_ms, 100 * r.probability, r.reason);
+  spdlog::info("belief: {} samples, {} place(s), fit {:.2f}, polished {}, {:.1f} ms: {:.0f}% {}",
+               samples, places, fit, polished, done.result.time_ms, 100 * r.probability, r.reason);
   if (!taken) return;
   counters_.set_registrations_accepted(counters_.registrations_accepted() + 1);
   PublishAlignment();

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -52,6 +53,40 @@ TEST(BenchDaemonTest, TwoHeadsetsEachAnsweredByItsOwnDaemon) {
     EXPECT_NE(log.find("as device '" + std::string(device) + "'"), std::string::npos) << device;
     EXPECT_NE(log.find("stopped: 201 poses in, 201 plan poses out"), std::string::npos) << log;
   }
+  fs::remove_all(dir);
+}
+
+// --config: the daemon runs what the file adds (here the MCL estimator), and its updates
+// are counted as registrations; a file that is not a configuration is refused.
+TEST(BenchDaemonTest, TheDaemonRunsTheConfigurationGiven) {
+  const fs::path dir =
+      fs::path(::testing::TempDir()) / ("bench-config-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string config = (dir / "mcl.conf").string();
+  std::ofstream(config) << "tracking { estimator: MCL }\n";
+  const std::string out = (dir / "out.json").string();
+  tools::ChildProcess bench({FLOORPOSE_PATH, "bench", "daemon", "--minutes", "1", "--speed", "20",
+                             "--domain", std::to_string(testing::UniqueDomain()), "--config",
+                             config, "--logs", (dir / "logs").string(), "--json"},
+                            out);
+  ASSERT_TRUE(bench.started());
+  ASSERT_EQ(bench.Wait(std::chrono::seconds(90)), 0) << testing::ReadText(out);
+  const std::string text = testing::ReadText(out);
+  const nlohmann::json j = nlohmann::json::parse(text.substr(text.rfind("\n{") + 1));
+  EXPECT_EQ(j["poses_out"], j["poses_in"]);
+  EXPECT_GT(j["registrations"].get<int>(), 0);
+  const std::string log = testing::ReadText(dir / "logs" / "bench-1.log");
+  EXPECT_NE(log.find("belief: "), std::string::npos) << log;
+  EXPECT_EQ(log.find("registration: "), std::string::npos) << "RULES ran";
+
+  const std::string bad = (dir / "bad.conf").string();
+  std::ofstream(bad) << "tracking { estimator: NONE }\n";
+  const std::string bad_out = (dir / "bad.txt").string();
+  tools::ChildProcess refused({FLOORPOSE_PATH, "bench", "daemon", "--config", bad}, bad_out);
+  ASSERT_TRUE(refused.started());
+  EXPECT_EQ(refused.Wait(std::chrono::seconds(30)), 2);
+  EXPECT_NE(testing::ReadText(bad_out).find("bad.conf"), std::string::npos);
   fs::remove_all(dir);
 }
 

@@ -64,12 +64,15 @@ struct BenchDaemonOptions {
   std::string floorposed;
   std::string logs;         // keep the daemons' logs here
   std::string latency_csv;  // every pose's latency here
+  std::string config;       // more of the daemon's configuration (text format)
   bool json = false;
 };
 
-// Registration times (ms) from a daemon's log: "registration: ..., 12.3 ms, drift ...".
+// Registration times (ms) from a daemon's log: "registration: ..., 12.3 ms, drift ..."
+// (tracking.estimator RULES) or "belief: ..., polished true, 12.3 ms: ..." (MCL).
 std::vector<double> RegistrationTimes(const std::string& log_path) {
-  static const std::regex kLine(R"(registration: .*iterations, ([0-9.]+) ms,)");
+  static const std::regex kLine(
+      R"((?:registration: .*iterations|belief: .*polished (?:true|false)), ([0-9.]+) ms)");
   std::vector<double> out;
   std::ifstream in(log_path);
   std::string line;
@@ -149,14 +152,27 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
     hs.round_trip_ms.reserve(hs.walk.steps.size());
   }
 
+  std::string extra_config;
+  if (!o.config.empty()) {
+    std::ifstream in(o.config);
+    std::stringstream text;
+    text << in.rdbuf();
+    extra_config = text.str();
+    v1::FloorposedConfig parsed;
+    std::string error;
+    if (!platform::ParseConfig(extra_config, &parsed, &error)) {
+      spdlog::error("--config {}: {}", o.config, error);
+      return 2;
+    }
+  }
   for (Headset& hs : headsets) {
     const fs::path dir = tmp / hs.device;
     fs::create_directories(dir);
     const std::string config_path = (dir / "floorposed.conf").string();
     std::ofstream(config_path) << platform::LoopbackDdsConfigText(domain, hs.device)
                                << "plan_path: \"" << fs::absolute(plan_path).string()
-                               << "\"\nlog_level: \"info\"\nstate_dir: \"" << dir.string()
-                               << "\"\n";
+                               << "\"\nlog_level: \"info\"\nstate_dir: \"" << dir.string() << "\"\n"
+                               << extra_config;
     hs.log_path = o.logs.empty() ? (dir / "floorposed.log").string()
                                  : (fs::path(o.logs) / (hs.device + ".log")).string();
     if (!o.logs.empty()) fs::create_directories(o.logs);
@@ -409,6 +425,10 @@ Run AddBenchDaemonCommand(CLI::App& bench) {
   app->add_option("--logs", o->logs, "keep the daemons' logs in this directory");
   app->add_option("--latency-csv", o->latency_csv,
                   "write every pose's latency here (device, walk time, ms, mesh deltas before it)");
+  app->add_option("--config", o->config,
+                  "more of the daemons' configuration, text format (for example "
+                  "'tracking { estimator: MCL }'); not dds, plan_path, log_level or state_dir")
+      ->check(CLI::ExistingFile);
   app->add_flag("--json", o->json, "print one JSON object");
   return [o] {
     try {
