@@ -110,12 +110,10 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
           std::pair{m.wheel().window_s(), "tracking.mcl.wheel.window_s"},
           std::pair{m.measurement().update_interval_s(),
                     "tracking.mcl.measurement.update_interval_s"},
-          std::pair{m.samples().kld_error(), "tracking.mcl.samples.kld_error"},
           std::pair{m.recovery().pick_sigma_m(), "tracking.mcl.recovery.pick_sigma_m"},
           std::pair{m.recovery().pick_sigma_deg(), "tracking.mcl.recovery.pick_sigma_deg"},
           std::pair{m.recovery().lost_s(), "tracking.mcl.recovery.lost_s"},
           std::pair{m.recovery().search_interval_s(), "tracking.mcl.recovery.search_interval_s"},
-          std::pair{m.publish().within_m(), "tracking.mcl.publish.within_m"},
           std::pair{m.motion().lost_after_s(), "tracking.mcl.motion.lost_after_s"}})
       if (!(value > 0 && std::isfinite(value))) return std::string(name) + " must be positive";
     if (!(m.recovery().start_doubt() > 0 && m.recovery().start_doubt() < 1))
@@ -313,14 +311,12 @@ tracking::MclOptions ToMclOptions(const v1::FloorposedConfig& c) {
   o.update_interval_s = m.measurement().update_interval_s();
   o.samples.min_samples = m.samples().min_samples();
   o.samples.max_samples = m.samples().max_samples();
-  o.samples.kld_error = m.samples().kld_error();
   o.pick_sigma_m = m.recovery().pick_sigma_m();
   o.pick_sigma_rad = m.recovery().pick_sigma_deg() * M_PI / 180;
   o.recovery.lost_s = m.recovery().lost_s();
   o.recovery.start_doubt = m.recovery().start_doubt();
   o.recovery.search_share = m.recovery().search_share();
   o.recovery.search_interval_s = m.recovery().search_interval_s();
-  o.publish.within_m = m.publish().within_m();
   o.publish.reliable = m.publish().reliable();
   o.publish.degraded = m.publish().degraded();
   o.icp = ToTrackerOptions(c).icp;

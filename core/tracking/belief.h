@@ -23,7 +23,7 @@ struct SampleBounds {
   size_t max_samples = 3000;
   // KLD-sampling: the error bound and the histogram its count is taken over (the wearer's
   // plan position and heading, at these bins).
-  double kld_error = 0.05;
+  double kld_error = 0.05;  // Fox 2003, a fraction
   double bin_m = 0.5;
   double bin_rad = 10.0 * M_PI / 180;
 };

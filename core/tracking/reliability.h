@@ -11,7 +11,7 @@
 namespace floorpose::tracking {
 
 struct PublishOptions {
-  double within_m = 1.0;  // the radius the probability is of, metres
+  double within_m = 1.0;  // the radius the probability is of, metres (the protocol's 1 m)
   double reliable = 0.9;  // RELIABLE at or above this probability
   double degraded = 0.5;  // DEGRADED at or above this, else UNRELIABLE
 };
