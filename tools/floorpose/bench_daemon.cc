@@ -154,13 +154,10 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
 
   std::string extra_config;
   if (!o.config.empty()) {
-    std::ifstream in(o.config);
-    std::stringstream text;
-    text << in.rdbuf();
-    extra_config = text.str();
     v1::FloorposedConfig parsed;
     std::string error;
-    if (!platform::ParseConfig(extra_config, &parsed, &error)) {
+    if (!platform::ReadFile(o.config, 1u << 20, &extra_config, &error) ||
+        !platform::ParseConfig(extra_config, &parsed, &error)) {
       spdlog::error("--config {}: {}", o.config, error);
       return 2;
     }
