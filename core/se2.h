@@ -33,6 +33,22 @@ struct Pose2 {
   double z = 0.0;        // height, metres
 };
 
+// Perturbations of T_plan_slam about a pivot on the plan (normally the wearer), so that
+// they say directly how far the wearer moves (u) and turns (phi):
+//   delta = (phi, u):  x -> R(phi) (x - pivot) + pivot + u
+// The perturbation that takes `from` to `to`: to = Exp(delta) from.
+inline Eigen::Vector3d Difference(const Se2& to, const Se2& from, const Eigen::Vector2d& pivot) {
+  const Eigen::Vector2d u = to * (from.Inverse() * pivot) - pivot;
+  return {WrapAngle(to.theta - from.theta), u.x(), u.y()};
+}
+// Exp(delta) * T.
+inline Se2 Perturb(const Se2& T, const Eigen::Vector3d& delta, const Eigen::Vector2d& pivot) {
+  Se2 E;
+  E.theta = delta(0);
+  E.t = pivot + delta.tail<2>() - E.R() * pivot;
+  return E * T;
+}
+
 inline Pose2 Apply(const Se2& T_b_a, const Pose2& pose_a) {
   return {T_b_a * pose_a.position, WrapAngle(pose_a.heading + T_b_a.theta), pose_a.z};
 }

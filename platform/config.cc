@@ -139,43 +139,20 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   if (!(c.tracking().snapshot_voxel_m() > 0)) return "tracking.snapshot_voxel_m must be positive";
   if (!(c.status_period_s() > 0)) return "status_period_s must be positive";
   if (!(c.snapshot_period_s() > 0)) return "snapshot_period_s must be positive";
-  RegistrationMethod method;
-  if (!ParseRegistrationMethod(c.registration().method(), &method))
-    return "registration.method must be icp, ik or hough, not \"" + c.registration().method() +
-           "\"";
-  if (c.registration().meshes() != "global" && c.registration().meshes() != "local")
-    return "registration.meshes must be global or local";
-  if (!(c.registration().hough_max_rotation_deg() > 0 &&
-        c.registration().hough_max_rotation_deg() < 45))
-    return "registration.hough_max_rotation_deg must be in (0, 45)";
-  if (!(c.registration().hough_bin_deg() > 0 && c.registration().hough_bin_deg() <= 5))
-    return "registration.hough_bin_deg must be in (0, 5]";
-  if (!(c.registration().wall_buffer_m() >= 0)) return "registration.wall_buffer_m must be >= 0";
-  if (!(c.registration().clip_margin_m() >= 0)) return "registration.clip_margin_m must be >= 0";
-  if (!(c.registration().pick_tie_ratio() >= 0 && c.registration().pick_tie_ratio() <= 1))
-    return "registration.pick_tie_ratio must be in [0, 1]";
-  for (const auto& [value, name] :
-       {std::pair{c.registration().search_sigmas(), "registration.search_sigmas"},
-        std::pair{c.registration().search_min_m(), "registration.search_min_m"},
-        std::pair{c.tracking().window_s(), "tracking.window_s"},
-        std::pair{c.tracking().refine_window_s(), "tracking.refine_window_s"},
-        std::pair{c.tracking().wheel_odometry().window_s(), "tracking.wheel_odometry.window_s"},
-        std::pair{c.tracking().wheel_odometry().refine_window_s(),
-                  "tracking.wheel_odometry.refine_window_s"},
-        std::pair{c.tracking().mcl().motion().relocalization_m(),
-                  "tracking.mcl.motion.relocalization_m"},
-        std::pair{c.tracking().mcl().motion().relocalization_deg(),
-                  "tracking.mcl.motion.relocalization_deg"},
-        std::pair{c.tracking().mcl().motion().position_m_per_sqrt_m(),
-                  "tracking.mcl.motion.position_m_per_sqrt_m"},
-        std::pair{c.tracking().mcl().motion().heading_deg_per_sqrt_m(),
-                  "tracking.mcl.motion.heading_deg_per_sqrt_m"},
-        std::pair{c.tracking().mcl().motion().heading_per_turn(),
-                  "tracking.mcl.motion.heading_per_turn"},
-        std::pair{c.tracking().mcl().wheel().heading_deg_per_sqrt_m(),
-                  "tracking.mcl.wheel.heading_deg_per_sqrt_m"},
-        std::pair{c.tracking().mcl().wheel().heading_per_turn(),
-                  "tracking.mcl.wheel.heading_per_turn"}}) {
+  for (const auto& [value, name] : {std::pair{c.tracking().mcl().motion().relocalization_m(),
+                                              "tracking.mcl.motion.relocalization_m"},
+                                    std::pair{c.tracking().mcl().motion().relocalization_deg(),
+                                              "tracking.mcl.motion.relocalization_deg"},
+                                    std::pair{c.tracking().mcl().motion().position_m_per_sqrt_m(),
+                                              "tracking.mcl.motion.position_m_per_sqrt_m"},
+                                    std::pair{c.tracking().mcl().motion().heading_deg_per_sqrt_m(),
+                                              "tracking.mcl.motion.heading_deg_per_sqrt_m"},
+                                    std::pair{c.tracking().mcl().motion().heading_per_turn(),
+                                              "tracking.mcl.motion.heading_per_turn"},
+                                    std::pair{c.tracking().mcl().wheel().heading_deg_per_sqrt_m(),
+                                              "tracking.mcl.wheel.heading_deg_per_sqrt_m"},
+                                    std::pair{c.tracking().mcl().wheel().heading_per_turn(),
+                                              "tracking.mcl.wheel.heading_per_turn"}}) {
     if (!(value >= 0 && std::isfinite(value))) return std::string(name) + " must be >= 0";
   }
   for (const auto& [value, name] :
@@ -191,88 +168,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
     return "routes.snap_m must be in [0, 100]";
   if (c.routes().cell_m() < 0.01 || c.explored().cell_m() < 0.01)
     return "routes.cell_m and explored.cell_m must be at least 0.01";
-  if (!(c.registration().search_tie_ratio() >= 0 && c.registration().search_tie_ratio() <= 1))
-    return "registration.search_tie_ratio must be in [0, 1]";
   if (!(c.icp().degeneracy_ratio() >= 0 && c.icp().degeneracy_ratio() < 1))
     return "icp.degeneracy_ratio must be in [0, 1)";
-  const auto& k = c.tracking();
-  for (const auto& [value, name] :
-       {std::pair{k.measurement_sigma_m(), "measurement_sigma_m"},
-        std::pair{k.measurement_points(), "measurement_points"},
-        std::pair{k.gate_chi2(), "gate_chi2"}, std::pair{k.pick_sigma_m(), "pick_sigma_m"},
-        std::pair{k.pick_sigma_deg(), "pick_sigma_deg"},
-        std::pair{k.worse_fit_ratio(), "worse_fit_ratio"},
-        std::pair{k.turn_sigma_deg(), "turn_sigma_deg"}}) {
-    if (!(value > 0 && std::isfinite(value)))
-      return std::string("tracking.") + name + " must be positive";
-  }
-  if (!(k.drift_heading_deg() >= 0 && k.drift_position_m() >= 0 && k.drift_turn() >= 0 &&
-        k.min_walk_m() >= 0 && k.confirm_m() >= 0 && k.confirm_deg() >= 0))
-    return "tracking.drift_*, min_walk_m and confirm_* must be >= 0";
-  if (!(k.max_drift_scale() >= 1 && k.max_drift_scale() <= 1e6))
-    return "tracking.max_drift_scale must be in [1, 1e6]";
-  if (k.drift_window() > 1000 || k.wheel_odometry().drift_window() > 1000)
-    return "tracking.drift_window and wheel_odometry.drift_window must be at most 1000";
-  if (!(k.max_ambiguity() > 0 && k.max_ambiguity() <= 1))
-    return "tracking.max_ambiguity must be in (0, 1]";
-  if (!(k.first_inlier_ratio() >= 0 && k.first_inlier_ratio() <= 1))
-    return "tracking.first_inlier_ratio must be in [0, 1]";
-  if (!(k.searched_first_inlier_ratio() >= 0 && k.searched_first_inlier_ratio() <= 1))
-    return "tracking.searched_first_inlier_ratio must be in [0, 1]";
-  if (!(k.clear_ambiguity() >= 0 && k.clear_ambiguity() <= k.max_ambiguity()))
-    return "tracking.clear_ambiguity must be in [0, max_ambiguity]";
-  if (k.global_min_points() < 10) return "tracking.global_min_points must be at least 10";
-  if (k.global_check_min_points() < 10)
-    return "tracking.global_check_min_points must be at least 10";
-  if (k.check_min_points() < 3) return "tracking.check_min_points must be at least 3";
-  if (!(k.path_check_margin_m() >= 0 && k.path_check_margin_m() <= 5))
-    return "tracking.path_check_margin_m must be in [0, 5]";
-  if (!(k.off_plan_margin_m() >= 0 && k.off_plan_margin_m() <= 1000))
-    return "tracking.off_plan_margin_m must be in [0, 1000]";
-  if (!(k.global_interval_s() > 0)) return "tracking.global_interval_s must be positive";
-  if (!(k.global_check_interval_s() > 0))
-    return "tracking.global_check_interval_s must be positive";
-  if (!(k.global_window_s() >= 0)) return "tracking.global_window_s must be 0 or positive";
-  if (!(k.global_clear_ratio() > 0 && k.global_clear_ratio() <= 1))
-    return "tracking.global_clear_ratio must be in (0, 1]";
-  if (!(k.global_lead_ratio() > 0 && k.global_lead_ratio() <= 1))
-    return "tracking.global_lead_ratio must be in (0, 1]";
-  if (!(k.global_excuse_crossings() == 0 || k.global_excuse_crossings() >= 1))
-    return "tracking.global_excuse_crossings must be 0 or at least 1";
-  if (!(k.global_min_lead() >= 1 && k.global_min_lead() <= 100))
-    return "tracking.global_min_lead must be in [1, 100]";
-  if (!(k.global_sight_reach_m() >= 0 && k.global_sight_reach_m() <= 50))
-    return "tracking.global_sight_reach_m must be in [0, 50]";
-  if (!(k.global_unseen_reach_m() >= 0 && k.global_unseen_reach_m() <= 20))
-    return "tracking.global_unseen_reach_m must be in [0, 20]";
-  if (!(k.global_unseen_allowance() >= 0 && k.global_unseen_allowance() <= 1))
-    return "tracking.global_unseen_allowance must be in [0, 1]";
-  if (!(k.global_alike_share() >= 0 && k.global_alike_share() <= 1))
-    return "tracking.global_alike_share must be in [0, 1]";
-  if (!(k.global_twin_clear_ratio() > 0 && k.global_twin_clear_ratio() <= 1))
-    return "tracking.global_twin_clear_ratio must be in (0, 1]";
-  if (!(k.global_crowded_ratio() >= 0 && k.global_crowded_ratio() <= 1))
-    return "tracking.global_crowded_ratio must be in [0, 1]";
-  if (k.global_confirm_searches() < 1) return "tracking.global_confirm_searches must be at least 1";
-  if (!(k.global_min_inliers() >= 0 && k.global_min_inliers() <= 1))
-    return "tracking.global_min_inliers must be in [0, 1]";
-  if (!(k.global_place_min_inliers() >= 0 && k.global_place_min_inliers() <= 1))
-    return "tracking.global_place_min_inliers must be in [0, 1]";
-  if (!(k.jump_clear_ratio() >= 0 && k.jump_clear_ratio() <= 1 &&
-        k.wheel_odometry().jump_clear_ratio() >= 0 && k.wheel_odometry().jump_clear_ratio() <= 1))
-    return "tracking.jump_clear_ratio and wheel_odometry.jump_clear_ratio must be in [0, 1]";
-  if (!(k.jump_clear_inliers() > 0 && k.jump_clear_inliers() <= 1))
-    return "tracking.jump_clear_inliers must be in (0, 1]";
-  const auto& rel = k.reliability();
-  if (rel.coefficients_size() != 0 && rel.coefficients_size() != ReliabilityModel::kFeatures + 1)
-    return "tracking.reliability.coefficients needs " +
-           std::to_string(ReliabilityModel::kFeatures + 1) + " values (bias, then weights)";
-  for (double v : rel.coefficients())
-    if (!std::isfinite(v)) return "tracking.reliability.coefficients must be finite";
-  if (!(rel.degraded_probability() >= 0 &&
-        rel.degraded_probability() <= rel.reliable_probability() &&
-        rel.reliable_probability() <= 1))
-    return "tracking.reliability: need 0 <= degraded_probability <= reliable_probability <= 1";
   const std::string& l = c.log_level();
   if (l != "trace" && l != "debug" && l != "info" && l != "warn" && l != "error")
     return "log_level must be trace, debug, info, warn or error";
@@ -282,13 +179,6 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
 std::string ResolvedConfigText(const v1::FloorposedConfig& config) {
   v1::FloorposedConfig copy = config;
   MaterializeDefaults(&copy);
-  // The reliability model prints as the coefficients in use: the built-in fit if unset.
-  auto* rel = copy.mutable_tracking()->mutable_reliability();
-  if (rel->coefficients_size() == 0) {
-    const ReliabilityModel model;
-    rel->add_coefficients(model.bias);
-    for (double w : model.weights) rel->add_coefficients(w);
-  }
   std::string out;
   pb::TextFormat::PrintToString(copy, &out);
   return out;
@@ -319,99 +209,18 @@ tracking::MclOptions ToMclOptions(const v1::FloorposedConfig& c) {
   o.recovery.search_interval_s = m.recovery().search_interval_s();
   o.publish.reliable = m.publish().reliable();
   o.publish.degraded = m.publish().degraded();
-  o.icp = ToTrackerOptions(c).icp;
-  return o;
-}
-
-TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& c) {
-  TrackerOptions t;
   const auto& i = c.icp();
-  t.icp.max_iterations = i.max_iterations();
-  t.icp.levels = i.levels();
-  t.icp.reject_sigma = i.reject_sigma();
-  t.icp.max_correspondence_m = i.max_correspondence_m();
-  t.icp.converge_translation_m = i.converge_translation_m();
-  t.icp.converge_rotation_rad = i.converge_rotation_rad();
-  t.icp.cauchy_scale_factor = i.cauchy_scale_factor();
-  t.icp.inlier_threshold_m = i.inlier_threshold_m();
-  t.icp.degeneracy_ratio = i.degeneracy_ratio();
-  t.icp.coarsest_points = i.coarsest_points();
-  const auto& r = c.registration();
-  ParseRegistrationMethod(r.method(), &t.method);  // validated by ValidateConfig
-  t.wall_buffer_m = r.wall_buffer_m();
-  t.clip_margin_m = r.clip_margin_m();
-  t.pick_search_m = r.pick_search_m();
-  t.pick_search_rad = r.pick_search_deg() * M_PI / 180.0;
-  t.pick_tie_ratio = r.pick_tie_ratio();
-  t.search_sigmas = r.search_sigmas();
-  t.search_min_m = r.search_min_m();
-  t.search_tie_ratio = r.search_tie_ratio();
-  t.local_meshes = r.meshes() == "local";
-  t.hough.max_rotation_rad = r.hough_max_rotation_deg() * M_PI / 180.0;
-  t.hough.bin_rad = r.hough_bin_deg() * M_PI / 180.0;
-  const auto& k = c.tracking();
-  t.min_new_points = k.min_new_points();
-  t.max_interval_s = k.max_interval_s();
-  t.min_points = k.min_points();
-  t.check_min_points = k.check_min_points();
-  t.path_check = k.path_check();
-  t.path_check_margin_m = k.path_check_margin_m();
-  t.off_plan_margin_m = k.off_plan_margin_m();
-  t.score_cap_m = k.score_cap_m();
-  t.worse_fit_ratio = k.worse_fit_ratio();
-  t.min_walk_m = k.min_walk_m();
-  t.pick_sigma_m = k.pick_sigma_m();
-  t.pick_sigma_rad = k.pick_sigma_deg() * M_PI / 180.0;
-  t.confirm_m = k.confirm_m();
-  t.confirm_rad = k.confirm_deg() * M_PI / 180.0;
-  t.confirm_walk_m = k.confirm_walk_m();
-  t.jump_score_ratio = k.jump_score_ratio();
-  t.jump_clear_ratio = k.jump_clear_ratio();
-  t.jump_clear_inliers = k.jump_clear_inliers();
-  t.search_unexplained = k.search_unexplained();
-  t.max_ambiguity = k.max_ambiguity();
-  t.first_inlier_ratio = k.first_inlier_ratio();
-  t.searched_first_inlier_ratio = k.searched_first_inlier_ratio();
-  t.clear_ambiguity = k.clear_ambiguity();
-  t.global_search = k.global_search();
-  t.global_min_points = k.global_min_points();
-  t.global_check_min_points = k.global_check_min_points();
-  t.global_check_interval_s = k.global_check_interval_s();
-  t.global_interval_s = k.global_interval_s();
-  t.global_window_s = k.global_window_s();
-  t.global_clear_ratio = k.global_clear_ratio();
-  t.global_lead_ratio = k.global_lead_ratio();
-  t.global_confirm_searches = k.global_confirm_searches();
-  t.global_min_inliers = k.global_min_inliers();
-  t.global_place_min_inliers = k.global_place_min_inliers();
-  t.global_max_crossings = k.global_max_crossings();
-  t.global_min_lead = k.global_min_lead();
-  t.global_excuse_crossings = k.global_excuse_crossings();
-  t.global_sight_reach_m = k.global_sight_reach_m();
-  t.global_unseen_reach_m = k.global_unseen_reach_m();
-  t.global_unseen_allowance = k.global_unseen_allowance();
-  t.global_alike_share = k.global_alike_share();
-  t.global_twin_clear_ratio = k.global_twin_clear_ratio();
-  t.global_crowded_ratio = k.global_crowded_ratio();
-  t.turn_sigma_rad = k.turn_sigma_deg() * M_PI / 180.0;
-  const double drift_rad = k.drift_heading_deg() * M_PI / 180.0;
-  t.filter.heading_var_per_m = drift_rad * drift_rad;
-  t.filter.position_var_per_m = k.drift_position_m() * k.drift_position_m();
-  t.filter.yaw_scale_sigma = k.drift_turn();
-  t.filter.drift_window = static_cast<int>(k.drift_window());
-  t.filter.max_drift_scale = k.max_drift_scale();
-  t.filter.measurement_sigma_m = k.measurement_sigma_m();
-  t.filter.measurement_points = k.measurement_points();
-  t.filter.gate_chi2 = k.gate_chi2();
-  const auto& rel = k.reliability();
-  if (rel.coefficients_size() == ReliabilityModel::kFeatures + 1) {  // validated
-    t.reliability.bias = rel.coefficients(0);
-    for (int w = 0; w < ReliabilityModel::kFeatures; ++w)
-      t.reliability.weights[w] = rel.coefficients(w + 1);
-  }
-  t.reliability.reliable_probability = rel.reliable_probability();
-  t.reliability.degraded_probability = rel.degraded_probability();
-  return t;
+  o.icp.max_iterations = i.max_iterations();
+  o.icp.levels = i.levels();
+  o.icp.reject_sigma = i.reject_sigma();
+  o.icp.max_correspondence_m = i.max_correspondence_m();
+  o.icp.converge_translation_m = i.converge_translation_m();
+  o.icp.converge_rotation_rad = i.converge_rotation_rad();
+  o.icp.cauchy_scale_factor = i.cauchy_scale_factor();
+  o.icp.inlier_threshold_m = i.inlier_threshold_m();
+  o.icp.degeneracy_ratio = i.degeneracy_ratio();
+  o.icp.coarsest_points = i.coarsest_points();
+  return o;
 }
 
 std::string LoopbackDdsConfigText(uint32_t domain, const std::string& device_id,
@@ -425,15 +234,7 @@ std::string LoopbackDdsConfigText(uint32_t domain, const std::string& device_id,
 
 v1::FloorposedConfig ForOdometry(v1::FloorposedConfig config, v1::HeadsetPose::Odometry odometry) {
   if (odometry == v1::HeadsetPose::WHEEL) {
-    v1::TrackingConfig& t = *config.mutable_tracking();
-    const v1::WheelOdometryConfig& w = t.wheel_odometry();
-    t.set_drift_window(w.drift_window());
-    t.set_window_s(w.window_s());
-    t.set_refine_window_s(w.refine_window_s());
-    t.set_confirm_walk_m(w.confirm_walk_m());
-    t.set_jump_clear_ratio(w.jump_clear_ratio());
-    t.set_search_recent(w.search_recent());
-    v1::MclConfig& m = *t.mutable_mcl();
+    v1::MclConfig& m = *config.mutable_tracking()->mutable_mcl();
     m.mutable_motion()->set_heading_deg_per_sqrt_m(m.wheel().heading_deg_per_sqrt_m());
     m.mutable_motion()->set_heading_per_turn(m.wheel().heading_per_turn());
     m.mutable_measurement()->set_window_s(m.wheel().window_s());

@@ -5,7 +5,7 @@
 #include <optional>
 #include <string>
 
-#include "core/tracker.h"
+#include "core/tracking/alignment.h"
 #include "core/tracking/mcl.h"
 #include "core/wall_extractor.h"
 #include "floorpose/v1/config.pb.h"
@@ -31,11 +31,10 @@ std::string LoopbackDdsConfigText(uint32_t domain, const std::string& device_id,
 // Text format with every option present, defaults included.
 std::string ResolvedConfigText(const v1::FloorposedConfig& config);
 
-TrackerOptions ToTrackerOptions(const v1::FloorposedConfig& config);
-// The MCL estimator's options (tracking.estimator MCL), ICP's from `icp`.
+// The estimator's options (tracking.mcl), ICP's from `icp`.
 tracking::MclOptions ToMclOptions(const v1::FloorposedConfig& config);
 // The configuration a device moving on this odometry is tracked with: for WHEEL,
-// tracking.wheel_odometry replaces the tracking options of the same names.
+// tracking.mcl.wheel replaces the headset's drift and window.
 v1::FloorposedConfig ForOdometry(v1::FloorposedConfig config, v1::HeadsetPose::Odometry odometry);
 // The DDS Security files of dds.security, or nothing when it is not set.
 std::optional<DdsSecurity> ToDdsSecurity(const v1::FloorposedConfig& config);

@@ -88,9 +88,6 @@ v1::Alignment ToProto(const AlignmentState& a, const std::string& floor) {
   return out;
 }
 
-// Smaller turns onto the walls' directions are not worth a new alignment version.
-constexpr double kMinTurnRad = 0.1 * M_PI / 180;
-
 }  // namespace
 
 Engine::Engine(v1::FloorposedConfig config, Publish publish, std::function<int64_t()> now_ns)
@@ -101,14 +98,11 @@ Engine::Engine(v1::FloorposedConfig config, Publish publish, std::function<int64
       frame_(
           ParseHeadsetFrame(config_.headset_frame()).value_or(HeadsetFrame::kUnityLeftHandedYUp)),
       wall_options_(ToWallExtractionOptions(config_)),
-      tracker_(ToTrackerOptions(config_)),
+      tracker_(ToMclOptions(config_)),
       store_(config_.tracking().snapshot_voxel_m()),
       floor_(config_.floor()),
       clock_({static_cast<int64_t>(config_.limits().max_future_s() * 1e9),
-              static_cast<int64_t>(config_.limits().restart_gap_s() * 1e9)}) {
-  if (config_.tracking().estimator() == v1::TrackingConfig::MCL)
-    mcl_ = std::make_unique<tracking::MclTracker>(ToMclOptions(config_));
-}
+              static_cast<int64_t>(config_.limits().restart_gap_s() * 1e9)}) {}
 
 std::string Engine::Start() {
   if (config_.plan_path().empty()) return {};
@@ -130,24 +124,21 @@ std::vector<GlobalPlace> Engine::RefineAsSearch(const Job& job,
   RefineOptions refine = job.refine;  // places are one place as the search has them
   refine.distinct_m = search.options().distinct_m;
   refine.distinct_rad = search.options().distinct_rad;
-  return RefinePlaces(places, job.cloud, job.path, *job.index, job.options.icp, refine, ranked);
+  return RefinePlaces(places, job.cloud, job.path, *job.index, job.icp, refine, ranked);
 }
 
 Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
   Done done;
+  const int64_t t0 = now_ns();
   if (job.global) {
-    const int64_t t0 = now_ns();
     const GlobalSearch& search = job.global->Get();
     const std::vector<double> headings = search.WallHeadings(job.cloud);
     done.places = search.Search(job.cloud, headings);
-    if (done.places.size() >= search.max_places())
-      for (const GlobalPlace& p : done.places) done.full_grid_scores.push_back(p.score);
     if (job.version > 0) done.places.push_back({job.initial});  // the place in use, refined too
-    for (const Se2& seed : job.seeds) done.places.push_back({seed});
     if (job.index) done.places = RefineAsSearch(job, done.places);
     if (job.refine.alike_reach_m > 0 && !done.places.empty() && done.places.front().rank == 0) {
-      // The best's half-turn twin, refined and ranked with the others, so that the
-      // tracker sees the twin the best must beat (the grid's few places often lack it).
+      // The best's half-turn twin, refined and ranked with the others: the grid's few
+      // places often lack it, and the belief must hold both while the walls cannot tell.
       WallSampleOptions in_sight;
       in_sight.reach_m = job.refine.alike_reach_m;
       in_sight.end_margin_m = job.refine.path_margin_m;
@@ -155,43 +146,15 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
           search, job.index->plan(), done.places.front().T_plan_slam, job.path, headings, in_sight);
       if (!twins.empty()) done.places = RefineAsSearch(job, twins, done.places);
     }
-    done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
     done.result.points = static_cast<uint32_t>(job.cloud.size());
   } else if (job.mcl && job.index) {
-    const int64_t t0 = now_ns();
     done.mcl = tracking::RunMclUpdate(std::move(*job.mcl), job.cloud, *job.index, job.mcl_options);
     job.mcl.reset();
     done.result = done.mcl->icp;
-    done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
-  } else if (job.index) {
-    const int64_t t0 = now_ns();
-    if (job.search_recent && job.options.search_window_m > 0 && !job.recent.empty()) {
-      done.result = Register(job.recent, job.recent_normals, *job.index, job.initial, job.options);
-      done.refined = done.result.converged;
-    }
-    if (!done.refined)
-      done.result = Register(job.cloud, job.normals, *job.index, job.initial, job.options);
-    if (!done.refined && !job.recent.empty() && done.result.converged) {
-      // From the whole window's answer, the recent walls only (Hough's rotation search has
-      // done its work there; its refinement is ICP).
-      const RegistrationResult whole = done.result;
-      done.result = job.options.method == RegistrationMethod::kIk
-                        ? RegisterIk(job.recent, *job.index, whole.T_plan_slam, job.options.icp)
-                        : RegisterIcp(job.recent, *job.index, whole.T_plan_slam, job.options.icp);
-      done.result.iterations += whole.iterations;
-      done.result.ambiguity = whole.ambiguity;
-      done.refined = done.result.converged;
-      if (!done.refined) done.result = whole;
-    }
-    if (job.turn) {
-      HoughOptions h = job.options.hough;
-      h.max_rotation_rad = job.options.search_window_rad;
-      done.turn = HoughRotation(job.cloud, job.normals, *job.index, job.initial, h);
-    }
-    done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
   } else {
     done.result.reason = "no floor plan";
   }
+  done.result.time_ms = static_cast<double>(now_ns() - t0) * 1e-6;
   done.job = std::move(job);
   return done;
 }
@@ -305,10 +268,10 @@ Engine::PlanAssets Engine::BuildPlan(const v1::FloorposedConfig& config,
                parsed.plan.max.x() - parsed.plan.min.x(), parsed.plan.max.y() - parsed.plan.min.y(),
                static_cast<double>(a.index->MemoryBytes()) / 1e6);
   if (!parsed.frame.empty()) spdlog::info("floor plan {}: {}", file, parsed.frame);
-  if (config.tracking().global_search() ||
-      config.tracking().estimator() == v1::TrackingConfig::MCL) {
+  {
+    // Up to 12 places while they score 98% of the best (a hall of repeated bays).
     GlobalSearchOptions search;
-    search.crowd_ratio = config.tracking().global_crowded_ratio();
+    search.crowd_ratio = 0.98;
     a.global = std::make_shared<GlobalSearchCache>(parsed.plan, search);
   }
   a.id = parsed.plan.id;
@@ -345,8 +308,6 @@ void Engine::UsePlan(PlanAssets assets, bool another_floor) {
     tracker_.ChangeFloor(plan_.index);
   else
     tracker_.SetPlan(plan_.index);
-  if (mcl_ && another_floor) mcl_->ChangeFloor(plan_.index);
-  if (mcl_ && !another_floor) mcl_->SetPlan(plan_.index);
   last_plan_pose_.reset();
   // Its explored map at once: the plan's rooms, or the floor as it was left.
   if (plan_.explored) explored_sent_ = plan_.explored->revision() - 1;
@@ -618,18 +579,16 @@ void Engine::OnHeadsetPose(const Envelope& e) {
                      "tracked",
                      source_stamp_ns,
                      1e-9 * static_cast<double>(*last_pose_stamp_ns_ - pose.stamp_ns)));
-    est = mcl_ ? mcl_->Project(pose.pose_slam) : tracker_.Project(pose.pose_slam);
+    est = tracker_.Project(pose.pose_slam);
   } else {
     last_pose_stamp_ns_ = pose.stamp_ns;
     eye_z_ = pose.pose_slam.z;
     FollowFloors(pose);
-    if (!mcl_) {
-      est = tracker_.Correct(pose.pose_slam);
-    } else if (pose.tracking == v1::HeadsetPose::TRACKING_LOST) {
-      mcl_->LoseTracking();
-      est = mcl_->Project(pose.pose_slam);
+    if (pose.tracking == v1::HeadsetPose::TRACKING_LOST) {
+      tracker_.LoseTracking();
+      est = tracker_.Project(pose.pose_slam);
     } else {
-      est = mcl_->Correct(pose.pose_slam, pose.stamp_ns);
+      est = tracker_.Correct(pose.pose_slam, pose.stamp_ns);
     }
   }
   if (!tracker_.has_plan()) {
@@ -648,10 +607,7 @@ void Engine::OnHeadsetPose(const Envelope& e) {
   if (pose.pose_slam.position.allFinite()) {
     if (path_.empty() || (pose.pose_slam.position - path_.back().second).norm() >= 0.25)
       path_.emplace_back(pose.stamp_ns, pose.pose_slam.position);
-    // The longer of the registrations' and the search's windows (0: everything).
-    double window_s = config_.tracking().window_s();
-    if (const double global_s = tracker_.options().global_window_s; plan_.global)
-      window_s = window_s > 0 && global_s > 0 ? std::max(window_s, global_s) : 0.0;
+    const double window_s = tracker_.options().search_window_s;
     while (window_s > 0 && !path_.empty() &&
            path_.front().first < pose.stamp_ns - static_cast<int64_t>(window_s * 1e9))
       path_.pop_front();
@@ -681,24 +637,13 @@ void Engine::OnHeadsetPose(const Envelope& e) {
 void Engine::UseOdometry(v1::HeadsetPose::Odometry odometry) {
   odometry_ = odometry;
   config_ = ForOdometry(base_config_, odometry);
-  const v1::TrackingConfig& t = config_.tracking();
-  tracker_.SetOdometryOptions(ToTrackerOptions(config_));
-  if (mcl_) {
-    const tracking::MclOptions o = ToMclOptions(config_);
-    mcl_->SetDrift(o.motion, o.window_s);
-    spdlog::info(
-        "device {} moves on {} odometry: heading drift {:.2f} deg/sqrt(m), {:.3f} per turn, "
-        "window {} s",
-        config_.dds().device_id(), v1::HeadsetPose::Odometry_Name(odometry),
-        o.motion.heading_rad_per_sqrt_m * 180 / M_PI, o.motion.heading_per_turn, o.window_s);
-    return;
-  }
+  const tracking::MclOptions o = ToMclOptions(config_);
+  tracker_.SetDrift(o.motion, o.window_s);
   spdlog::info(
-      "device {} moves on {} odometry: drift_window {}, window_s {}, refine_window_s {}, "
-      "confirm_walk_m {}, jump_clear_ratio {}, search_recent {}",
-      config_.dds().device_id(), v1::HeadsetPose::Odometry_Name(odometry), t.drift_window(),
-      t.window_s(), t.refine_window_s(), t.confirm_walk_m(), t.jump_clear_ratio(),
-      t.search_recent());
+      "device {} moves on {} odometry: heading drift {:.2f} deg/sqrt(m), {:.3f} per turn, "
+      "window {} s",
+      config_.dds().device_id(), v1::HeadsetPose::Odometry_Name(odometry),
+      o.motion.heading_rad_per_sqrt_m * 180 / M_PI, o.motion.heading_per_turn, o.window_s);
 }
 
 v1::PlanPose Engine::ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) const {
@@ -801,18 +746,16 @@ void Engine::OnCommand(const Envelope& e) {
                       normal.head<2>(),
                       {p.plan_x(), p.plan_y()},
                       {p.plan_normal_x(), p.plan_normal_y()}};
-        error = mcl_ ? mcl_->ApplyWallPick(pick, clock_.newest_ns())
-                     : tracker_.ApplyWallPick(pick, clock_.newest_ns());
+        error = tracker_.ApplyWallPick(pick, clock_.newest_ns());
         if (error.empty()) done = "wall pick applied";
         break;
       }
       case v1::Command::kFlip:
-        error = mcl_ ? mcl_->Flip(clock_.newest_ns()) : tracker_.Flip(clock_.newest_ns());
+        error = tracker_.Flip(clock_.newest_ns());
         if (error.empty()) done = "flipped";
         break;
       case v1::Command::kReset:
         tracker_.Reset();
-        if (mcl_) mcl_->Reset();
         store_.Clear();
         clock_.Reset();
         done = "reset: alignment, wall store and the headset's clock cleared";
@@ -863,25 +806,6 @@ void Engine::FinishCommand(const v1::Command& cmd, v1::CommandReply reply, const
   publish_(Topic::kCommandReply, reply);
 }
 
-void Engine::OnGlobalSearchDone(const Done& done) {
-  const std::vector<GlobalPlace>& places = done.places;
-  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-  for (const Eigen::Vector2d& p : done.job.cloud) centre += p;
-  centre /= static_cast<double>(std::max<size_t>(1, done.job.cloud.size()));
-  const Tracker::Decision d = tracker_.OfferPlaces(places, centre, done.job.version,
-                                                   done.job.stamp_ns, done.full_grid_scores);
-  spdlog::info(
-      "global search: {} points, {} place(s), best fit {:.4f} ({:.0f}% inliers), next {:.4f}, "
-      "{:.1f} ms: {}{}",
-      done.job.cloud.size(), places.size(), places.empty() ? 0.0 : places[0].fit_mse,
-      places.empty() ? 0.0 : 100 * places[0].inlier_ratio,
-      places.size() > 1 ? places[1].fit_mse : 0.0, done.result.time_ms,
-      d.accepted ? "placed: " : "", d.reason);
-  if (!d.accepted) return;
-  PublishAlignment();
-  PublishTrack();
-}
-
 std::optional<Engine::Job> Engine::SearchJob(int64_t since, size_t min_points) {
   Job job;
   job.cloud = store_.Snapshot(config_.tracking().max_points(), nullptr, 0, since);
@@ -895,18 +819,8 @@ std::optional<Engine::Job> Engine::SearchJob(int64_t since, size_t min_points) {
   job.path = PathSince(since);
   job.global = plan_.global;
   job.index = tracker_.index();
-  job.options.icp = tracker_.options().icp;
-  job.refine.cap_m = tracker_.options().score_cap_m;
-  job.refine.path_margin_m = tracker_.options().path_check_margin_m;
-  job.refine.min_inliers = tracker_.options().global_place_min_inliers;
-  if (tracker_.options().global_max_crossings > 0)
-    job.refine.max_crossings = tracker_.options().global_max_crossings;
-  job.refine.excuse_crossings_ratio = tracker_.options().global_excuse_crossings;
-  job.refine.sight_reach_m = tracker_.options().global_sight_reach_m;
-  job.refine.unseen_reach_m = tracker_.options().global_unseen_reach_m;
-  job.refine.unseen_allowance = tracker_.options().global_unseen_allowance;
-  if (tracker_.options().global_alike_share > 0)
-    job.refine.alike_reach_m = tracker_.options().global_sight_reach_m;
+  job.icp = tracker_.options().icp;
+  job.refine = tracker_.options().refine;
   job.initial = alignment().T_plan_slam;
   job.version = alignment().version;
   job.stamp_ns = clock_.newest_ns();
@@ -915,89 +829,32 @@ std::optional<Engine::Job> Engine::SearchJob(int64_t since, size_t min_points) {
 
 std::optional<Engine::Job> Engine::TakeDueJob() {
   if (running_) return std::nullopt;
-  if (mcl_) return TakeMclJob();
-  if (plan_.global && tracker_.GlobalSearchDue(clock_.newest_ns(), store_.points())) {
-    // Where on the whole plan do the recent walls fit: to place the wearer, or to check
-    // the place in use (the tracker says which, and how often).
-    tracker_.MarkGlobalSearchStarted(clock_.newest_ns());
-    const double window_s = tracker_.options().global_window_s;
-    const int64_t since =
-        window_s > 0 ? clock_.newest_ns() - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
-    std::optional<Job> job = SearchJob(since, tracker_.GlobalMinPoints());
-    if (!job) return std::nullopt;
-    if (tracker_.leading_place()) job->seeds.push_back(*tracker_.leading_place());
-    running_ = true;
-    return job;
-  }
-  if (!tracker_.RegistrationDue(clock_.newest_ns(), store_.points(), store_.new_points()))
-    return std::nullopt;
-  store_.TakeNewPoints();
-  Job job;
-  const TrackerOptions& options = tracker_.options();
-  const double window_s = config_.tracking().window_s();
-  const int64_t min_stamp =
-      window_s > 0 ? clock_.newest_ns() - static_cast<int64_t>(window_s * 1e9) : INT64_MIN;
-  job.cloud = store_.Snapshot(config_.tracking().max_points(), &job.normals,
-                              options.local_meshes ? last_run_generation_ : 0, min_stamp);
-  // The live points were enough, but not the distinct ones in the window (a voxel keeps
-  // one): try again as soon as new walls come, not a whole interval later (a wrong pick
-  // is told by its first check).
-  if (job.cloud.size() < tracker_.MinPoints()) return std::nullopt;
-  tracker_.MarkRegistrationStarted(clock_.newest_ns());
-  // A first place after a pick must not walk the wearer through walls (Tracker::Offer).
-  if (tracker_.on_pick() || tracker_.path_crossed()) job.path = PathSince(min_stamp);
-  const double refine_s = config_.tracking().refine_window_s();
-  if (refine_s > 0) {
-    job.recent = store_.Snapshot(config_.tracking().max_points(), &job.recent_normals,
-                                 options.local_meshes ? last_run_generation_ : 0,
-                                 clock_.newest_ns() - static_cast<int64_t>(refine_s * 1e9));
-    if (job.recent.size() < tracker_.MinPoints() / 2) {
-      job.recent.clear();
-      job.recent_normals.clear();
-    }
-    job.search_recent = config_.tracking().search_recent();
-  }
-  last_run_generation_ = store_.generation();
-  job.index = tracker_.index();
-  job.options = tracker_.NextRegistrationOptions();
-  job.initial = tracker_.alignment().T_plan_slam;
-  job.version = tracker_.alignment().version;
-  job.stamp_ns = clock_.newest_ns();
-  job.turn = config_.tracking().turn_to_walls() &&
-             tracker_.alignment().source != AlignmentSource::kRegistration &&
-             job.cloud.size() >= options.min_points;
-  running_ = true;
-  return job;
-}
-
-std::optional<Engine::Job> Engine::TakeMclJob() {
   const int64_t now = clock_.newest_ns();
-  const tracking::MclOptions& options = mcl_->options();
+  const tracking::MclOptions& options = tracker_.options();
   // Wall points from before a loss of tracking are in another frame.
   const auto since = [&](double window_s) {
-    return std::max(mcl_->frame_since_ns(),
+    return std::max(tracker_.frame_since_ns(),
                     window_s > 0 ? now - static_cast<int64_t>(window_s * 1e9) : INT64_MIN);
   };
-  if (plan_.global && mcl_->SearchDue(now, store_.points())) {
+  if (plan_.global && tracker_.SearchDue(now, store_.points())) {
     // Where on the whole plan do the walls fit: to seed the belief, or to reseed it.
-    mcl_->MarkSearchStarted(now);
-    const double window_s = tracker_.options().global_window_s;
-    std::optional<Job> job = SearchJob(since(window_s), options.search_min_points);
+    tracker_.MarkSearchStarted(now);
+    std::optional<Job> job = SearchJob(since(options.search_window_s), options.search_min_points);
     if (job) {
       running_ = true;
       return job;
     }
   }
-  if (!mcl_->UpdateDue(now, store_.points())) return std::nullopt;
+  if (!tracker_.UpdateDue(now, store_.points())) return std::nullopt;
   Job job;
   job.cloud = store_.Snapshot(config_.tracking().max_points(), nullptr, 0, since(options.window_s));
   if (job.cloud.size() < options.min_points) return std::nullopt;
   store_.TakeNewPoints();
   const int64_t fresh_since =
-      std::max(since(options.window_s), mcl_->last_update_ns().value_or(INT64_MIN));
+      std::max(since(options.window_s), tracker_.last_update_ns().value_or(INT64_MIN));
   std::vector<Eigen::Vector2d> fresh =
       store_.Snapshot(config_.tracking().max_points(), nullptr, 0, fresh_since);
-  job.mcl = mcl_->PrepareUpdate(now);
+  job.mcl = tracker_.PrepareUpdate(now);
   job.mcl->fresh_slam = std::move(fresh);
   job.mcl_options = options;
   job.index = tracker_.index();
@@ -1007,9 +864,10 @@ std::optional<Engine::Job> Engine::TakeMclJob() {
   return job;
 }
 
-void Engine::OnMclDone(Done done) {
+void Engine::OnRegistrationDone(Done done) {
+  running_ = false;
   if (done.job.global) {
-    const std::string what = mcl_->OfferPlaces(done.places, done.job.stamp_ns);
+    const std::string what = tracker_.OfferPlaces(done.places, done.job.stamp_ns);
     spdlog::info("global search: {} points, {} place(s), {:.1f} ms: {}", done.job.cloud.size(),
                  done.places.size(), done.result.time_ms, what);
     PublishAlignment();
@@ -1020,8 +878,8 @@ void Engine::OnMclDone(Done done) {
   const size_t samples = done.mcl->belief.size(), places = done.mcl->places;
   const double fit = done.mcl->fit;
   const bool polished = done.mcl->polished;
-  const bool taken = mcl_->FinishUpdate(std::move(*done.mcl), done.job.stamp_ns);
-  const Reliability r = mcl_->CurrentReliability();
+  const bool taken = tracker_.FinishUpdate(std::move(*done.mcl), done.job.stamp_ns);
+  const Reliability r = tracker_.CurrentReliability();
   last_registration_ = {done.result, taken, taken ? r.reason : "a new prior came meanwhile"};
   spdlog::info("belief: {} samples, {} place(s), fit {:.2f}, polished {}, {:.1f} ms: {:.0f}% {}",
                samples, places, fit, polished, done.result.time_ms, 100 * r.probability, r.reason);
@@ -1036,38 +894,6 @@ std::vector<Eigen::Vector2d> Engine::PathSince(int64_t since_ns) const {
   for (const auto& [stamp, position] : path_)
     if (stamp >= since_ns) path.push_back(position);
   return path;
-}
-
-void Engine::OnRegistrationDone(Done done) {
-  running_ = false;
-  if (mcl_) return OnMclDone(std::move(done));
-  if (done.job.global) {
-    OnGlobalSearchDone(done);
-    return;
-  }
-  const RegistrationResult& r = done.result;
-  counters_.set_registrations(counters_.registrations() + 1);
-  const Tracker::Decision d = tracker_.Offer(r, done.refined ? done.job.recent : done.job.cloud,
-                                             done.job.version, done.job.stamp_ns, done.job.path);
-  last_registration_ = {r, d.accepted, d.reason};
-  spdlog::info(
-      "registration: {} points, {} inliers, inlier RMSE {:.3f} m, {} iterations, {:.1f} ms, "
-      "drift x{:.1f}: {}{}",
-      r.points, r.inliers, r.inlier_rmse, r.iterations, r.time_ms, tracker_.drift_scale(),
-      d.accepted ? "accepted" : "rejected", d.reason.empty() ? "" : ": " + d.reason);
-  if (d.accepted) {
-    counters_.set_registrations_accepted(counters_.registrations_accepted() + 1);
-    PublishAlignment();
-    PublishTrack();
-  } else if (done.turn && std::abs(*done.turn) >= kMinTurnRad) {
-    if (const auto turned = tracker_.TurnToWalls(*done.turn, done.job.version, done.job.stamp_ns)) {
-      spdlog::info(
-          "wall pick turned by {:.2f} deg about its point (the walls' directions say {:.2f})",
-          *turned * 180 / M_PI, *done.turn * 180 / M_PI);
-      PublishAlignment();
-      PublishTrack();
-    }
-  }
 }
 
 void Engine::PublishAlignment() { publish_(Topic::kAlignment, ToProto(alignment(), floor_)); }
@@ -1109,22 +935,25 @@ v1::StateSnapshot Engine::SaveState() const {
   s.set_floor(floor_);
   s.set_latest_stamp_ns(clock_.newest_ns());
   s.set_stamp_offset_ns(clock_.offset_ns());
-  const TrackerState t = mcl_ ? mcl_->SaveState() : tracker_.SaveState();
+  const TrackerState t = tracker_.SaveState();
   *s.mutable_alignment() = ToProto(t.alignment, floor_);
   s.set_next_version(t.next_version);
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) s.add_covariance(t.P(r, c));
   s.set_pivot_x(t.pivot.x());
   s.set_pivot_y(t.pivot.y());
-  s.set_drift_scale(t.drift_scale);
   s.set_has_pick(t.pick_plan_point.has_value());
   if (t.pick_plan_point) {
     s.set_pick_x(t.pick_plan_point->x());
     s.set_pick_y(t.pick_plan_point->y());
   }
-  s.set_start_pivot_x(t.start_pivot.x());
-  s.set_start_pivot_y(t.start_pivot.y());
-  s.set_fused(t.fused);
+  s.mutable_samples()->Reserve(static_cast<int>(4 * t.samples.size()));
+  for (const tracking::Sample& sample : t.samples)
+    for (double v : {sample.T_plan_slam.theta, sample.T_plan_slam.t.x(), sample.T_plan_slam.t.y(),
+                     sample.log_weight})
+      s.add_samples(v);
+  s.set_elsewhere(t.elsewhere);
+  s.set_checked(t.checked);
   store_.ForEachMesh([&](uint64_t id, const std::vector<WallPoint>& points, int64_t stamp_ns) {
     v1::StateSnapshot::Mesh* m = s.add_meshes();
     m->set_mesh_id(id);
@@ -1153,7 +982,6 @@ std::string Engine::RestoreState(const v1::StateSnapshot& s) {
     if (switched) {
       if (configured_plan.empty()) {
         tracker_.SetPlan(nullptr);
-        if (mcl_) mcl_->SetPlan(nullptr);
         plan_ = {};
         plan_path_.clear();
       } else {
@@ -1207,21 +1035,21 @@ std::string Engine::RestoreState(const v1::StateSnapshot& s) {
       default: return refuse("with an alignment of unknown source");
     }
     t.next_version = s.next_version();
-    if (s.covariance_size() != 9) return refuse("without the filter's covariance");
+    if (s.covariance_size() != 9) return refuse("without the belief's covariance");
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) t.P(r, c) = s.covariance(3 * r + c);
     t.pivot = {s.pivot_x(), s.pivot_y()};
-    t.drift_scale = s.drift_scale();
     if (s.has_pick()) t.pick_plan_point = Eigen::Vector2d(s.pick_x(), s.pick_y());
-    t.start_pivot = {s.start_pivot_x(), s.start_pivot_y()};
-    t.fused = s.fused();
+    if (s.samples_size() % 4 != 0) return refuse("with belief samples malformed");
+    for (int i = 0; i + 3 < s.samples_size(); i += 4)
+      t.samples.push_back({{s.samples(i), {s.samples(i + 1), s.samples(i + 2)}}, s.samples(i + 3)});
+    t.elsewhere = s.elsewhere();
+    t.checked = s.checked();
     if (!within(t.alignment.T_plan_slam.t, 2 * max_abs) || !within(t.pivot, 2 * max_abs) ||
-        !within(t.start_pivot, 2 * max_abs) ||
         (t.pick_plan_point && !within(*t.pick_plan_point, 2 * max_abs)) ||
-        !(t.P.cwiseAbs().maxCoeff() <= 1e6))
-      return refuse("with an alignment or its filter out of range");
-    if (const std::string e = mcl_ ? mcl_->RestoreState(t) : tracker_.RestoreState(t); !e.empty())
-      return refuse("with " + e);
+        !(t.P.cwiseAbs().maxCoeff() <= 1e6) || !(t.elsewhere >= 0 && t.elsewhere <= 1))
+      return refuse("with an alignment or its belief out of range");
+    if (const std::string e = tracker_.RestoreState(t); !e.empty()) return refuse("with " + e);
   }
   store_.Clear();
   for (auto& [m, points] : meshes) store_.Upsert(m->mesh_id(), std::move(points), m->stamp_ns());

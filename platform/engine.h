@@ -21,7 +21,7 @@
 #include "core/registration.h"
 #include "core/rooms.h"
 #include "core/route_planner.h"
-#include "core/tracker.h"
+#include "core/tracking/alignment.h"
 #include "core/tracking/mcl.h"
 #include "core/wall_store.h"
 #include "floorpose/v1/config.pb.h"
@@ -59,43 +59,29 @@ class Engine {
     std::once_flag once_;
     std::unique_ptr<GlobalSearch> search_;
   };
-  // A registration to run: everything it needs, copied, so it can run on any thread.
+  // A job for the worker, everything it needs copied so it can run on any thread: an
+  // update of the belief, or a search of the whole plan.
   struct Job {
-    std::vector<Eigen::Vector2d> cloud, normals;
-    // When not empty: the result on `cloud` is refined on these (the recent walls), and
-    // offered with them.
-    std::vector<Eigen::Vector2d> recent, recent_normals;
-    // A search (options.search_window_m) registers `recent` alone (tracking.search_recent).
-    bool search_recent = false;
+    std::vector<Eigen::Vector2d> cloud;  // the window's wall points, slam frame
     std::shared_ptr<const ClosestWallIndex> index;
-    RegistrationOptions options;
-    Se2 initial;
-    uint64_t version = 0;
+    Se2 initial;           // the alignment in use (a search refines it with its places)
+    uint64_t version = 0;  // ...and its version (0: none)
     int64_t stamp_ns = 0;
-    bool turn = false;  // also measure the walls' rotation (before a first place is taken)
-    // Set: no alignment yet; search the whole plan for the cloud, then refine the places
-    // on `index` with options.icp, as `refine` says.
+    // Set: search the whole plan for the cloud, then refine the places on `index` with
+    // `icp`, as `refine` says, on the wearer's slam positions over the same window.
     std::shared_ptr<GlobalSearchCache> global;
+    IcpOptions icp;
     RefineOptions refine;
-    // The wearer's slam positions over the same window (a search's, a first place's after
-    // a pick, or any registration's after a step through a wall: Tracker::Offer).
     std::vector<Eigen::Vector2d> path;
-    // Places a search refines with the grid's (the previous search's best).
-    std::vector<Se2> seeds;
-    // Set: an update of the MCL belief (tracking.estimator MCL) on `cloud`.
+    // Else: an update of the belief on `cloud`.
     std::optional<tracking::MclUpdate> mcl;
     tracking::MclOptions mcl_options;
   };
   struct Done {
     Job job;
-    RegistrationResult result;
-    bool refined = false;             // the result is job.recent's
-    std::optional<double> turn;       // HoughRotation of job.cloud, when job.turn
-    std::vector<GlobalPlace> places;  // of a global job, best first
-    // ...and the grid's scores of its places when it returned as many as it may (more
-    // may score as well), best first; else empty.
-    std::vector<double> full_grid_scores;
-    std::optional<tracking::MclUpdateResult> mcl;  // of an MCL update
+    RegistrationResult result;                     // the update's polish (time_ms: the whole job's)
+    std::vector<GlobalPlace> places;               // of a search, best first
+    std::optional<tracking::MclUpdateResult> mcl;  // of an update
   };
   // Runs a job; now_ns() is read before and after to fill result.time_ms.
   static Done Run(Job job, const std::function<int64_t()>& now_ns);
@@ -126,7 +112,7 @@ class Engine {
   // Samples of `topic` DDS lost or rejected before they reached us: counted and logged.
   void OnDdsLosses(Topic topic, uint64_t lost, uint64_t rejected);
 
-  // Registration: a job when one is due and none is running, and its result.
+  // The worker's job when one is due and none is running, and its result.
   std::optional<Job> TakeDueJob();
   void OnRegistrationDone(Done done);
   bool registration_running() const { return running_; }
@@ -145,16 +131,11 @@ class Engine {
   void PublishAlignment();
 
   const v1::DaemonStatus::Counters& counters() const { return counters_; }
-  const Tracker& tracker() const { return tracker_; }
-  // The estimator in use (tracking.estimator): its alignment, state and reliability.
-  const AlignmentState& alignment() const {
-    return mcl_ ? mcl_->alignment() : tracker_.alignment();
-  }
-  TrackState state() const { return mcl_ ? mcl_->state() : tracker_.state(); }
-  const tracking::MclTracker* mcl() const { return mcl_.get(); }  // tracking.estimator MCL
-  Reliability reliability() const {
-    return mcl_ ? mcl_->CurrentReliability() : tracker_.CurrentReliability();
-  }
+  // The estimator: its alignment, state and reliability.
+  const tracking::MclTracker& tracker() const { return tracker_; }
+  const AlignmentState& alignment() const { return tracker_.alignment(); }
+  TrackState state() const { return tracker_.state(); }
+  Reliability reliability() const { return tracker_.CurrentReliability(); }
   const WallStore& store() const { return store_; }
   // The configuration in use: as configured, for the device's odometry (ForOdometry).
   const v1::FloorposedConfig& config() const { return config_; }
@@ -174,7 +155,7 @@ class Engine {
                            const std::function<int64_t()>& now_ns, const std::string& path,
                            const std::string& floor);
   std::string UseLoad(PlanLoad load);
-  // A plan's index, routes, rooms and explored map (and global search, when on).
+  // A plan's index, search, routes, rooms and explored map.
   static PlanAssets BuildPlan(const v1::FloorposedConfig& config,
                               const std::function<int64_t()>& now_ns, const FloorPlanParse& parsed,
                               const std::string& file);
@@ -188,11 +169,6 @@ class Engine {
   // floors.change_hold_s.
   void FollowFloors(const DecodedPose& pose);
   void ChangeFloor(const FloorEntry& to, double slam_z, double height_m);
-  void OnGlobalSearchDone(const Done& done);
-  // The MCL estimator's jobs (an update of its belief, or a search of the plan) and their
-  // results.
-  std::optional<Job> TakeMclJob();
-  void OnMclDone(Done done);
   // A search of the whole plan over the walls since `since_ns`; nothing when those walls
   // were searched already or are too few.
   std::optional<Job> SearchJob(int64_t since_ns, size_t min_points);
@@ -226,8 +202,7 @@ class Engine {
   std::function<int64_t()> now_ns_;
   HeadsetFrame frame_;
   WallExtractionOptions wall_options_;
-  Tracker tracker_;
-  std::unique_ptr<tracking::MclTracker> mcl_;  // tracking.estimator MCL: in use instead
+  tracking::MclTracker tracker_;
   WallStore store_;
   std::string floor_;
   std::string plan_path_;  // as loaded (a plan or a .floors set), with its FloorPlanDigest
@@ -241,8 +216,8 @@ class Engine {
     int64_t since_ns = 0;
   };
   std::optional<FloorCandidate> floor_candidate_;
-  // A floor's plan and what is made from it: the index, the plan search (when
-  // tracking.global_search), routes, rooms and the explored map.
+  // A floor's plan and what is made from it: the index, the plan search, routes, rooms
+  // and the explored map.
   struct PlanAssets {
     std::shared_ptr<const ClosestWallIndex> index;
     std::shared_ptr<GlobalSearchCache> global;
@@ -287,8 +262,8 @@ class Engine {
   std::optional<double> eye_z_;  // slam height of the latest pose
   // Recent poses: slam, and as published (for PlanTrack).
   std::deque<std::pair<Pose2, v1::PlanPose>> recent_;
-  // The wearer's path for the global search and a first place's check: slam positions
-  // 0.25 m apart, with stamps, over the longer of the two windows.
+  // The wearer's path for the search of the plan: slam positions 0.25 m apart, with
+  // stamps, over the search's window.
   std::deque<std::pair<int64_t, Eigen::Vector2d>> path_;
   // The walls the last search ran on (count, sum, the alignment it checked): a search on
   // the same walls finds the same places, and would count twice towards their lead.
@@ -302,7 +277,6 @@ class Engine {
   };
   std::optional<SearchedWalls> last_searched_;
   bool running_ = false;
-  uint64_t last_run_generation_ = 0;
 };
 
 }  // namespace floorpose::platform

@@ -11,7 +11,7 @@
 
 #include "core/floor_plan.h"
 #include "core/se2.h"
-#include "core/tracker.h"
+#include "core/tracking/alignment.h"
 
 namespace floorpose::sim {
 

@@ -39,7 +39,7 @@
 #include "core/floor_plan.h"
 #include "core/se2.h"
 #include "core/sim/demo_walk.h"
-#include "core/tracker.h"
+#include "core/tracking/alignment.h"
 
 namespace floorpose::sim {
 

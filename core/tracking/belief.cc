@@ -6,8 +6,6 @@
 #include <limits>
 #include <unordered_set>
 
-#include "core/alignment_filter.h"
-
 namespace floorpose::tracking {
 
 namespace {

@@ -4,8 +4,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/alignment_filter.h"
-
 namespace floorpose::tracking {
 namespace {
 
@@ -282,28 +280,50 @@ TrackerState MclTracker::SaveState() const {
   s.pivot = alignment_.T_plan_slam * wearer;
   s.P = belief_.empty() ? PriorCovariance(options_.pick_sigma_m, options_.pick_sigma_rad)
                         : belief_.Covariance(alignment_.T_plan_slam, wearer);
-  s.start_pivot = s.pivot;
   if (pick_plan_point_) s.pick_plan_point = *pick_plan_point_;
+  s.samples = belief_.samples();
+  s.elsewhere = recovery_.Elsewhere();
+  s.checked = checked_ && recovery_.searched();
   return s;
 }
 
 std::string MclTracker::RestoreState(const TrackerState& state) {
   if (!index_) return "no floor plan";
-  const Se2& T = state.alignment.T_plan_slam;
-  if (!std::isfinite(T.theta) || !T.t.allFinite() || !state.P.allFinite() ||
-      !state.pivot.allFinite())
+  const AlignmentState& a = state.alignment;
+  if (!std::isfinite(a.T_plan_slam.theta) || !a.T_plan_slam.t.allFinite() || !state.P.allFinite() ||
+      !state.pivot.allFinite() || (state.pick_plan_point && !state.pick_plan_point->allFinite()))
     return "values that are not finite";
-  Eigen::LLT<Eigen::Matrix3d> llt(state.P);
-  if (llt.info() != Eigen::Success) return "a covariance that is not positive";
-  if (state.alignment.version == 0) return {};
-  // At least the drift of a restart's few metres: the saved belief was at the wearer then.
-  const Eigen::Matrix3d P =
-      state.P + PriorCovariance(options_.place_sigma_m, options_.place_sigma_rad);
+  if (a.version == 0 || state.next_version <= a.version)
+    return "no alignment, or versions out of order";
+  const Eigen::Matrix3d sym = 0.5 * (state.P + state.P.transpose());
+  if ((state.P - sym).norm() > 1e-9 * (1 + state.P.norm()) ||
+      Eigen::LLT<Eigen::Matrix3d>(sym).info() != Eigen::Success)
+    return "a covariance that is not symmetric and positive";
+  for (const Sample& sample : state.samples)
+    if (!std::isfinite(sample.T_plan_slam.theta) || !sample.T_plan_slam.t.allFinite() ||
+        !std::isfinite(sample.log_weight))
+      return "belief samples that are not finite";
+  if (state.samples.size() > 10 * options_.samples.max_samples)
+    return "more belief samples than samples.max_samples allows";
   belief_.Clear();
-  belief_.AddGaussian(T, P, state.pivot, options_.samples.max_samples, 0.0, rng_);
-  next_version_ = std::max(next_version_, state.next_version);
+  if (!state.samples.empty()) {
+    belief_.samples() = state.samples;
+  } else {
+    // At least the drift of a restart's few metres: the belief was at the wearer then.
+    const Eigen::Matrix3d P =
+        sym + PriorCovariance(options_.place_sigma_m, options_.place_sigma_rad);
+    belief_.AddGaussian(a.T_plan_slam, P, state.pivot, options_.samples.max_samples, 0.0, rng_);
+  }
+  next_version_ = state.next_version;
   pick_plan_point_ = state.pick_plan_point;
-  StartBelief(T, state.alignment.source, state.alignment.stamp_ns);
+  StartBelief(a.T_plan_slam, a.source, a.stamp_ns);
+  if (state.checked && state.elsewhere >= 0 && state.elsewhere <= 1) {
+    // A belief the walls and a search had checked resumes as it was, under its version.
+    alignment_.version = a.version;
+    next_version_ = state.next_version;
+    checked_ = true;
+    recovery_.Resume(state.elsewhere);
+  }
   return {};
 }
 

@@ -19,7 +19,7 @@
 #include "core/closest_wall_index.h"
 #include "core/global_search.h"
 #include "core/registration.h"
-#include "core/tracker.h"
+#include "core/tracking/alignment.h"
 #include "core/tracking/belief.h"
 #include "core/tracking/measurement_model.h"
 #include "core/tracking/motion_model.h"
@@ -42,7 +42,26 @@ struct MclOptions {
   double pick_sigma_rad = 5.0 * M_PI / 180;  // ...and of its heading
   double place_sigma_m = 0.3;                // a searched place's, metres...
   double place_sigma_rad = 2.0 * M_PI / 180;  // ...and radians
-  uint32_t search_min_points = 150;           // a search of the plan needs this many points
+  uint32_t search_min_points = 150;           // a search of the plan needs this many points...
+  double search_window_s = 60.0;              // ...over the walls of this many seconds
+  // How a search's places are refined and ranked (RefinePlaces); the belief takes those of
+  // rank 0 and 1. Wall points scored to 0.2 m; steps through plan walls 0.4 m clear of
+  // their ends count (2 or more: rank 1, unless it fits 3 times better than any other);
+  // points hidden from the path within 4.5 m and plan walls unseen within 2 m of it count
+  // as misses; places fitting under 45% of the walls rank last.
+  RefineOptions refine = [] {
+    RefineOptions r;
+    r.cap_m = 0.2;
+    r.path_margin_m = 0.4;
+    r.min_inliers = 0.45;
+    r.max_crossings = 2;
+    r.excuse_crossings_ratio = 3.0;
+    r.sight_reach_m = 4.5;
+    r.unseen_reach_m = 2.0;
+    r.unseen_allowance = 0.5;
+    r.alike_reach_m = 4.5;
+    return r;
+  }();
   IcpOptions icp;
 };
 
@@ -86,6 +105,7 @@ class MclTracker {
   void Reset();
 
   bool has_plan() const { return index_ != nullptr; }
+  const std::shared_ptr<const ClosestWallIndex>& index() const { return index_; }
   bool has_alignment() const { return alignment_.version > 0; }
   const AlignmentState& alignment() const { return alignment_; }
   const MclOptions& options() const { return options_; }

@@ -2,8 +2,6 @@
 
 #include <cmath>
 
-#include "core/alignment_filter.h"
-
 namespace floorpose::tracking {
 
 Eigen::Vector2d MotionModel::Sigmas(double metres, double turned_rad) const {

@@ -57,6 +57,12 @@ void Recovery::Reset() {
   searched_ = false;
 }
 
+void Recovery::Resume(double elsewhere) {
+  log_odds_ = Logit(std::clamp(elsewhere, 1e-9, 1 - 1e-9));
+  fit_ = expected_;
+  searched_ = true;
+}
+
 void Recovery::Observe(double mean_log_likelihood, double exponent, double dt_s) {
   if (!std::isfinite(mean_log_likelihood)) return;
   fit_ = mean_log_likelihood;

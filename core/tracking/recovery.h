@@ -42,6 +42,9 @@ class Recovery {
   // right one does: only the other places that fit tell the two apart, so every start is
   // checked by one search.
   void Searched() { searched_ = true; }
+  // Resumes at a saved probability of "elsewhere", the start already checked by a search
+  // (a restart of the daemon: the SLAM frame and the wearer went on).
+  void Resume(double elsewhere);
   bool searched() const { return searched_; }
   // One update: the belief's mean log-likelihood per wall point, the tempering exponent
   // it was weighed with, dt_s after the last.

@@ -6,7 +6,7 @@
 
 #include <string>
 
-#include "core/tracker.h"
+#include "core/tracking/alignment.h"
 
 namespace floorpose::tracking {
 

@@ -9,7 +9,6 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "core/alignment_filter.h"
 #include "core/random.h"
 #include "tests/test_util.h"
 

@@ -14,7 +14,7 @@
 #include <set>
 
 #include "core/sim/free_space.h"
-#include "core/tracker.h"
+#include "core/tracking/alignment.h"
 #include "tests/sim_test_plans.h"
 #include "tests/test_util.h"
 

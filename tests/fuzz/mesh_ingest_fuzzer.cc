@@ -179,11 +179,9 @@ v1::FloorposedConfig MakeConfig() {
   // takes the same rejection path as a larger one would in the daemon).
   config.mutable_limits()->set_max_wall_points_per_mesh(20000);
   config.mutable_limits()->set_max_wall_points(50000);
-  // Registrations in smaller windows: the same code, at a tenth of the cost.
+  // Updates in smaller windows and beliefs: the same code, at a tenth of the cost.
   config.mutable_tracking()->set_max_points(1000);
-  config.mutable_registration()->set_pick_search_m(0.5);
-  config.mutable_registration()->set_pick_search_deg(3);
-  config.mutable_registration()->set_search_min_m(0.3);
+  config.mutable_tracking()->mutable_mcl()->mutable_samples()->set_max_samples(300);
   return config;
 }
 

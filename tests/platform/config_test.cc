@@ -33,8 +33,8 @@ TEST(ConfigTest, ProtoDefaultsMatchTheCoreDefaults) {
   // The core's option structs and the config schema each carry defaults; they must
   // agree, or the daemon and the offline tools would run different algorithms.
   const v1::FloorposedConfig c;
-  const TrackerOptions t = ToTrackerOptions(c);
-  const TrackerOptions core;
+  const tracking::MclOptions t = ToMclOptions(c);
+  const tracking::MclOptions core;
   EXPECT_EQ(t.icp.max_iterations, core.icp.max_iterations);
   EXPECT_EQ(t.icp.levels, core.icp.levels);
   EXPECT_EQ(t.icp.reject_sigma, core.icp.reject_sigma);
@@ -44,36 +44,29 @@ TEST(ConfigTest, ProtoDefaultsMatchTheCoreDefaults) {
   EXPECT_EQ(t.icp.cauchy_scale_factor, core.icp.cauchy_scale_factor);
   EXPECT_EQ(t.icp.inlier_threshold_m, core.icp.inlier_threshold_m);
   EXPECT_EQ(t.icp.degeneracy_ratio, core.icp.degeneracy_ratio);
-  EXPECT_EQ(t.method, core.method);
-  EXPECT_EQ(t.wall_buffer_m, core.wall_buffer_m);
-  EXPECT_EQ(t.local_meshes, core.local_meshes);
-  // The config gives the Hough settings in degrees; 1e-12 rad is far below a bin.
-  EXPECT_NEAR(t.hough.max_rotation_rad, core.hough.max_rotation_rad, 1e-12);
-  EXPECT_NEAR(t.hough.bin_rad, core.hough.bin_rad, 1e-12);
-  EXPECT_EQ(t.hough.smooth_rad, core.hough.smooth_rad);
-  EXPECT_EQ(t.min_new_points, core.min_new_points);
-  EXPECT_EQ(t.max_interval_s, core.max_interval_s);
-  EXPECT_EQ(t.min_points, core.min_points);
+  // Angles are configured in degrees; 1e-12 rad is far below anything they tell apart.
+  EXPECT_EQ(t.motion.position_m_per_sqrt_m, core.motion.position_m_per_sqrt_m);
+  EXPECT_NEAR(t.motion.heading_rad_per_sqrt_m, core.motion.heading_rad_per_sqrt_m, 1e-12);
+  EXPECT_EQ(t.motion.heading_per_turn, core.motion.heading_per_turn);
+  EXPECT_EQ(t.motion.lost_after_s, core.motion.lost_after_s);
+  EXPECT_EQ(t.motion.relocalization_m, core.motion.relocalization_m);
+  EXPECT_NEAR(t.motion.relocalization_rad, core.motion.relocalization_rad, 1e-12);
+  EXPECT_EQ(t.motion.through_wall, core.motion.through_wall);
+  EXPECT_EQ(t.measurement.sigma_m, core.measurement.sigma_m);
+  EXPECT_EQ(t.measurement.clutter, core.measurement.clutter);
+  EXPECT_EQ(t.measurement.independent_points, core.measurement.independent_points);
+  EXPECT_EQ(t.window_s, core.window_s);
+  EXPECT_EQ(t.update_interval_s, core.update_interval_s);
+  EXPECT_EQ(t.samples.min_samples, core.samples.min_samples);
+  EXPECT_EQ(t.samples.max_samples, core.samples.max_samples);
   EXPECT_EQ(t.pick_sigma_m, core.pick_sigma_m);
-  EXPECT_NEAR(t.pick_sigma_rad, core.pick_sigma_rad, 1e-4);
-  EXPECT_NEAR(t.filter.heading_var_per_m, core.filter.heading_var_per_m, 1e-8);
-  EXPECT_NEAR(t.filter.position_var_per_m, core.filter.position_var_per_m, 1e-12);
-  EXPECT_EQ(t.filter.yaw_scale_sigma, core.filter.yaw_scale_sigma);
-  EXPECT_EQ(t.filter.measurement_points, core.filter.measurement_points);
-  EXPECT_EQ(t.reliability.weights, core.reliability.weights);
-  EXPECT_EQ(t.min_walk_m, core.min_walk_m);
-  EXPECT_EQ(t.max_ambiguity, core.max_ambiguity);
-  EXPECT_EQ(t.first_inlier_ratio, core.first_inlier_ratio);
-  EXPECT_EQ(t.searched_first_inlier_ratio, core.searched_first_inlier_ratio);
-  EXPECT_EQ(t.jump_clear_ratio, core.jump_clear_ratio);
-  EXPECT_EQ(t.jump_clear_inliers, core.jump_clear_inliers);
-  EXPECT_EQ(t.search_unexplained, core.search_unexplained);
-  EXPECT_EQ(t.clear_ambiguity, core.clear_ambiguity);
-  EXPECT_EQ(t.pick_tie_ratio, core.pick_tie_ratio);
-  EXPECT_EQ(t.search_sigmas, core.search_sigmas);
-  EXPECT_EQ(t.search_min_m, core.search_min_m);
-  EXPECT_EQ(t.search_tie_ratio, core.search_tie_ratio);
-  EXPECT_DOUBLE_EQ(t.turn_sigma_rad, core.turn_sigma_rad);
+  EXPECT_NEAR(t.pick_sigma_rad, core.pick_sigma_rad, 1e-12);
+  EXPECT_EQ(t.recovery.lost_s, core.recovery.lost_s);
+  EXPECT_EQ(t.recovery.start_doubt, core.recovery.start_doubt);
+  EXPECT_EQ(t.recovery.search_share, core.recovery.search_share);
+  EXPECT_EQ(t.recovery.search_interval_s, core.recovery.search_interval_s);
+  EXPECT_EQ(t.publish.reliable, core.publish.reliable);
+  EXPECT_EQ(t.publish.degraded, core.publish.degraded);
   const WallExtractionOptions w = ToWallExtractionOptions(c);
   const WallExtractionOptions core_w;
   EXPECT_EQ(w.max_normal_up, core_w.max_normal_up);
@@ -90,16 +83,16 @@ TEST(ConfigTest, ValuesAreParsedAndConverted) {
       plan_path: "/srv/plans/floor1.geojson"
       walls { density_per_m2: 80 seed: 9 }
       icp { max_iterations: 30 levels: 1 }
-      tracking { min_points: 100 }
+      tracking { mcl { samples { max_samples: 800 } } }
   )",
                           &c, &error))
       << error;
   EXPECT_EQ(c.headset_frame(), "zup");
   EXPECT_EQ(ToWallExtractionOptions(c).density_per_m2, 80.0);
   EXPECT_EQ(ToWallExtractionOptions(c).seed, 9u);
-  EXPECT_EQ(ToTrackerOptions(c).icp.max_iterations, 30u);
-  EXPECT_EQ(ToTrackerOptions(c).icp.levels, 1u);
-  EXPECT_EQ(ToTrackerOptions(c).min_points, 100u);
+  EXPECT_EQ(ToMclOptions(c).icp.max_iterations, 30u);
+  EXPECT_EQ(ToMclOptions(c).icp.levels, 1u);
+  EXPECT_EQ(ToMclOptions(c).samples.max_samples, 800u);
   EXPECT_EQ(c.walls().max_edge_m(), 10.0);  // untouched fields keep their defaults
 }
 
@@ -142,34 +135,14 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"icp { max_correspondence_m: -1 }", "max_correspondence_m"},
            Case{"icp { levels: 20 }", "levels"},
            Case{"tracking { snapshot_voxel_m: 0 }", "snapshot_voxel_m"},
-           Case{"tracking { max_ambiguity: 0 }", "max_ambiguity"},
-           Case{"tracking { max_ambiguity: 1.5 }", "max_ambiguity"},
-           Case{"tracking { refine_window_s: -1 }", "refine_window_s"},
-           Case{"tracking { first_inlier_ratio: 1.1 }", "first_inlier_ratio"},
-           Case{"tracking { searched_first_inlier_ratio: -0.1 }", "searched_first_inlier_ratio"},
-           Case{"tracking { jump_clear_ratio: -0.5 }", "jump_clear_ratio"},
-           Case{"tracking { jump_clear_inliers: 0 }", "jump_clear_inliers"},
-           Case{"tracking { clear_ambiguity: 0.8 }", "clear_ambiguity"},
-           Case{"registration { pick_tie_ratio: -0.1 }", "pick_tie_ratio"},
-           Case{"registration { search_sigmas: -1 }", "search_sigmas"},
-           Case{"registration { search_min_m: nan }", "search_min_m"},
-           Case{"registration { search_tie_ratio: 2 }", "search_tie_ratio"},
-           Case{"tracking { turn_sigma_deg: 0 }", "turn_sigma_deg"},
-           Case{"tracking { drift_turn: -0.01 }", "drift_"},
-           Case{"tracking { refine_window_s: inf }", "refine_window_s"},
-           Case{"tracking { window_s: -5 }", "tracking.window_s"},
-           Case{"tracking { global_check_min_points: 5 }", "global_check_min_points"},
-           Case{"tracking { off_plan_margin_m: -1 }", "off_plan_margin_m"},
-           Case{"tracking { global_place_min_inliers: 1.5 }", "global_place_min_inliers"},
-           Case{"tracking { global_check_interval_s: 0 }", "global_check_interval_s"},
-           Case{"tracking { off_plan_margin_m: nan }", "off_plan_margin_m"},
-           Case{"tracking { global_unseen_reach_m: -1 }", "global_unseen_reach_m"},
-           Case{"tracking { global_unseen_allowance: 1.5 }", "global_unseen_allowance"},
-           Case{"tracking { global_alike_share: -0.5 }", "global_alike_share"},
-           Case{"tracking { global_crowded_ratio: 2 }", "global_crowded_ratio"},
-           Case{"tracking { global_twin_clear_ratio: 0 }", "global_twin_clear_ratio"},
-           Case{"tracking { wheel_odometry { window_s: nan } }", "wheel_odometry.window_s"},
-           Case{"tracking { wheel_odometry { drift_window: 5000 } }", "drift_window"},
+           Case{"tracking { mcl { motion { through_wall: 0 } } }", "through_wall"},
+           Case{"tracking { mcl { measurement { clutter: 1 } } }", "clutter"},
+           Case{"tracking { mcl { measurement { window_s: nan } } }", "measurement.window_s"},
+           Case{"tracking { mcl { wheel { window_s: -1 } } }", "wheel.window_s"},
+           Case{"tracking { mcl { recovery { start_doubt: 1 } } }", "start_doubt"},
+           Case{"tracking { mcl { samples { min_samples: 10 max_samples: 5 } } }", "samples"},
+           Case{"tracking { mcl { publish { reliable: 0.4 } } }", "publish"},
+           Case{"tracking { mcl { motion { heading_per_turn: -1 } } }", "heading_per_turn"},
            Case{"routes { body_radius_m: 0 }", "routes.body_radius_m"},
            Case{"routes { cell_m: 0.001 }", "cell_m"},
            Case{"routes { snap_m: nan }", "routes.snap_m"},
@@ -191,27 +164,12 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
   EXPECT_THAT(ValidateConfig(c), IsEmpty());
 }
 
-TEST(ConfigTest, WheelOdometryReplacesTheHeadsetsDriftAndWindows) {
+TEST(ConfigTest, AWheelsDriftReplacesTheHeadsets) {
   v1::FloorposedConfig c;
   std::string error;
-  ASSERT_TRUE(ParseConfig("tracking { window_s: 30 wheel_odometry { window_s: 4 } }", &c, &error))
-      << error;
+  ASSERT_TRUE(ParseConfig("tracking { mcl { wheel { window_s: 4 } } }", &c, &error)) << error;
   const v1::FloorposedConfig headset = ForOdometry(c, v1::HeadsetPose::VISUAL_INERTIAL);
-  EXPECT_EQ(headset.tracking().window_s(), 30);
-  EXPECT_EQ(headset.tracking().drift_window(), 0u);
-  EXPECT_EQ(headset.tracking().refine_window_s(), 20);
   const v1::FloorposedConfig wheel = ForOdometry(c, v1::HeadsetPose::WHEEL);
-  EXPECT_EQ(wheel.tracking().window_s(), 4);
-  EXPECT_EQ(wheel.tracking().drift_window(), 9u);
-  EXPECT_EQ(wheel.tracking().refine_window_s(), 3);
-  EXPECT_EQ(wheel.tracking().confirm_walk_m(), 3);
-  EXPECT_EQ(headset.tracking().confirm_walk_m(), 10);
-  EXPECT_EQ(headset.tracking().jump_clear_ratio(), 0);
-  EXPECT_EQ(ToTrackerOptions(wheel).jump_clear_ratio, 0.6);
-  EXPECT_FALSE(headset.tracking().search_recent());
-  EXPECT_TRUE(wheel.tracking().search_recent());
-  EXPECT_EQ(ToTrackerOptions(wheel).filter.drift_window, 9);
-  EXPECT_EQ(wheel.tracking().drift_heading_deg(), headset.tracking().drift_heading_deg());
   // The belief's drift and window: a wheel's (tracking.mcl.wheel), else a headset's.
   const tracking::MclOptions mcl_headset = ToMclOptions(headset);
   const tracking::MclOptions mcl_wheel = ToMclOptions(wheel);

@@ -48,13 +48,14 @@ class EngineInputTest : public testing::TempDirTest {
     e.payload = std::move(bytes);
     return e;
   }
-  // A 4 x 2.5 m wall along x at y = 1 (zup frame), as two triangles.
-  static v1::MeshDelta Wall(uint64_t id, v1::MeshDelta::Change change, int64_t stamp_ns) {
+  // A `length` x 2.5 m wall along x at y = 1 (zup frame), as two triangles.
+  static v1::MeshDelta Wall(uint64_t id, v1::MeshDelta::Change change, int64_t stamp_ns,
+                            float length = 4.f) {
     v1::MeshDelta m;
     m.set_mesh_id(id);
     m.set_change(change);
     m.set_stamp_ns(stamp_ns);
-    for (float v : {0.f, 1.f, 0.f, 4.f, 1.f, 0.f, 4.f, 1.f, 2.5f, 0.f, 1.f, 2.5f})
+    for (float v : {0.f, 1.f, 0.f, length, 1.f, 0.f, length, 1.f, 2.5f, 0.f, 1.f, 2.5f})
       m.add_vertices(v);
     for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) m.add_triangles(i);
     return m;
@@ -231,92 +232,72 @@ TEST_F(EngineInputTest, TheWallStoreIsBoundedByAreaNotTime) {
   EXPECT_EQ(engine_->store().points(), 0u);
 }
 
-TEST_F(EngineInputTest, AWheeledDeviceIsTrackedWithTheWheelOdometrysDrift) {
-  Start(/*with_plan=*/true);
-  engine_->OnHeadsetPose(Wrap(Pose(1)));
-  EXPECT_EQ(engine_->config().tracking().window_s(), 40);
-  EXPECT_EQ(engine_->tracker().options().filter.drift_window, 0);
-  v1::HeadsetPose wheel = Pose(2);
-  wheel.set_odometry(v1::HeadsetPose::WHEEL);
-  engine_->OnHeadsetPose(Wrap(wheel));
-  EXPECT_EQ(engine_->config().tracking().window_s(), 6);
-  EXPECT_EQ(engine_->config().tracking().refine_window_s(), 3);
-  EXPECT_EQ(engine_->tracker().options().filter.drift_window, 9);
-  EXPECT_EQ(engine_->tracker().options().confirm_walk_m, 3);
-  engine_->OnHeadsetPose(Wrap(Pose(3)));  // unset again: a headset's SLAM
-  EXPECT_EQ(engine_->config().tracking().window_s(), 40);
-  EXPECT_EQ(engine_->tracker().options().filter.drift_window, 0);
-  EXPECT_EQ(poses_.size(), 3u);
-}
-
-// The whole-plan search runs on new walls only: a search on the walls of the last one
-// finds the same places, and would count twice towards their lead (issue 7).
 TEST_F(EngineInputTest, AWheeledDeviceMovesTheBeliefWithTheWheelsDrift) {
-  config_.mutable_tracking()->set_estimator(v1::TrackingConfig::MCL);
   Start(/*with_plan=*/true);
-  ASSERT_NE(engine_->mcl(), nullptr);
-  const double headset = engine_->mcl()->options().motion.heading_rad_per_sqrt_m;
+  const double headset = engine_->tracker().options().motion.heading_rad_per_sqrt_m;
   v1::HeadsetPose wheel = Pose(1);
   wheel.set_odometry(v1::HeadsetPose::WHEEL);
   engine_->OnHeadsetPose(Wrap(wheel));
-  EXPECT_GT(engine_->mcl()->options().motion.heading_rad_per_sqrt_m, 10 * headset);
-  EXPECT_LT(engine_->mcl()->options().window_s, 20);
+  EXPECT_GT(engine_->tracker().options().motion.heading_rad_per_sqrt_m, 10 * headset);
+  EXPECT_LT(engine_->tracker().options().window_s, 20);
   engine_->OnHeadsetPose(Wrap(Pose(2)));  // unset again: a headset's SLAM
-  EXPECT_EQ(engine_->mcl()->options().motion.heading_rad_per_sqrt_m, headset);
-  EXPECT_EQ(engine_->mcl()->options().window_s, 20);
+  EXPECT_EQ(engine_->tracker().options().motion.heading_rad_per_sqrt_m, headset);
+  EXPECT_EQ(engine_->tracker().options().window_s, 20);
 }
 
+// The whole-plan search runs on new walls only: a search on the walls of the last one
+// finds the same places again (issue 7).
 TEST_F(EngineInputTest, TheSearchWaitsForNewWalls) {
-  config_.mutable_tracking()->set_global_search(true);
-  config_.mutable_tracking()->set_global_min_points(50);
-  Start(/*with_plan=*/true);
+  // A 3 x 3 m room, where a 9 m wall fits nowhere: the belief stays empty, and a search
+  // is due every recovery.search_interval_s.
+  config_.set_plan_path(Write("small.txt", "4\n0 0 3 0\n3 0 3 3\n3 3 0 3\n0 3 0 0\n"));
+  Start(/*with_plan=*/false);
   const int64_t s = 1'000'000'000;
-  engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::ADDED, 1 * s)));
+  engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::ADDED, 1 * s, 9.0)));
   engine_->OnHeadsetPose(Wrap(Pose(1 * s)));
   auto first = engine_->TakeDueJob();
   ASSERT_TRUE(first && first->global);
-  EXPECT_TRUE(first->seeds.empty());
   engine_->OnRegistrationDone(Engine::Run(std::move(*first), [] { return int64_t{0}; }));
-  ASSERT_TRUE(engine_->tracker().leading_place());
-  // The wearer stands; the interval passes with nothing new scanned: no search.
-  engine_->OnHeadsetPose(Wrap(Pose(5 * s)));
-  EXPECT_FALSE(engine_->TakeDueJob());
-  // The wall is scanned again (its points sampled anew): searched again.
-  engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::UPDATED, 6 * s)));
-  engine_->OnHeadsetPose(Wrap(Pose(9 * s)));
-  auto second = engine_->TakeDueJob();
+  ASSERT_FALSE(engine_->tracker().has_alignment());
+  // The wearer stands; intervals pass with nothing new scanned: no search.
+  for (int k = 2; k <= 10; ++k) {
+    engine_->OnHeadsetPose(Wrap(Pose(k * s)));
+    EXPECT_FALSE(engine_->TakeDueJob()) << k << " s";
+  }
+  // The wall is scanned again (its points sampled anew): searched again, within an
+  // interval.
+  engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::UPDATED, 11 * s, 9.0)));
+  std::optional<Engine::Job> second;
+  for (int k = 11; k <= 14 && !second; ++k) {
+    engine_->OnHeadsetPose(Wrap(Pose(k * s)));
+    second = engine_->TakeDueJob();
+  }
   ASSERT_TRUE(second && second->global);
-  // ...with the first search's best refined again, whatever the grid returns this time.
-  ASSERT_EQ(second->seeds.size(), 1u);
-  EXPECT_THAT(second->seeds[0], testing::IsNearlySe2(*engine_->tracker().leading_place(), 0, 0));
-  const Engine::Done done = Engine::Run(std::move(*second), [] { return int64_t{0}; });
-  EXPECT_TRUE(std::any_of(done.places.begin(), done.places.end(), [&](const GlobalPlace& p) {
-    return (p.T_plan_slam.t - engine_->tracker().leading_place()->t).norm() < 1.0;
-  }));
 }
 
-// A registration is due, but the walls of its window are too few (the wearer's walls were
+// An update is due, but the walls of its window are too few (the wearer's walls were
 // scanned long ago): no job, and the next one is tried as soon as new walls come, not a
-// whole interval later (a wrong pick is told by its first check).
-TEST_F(EngineInputTest, ACheckWithTooFewWallsInItsWindowIsTriedAgainOnTheNextWalls) {
-  config_.mutable_tracking()->set_window_s(10);
+// whole interval later.
+TEST_F(EngineInputTest, AnUpdateWithTooFewWallsInItsWindowIsTriedAgainOnTheNextWalls) {
+  config_.mutable_tracking()->mutable_mcl()->mutable_measurement()->set_window_s(10);
   Start(/*with_plan=*/true);
   engine_->OnCommand(Wrap(WallPickAtWall()));
   ASSERT_TRUE(engine_->tracker().has_alignment());
   const int64_t s = 1'000'000'000;
   engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::ADDED, 1 * s)));
-  ASSERT_GE(engine_->store().points(), engine_->tracker().MinPoints());
+  const size_t min_points = engine_->tracker().options().min_points;
+  ASSERT_GE(engine_->store().points(), min_points);
   // 20 s on, the wall is still in the store but 19 s old: out of the 10 s window.
   clock_ns_ += 19 * s;
   engine_->OnHeadsetPose(Wrap(Pose(20 * s)));
   EXPECT_FALSE(engine_->TakeDueJob());
-  // Scanned again 0.3 s later, well within max_interval_s of that attempt.
+  // Scanned again 0.3 s later, well within update_interval_s of that attempt.
   engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::UPDATED, 20 * s + 300'000'000)));
   engine_->OnHeadsetPose(Wrap(Pose(20 * s + 300'000'000)));
   auto job = engine_->TakeDueJob();
   ASSERT_TRUE(job);
   EXPECT_FALSE(job->global);
-  EXPECT_GE(job->cloud.size(), engine_->tracker().MinPoints());
+  EXPECT_GE(job->cloud.size(), min_points);
 }
 
 // A building of two floors (a .floors set): the daemon follows the wearer up and down the
@@ -358,7 +339,8 @@ TEST_F(EngineInputTest, TheFloorFollowsTheHeadsetUpAndDownTheStairs) {
   walk(3, 5.1, 5.1);
   EXPECT_EQ(c().floor_changes(), 1u);
   EXPECT_EQ(poses_.back().floor(), "1");
-  EXPECT_EQ(poses_.back().reliability().reason(), "floor changed, not yet checked");
+  EXPECT_NE(poses_.back().reliability().reason().find("not yet checked"), std::string::npos)
+      << poses_.back().reliability().reason();
   EXPECT_EQ(engine_->store().points(), 0u);  // the ground floor's walls
   {
     // A restart upstairs resumes upstairs, though the configuration says floor 0.

@@ -1,5 +1,5 @@
 // No wall pick: the daemon's code (Evaluate, as floorposed runs it) places the wearer by
-// searching the whole plan, and the registrations after it track as after a pick.
+// searching the whole plan, and the belief's updates after it track as after a pick.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -38,19 +38,7 @@ TEST_F(GlobalPlacementTest, AWalkWithoutAPickIsPlacedAndNeverReliablyWrong) {
   v1::FloorposedConfig config;
   config.set_plan_path(kPlanPath);
 
-  // Without the search, a walk without its pick is never placed.
-  EvalReport waiting;
-  ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &waiting, &error, nullptr,
-                       /*no_pick=*/true))
-      << error;
-  EXPECT_EQ(waiting.poses, 0u);
-  EXPECT_EQ(waiting.global_searches, 0u);
-  ASSERT_FALSE(waiting.plan_poses.empty());
-  EXPECT_EQ(waiting.plan_poses.back().reliability().reason(),
-            "no alignment: waiting for a wall pick");
-
-  // With it: placed, tracked to the end, and never RELIABLE while more than 1 m off.
-  config.mutable_tracking()->set_global_search(true);
+  // Placed, tracked to the end, and never RELIABLE while more than 1 m off.
   EvalReport placed;
   ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &placed, &error, nullptr, true))
       << error;
@@ -85,15 +73,8 @@ TEST_F(GlobalPlacementTest, AWrongPickIsFlaggedAndUndone) {
 
   v1::FloorposedConfig config;
   config.set_plan_path(kPlanPath);
-  // Without the search the tracker cannot undo it: the pick's search reaches 2.5 m.
-  EvalReport stuck;
-  ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &stuck, &error)) << error;
-  EXPECT_GT(stuck.mean_error_m, 5.0);
-  EXPECT_LT(stuck.time_to_recovered_s, 0.0);
-
-  // With it: flagged UNRELIABLE at once, placed right within a minute, never RELIABLE
-  // while wrong.
-  config.mutable_tracking()->set_global_search(true);
+  // Flagged UNRELIABLE at once (the pick is doubted until a search of the plan checks
+  // it), placed right within a minute, never RELIABLE while wrong.
   EvalReport undone;
   ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &undone, &error)) << error;
   EXPECT_GE(undone.time_to_unreliable_s, 0.0);

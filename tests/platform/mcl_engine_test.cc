@@ -31,7 +31,6 @@ class MclEngineTest : public testing::TempDirTest {
   EvalReport Run(const std::string& recording, bool no_pick) {
     v1::FloorposedConfig config;
     config.set_plan_path(kPlanPath);
-    config.mutable_tracking()->set_estimator(v1::TrackingConfig::MCL);
     EvalReport report;
     std::string error;
     EXPECT_TRUE(Evaluate(config, recording, Baseline::kNone, &report, &error, nullptr, no_pick))

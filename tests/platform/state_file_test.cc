@@ -221,12 +221,16 @@ TEST_F(EngineStateTest, ARestoredEngineGoesOnExactlyWhereTheSavedOneWas) {
   EXPECT_EQ(b->store().meshes(), a->store().meshes());
   const v1::StateSnapshot again = b->SaveState();
   EXPECT_EQ(again.latest_stamp_ns(), saved.latest_stamp_ns());
-  EXPECT_EQ(again.covariance().size(), 9);
-  for (int i = 0; i < 9; ++i) EXPECT_EQ(again.covariance(i), saved.covariance(i));
-  EXPECT_EQ(again.drift_scale(), saved.drift_scale());
   EXPECT_EQ(again.next_version(), saved.next_version());
-  // Until the next registration the flag says where the alignment came from.
-  EXPECT_EQ(b->tracker().CurrentReliability().reason, "restored, not yet checked");
+  // The belief resumes as it was: its samples, its doubt, checked (not doubted again).
+  ASSERT_TRUE(saved.checked());
+  EXPECT_TRUE(again.checked());
+  EXPECT_EQ(again.elsewhere(), saved.elsewhere());
+  ASSERT_GT(saved.samples_size(), 0);
+  EXPECT_EQ(again.samples_size(), saved.samples_size());
+  for (int i = 0; i < saved.samples_size(); ++i) ASSERT_EQ(again.samples(i), saved.samples(i));
+  EXPECT_EQ(b->reliability().flag, a->reliability().flag) << b->reliability().reason;
+  EXPECT_NEAR(b->reliability().probability, a->reliability().probability, 0.01);
 
   // The same next pose gives the same plan pose.
   const sim::SimStep& next = walk.steps[walk.steps.size() / 2];
@@ -254,12 +258,15 @@ TEST_F(EngineStateTest, ForeignOrBrokenSnapshotsAreRefusedAndNothingOfThemIsKept
        [](v1::StateSnapshot* s) { s->mutable_meshes(0)->set_points(0, std::nanf("")); }},
       {"malformed", [](v1::StateSnapshot* s) { s->mutable_meshes(0)->add_points(1.0f); }},
       {"out of range", [](v1::StateSnapshot* s) { s->mutable_meshes(0)->set_points(1, 5e21f); }},
-      {"alignment or its filter out of range",
+      {"alignment or its belief out of range",
        [](v1::StateSnapshot* s) { s->set_covariance(4, 1e300); }},
       {"not symmetric and positive", [](v1::StateSnapshot* s) { s->set_covariance(0, -1.0); }},
-      {"without the filter's covariance", [](v1::StateSnapshot* s) { s->clear_covariance(); }},
+      {"without the belief's covariance", [](v1::StateSnapshot* s) { s->clear_covariance(); }},
+      {"belief samples malformed", [](v1::StateSnapshot* s) { s->add_samples(1.0); }},
+      {"belief samples that are not finite",
+       [](v1::StateSnapshot* s) { s->set_samples(1, std::nan("")); }},
       {"versions out of order", [](v1::StateSnapshot* s) { s->set_next_version(1); }},
-      {"alignment or its filter out of range", [](v1::StateSnapshot* s) {
+      {"alignment or its belief out of range", [](v1::StateSnapshot* s) {
          s->mutable_alignment()->mutable_t_plan_slam()->set_x(INFINITY);
        }}};
   for (const Case& c : cases) {

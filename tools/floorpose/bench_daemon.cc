@@ -68,11 +68,9 @@ struct BenchDaemonOptions {
   bool json = false;
 };
 
-// Registration times (ms) from a daemon's log: "registration: ..., 12.3 ms, drift ..."
-// (tracking.estimator RULES) or "belief: ..., polished true, 12.3 ms: ..." (MCL).
+// Update times (ms) from a daemon's log: "belief: ..., polished true, 12.3 ms: ...".
 std::vector<double> RegistrationTimes(const std::string& log_path) {
-  static const std::regex kLine(
-      R"((?:registration: .*iterations|belief: .*polished (?:true|false)), ([0-9.]+) ms)");
+  static const std::regex kLine(R"(belief: .*polished (?:true|false), ([0-9.]+) ms)");
   std::vector<double> out;
   std::ifstream in(log_path);
   std::string line;
@@ -424,7 +422,8 @@ Run AddBenchDaemonCommand(CLI::App& bench) {
                   "write every pose's latency here (device, walk time, ms, mesh deltas before it)");
   app->add_option("--config", o->config,
                   "more of the daemons' configuration, text format (for example "
-                  "'tracking { estimator: MCL }'); not dds, plan_path, log_level or state_dir")
+                  "'tracking { mcl { samples { max_samples: 1000 } } }'); not dds, plan_path, "
+                  "log_level or state_dir")
       ->check(CLI::ExistingFile);
   app->add_flag("--json", o->json, "print one JSON object");
   return [o] {

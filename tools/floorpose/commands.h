@@ -18,7 +18,6 @@ Run AddImportCarmenCommand(CLI::App& app);
 Run AddEvalCommand(CLI::App& app);
 Run AddEvalSuiteCommand(CLI::App& app);
 Run AddBenchCommand(CLI::App& app);
-Run AddCalibrateCommand(CLI::App& app);
 Run AddRouteCommand(CLI::App& app);
 Run AddDashboardCommand(CLI::App& app);
 // `floorpose bench daemon` (bench_daemon.cc), a subcommand of `bench`.

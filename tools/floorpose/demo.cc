@@ -76,7 +76,6 @@ struct DemoOptions {
   int every = 5;
   std::string floorposed;
   std::string log;
-  std::string method = v1::RegistrationConfig().method();  // the daemon's default
 };
 
 int RunDemo(const DemoOptions& o) {
@@ -108,8 +107,7 @@ int RunDemo(const DemoOptions& o) {
     std::ofstream conf(config_path);
     conf << platform::LoopbackDdsConfigText(domain, "demo-headset") << "plan_path: \""
          << fs::absolute(plan_path).string() << "\"\n"
-         << "log_level: \"info\"\nstate_dir: \"" << tmp.string() << "\"\n"
-         << "registration { method: \"" << o.method << "\" }\n";
+         << "log_level: \"info\"\nstate_dir: \"" << tmp.string() << "\"\n";
   }
   const std::string log_path = o.log.empty() ? (tmp / "floorposed.log").string() : o.log;
   const std::string floorposed = o.floorposed.empty() ? FindFloorposed() : o.floorposed;
@@ -232,9 +230,6 @@ Run AddDemoCommand(CLI::App& app) {
   app.add_option("--every", o->every, "print every n-th pose")->capture_default_str();
   app.add_option("--floorposed", o->floorposed, "floorposed binary (default: beside floorpose)");
   app.add_option("--log", o->log, "write floorposed's log here and keep it");
-  app.add_option("--method", o->method, "registration method: icp, ik or hough")
-      ->check(CLI::IsMember({"icp", "ik", "hough"}))
-      ->capture_default_str();
   return [o] { return RunDemo(*o); };
 }
 

@@ -16,7 +16,6 @@ namespace {
 
 struct EvalOptions {
   std::string plan, recording, baseline, config, svg, track, session;
-  std::string method = v1::RegistrationConfig().method();  // the daemon's default
   bool json = false;
   bool no_pick = false;
 };
@@ -31,8 +30,6 @@ int RunEval(const EvalOptions& o) {
     return 2;
   }
   config.set_plan_path(o.plan);
-  config.mutable_registration()->set_method(o.method);
-  if (o.no_pick) config.mutable_tracking()->set_global_search(true);
   config.set_log_level("warn");
   if (const std::string e = platform::ValidateConfig(config); !e.empty()) {
     spdlog::error("{}", e);
@@ -74,9 +71,6 @@ Run AddEvalCommand(CLI::App& app) {
   auto o = std::make_shared<EvalOptions>();
   app.add_option("--plan", o->plan, "floor plan (.geojson or .txt)")->required();
   app.add_option("--recording", o->recording, "recording made by `floorpose simulate`")->required();
-  app.add_option("--method", o->method, "registration method")
-      ->check(CLI::IsMember({"icp", "ik", "hough"}))
-      ->capture_default_str();
   app.add_option("--baseline", o->baseline,
                  "instead of registering: none (the wall pick only, the thesis' \"no "
                  "algorithm\") or best-fit (one SE(2) fitted to the whole walk after the fact)")
@@ -84,8 +78,7 @@ Run AddEvalCommand(CLI::App& app) {
   app.add_option("--config", o->config, "floorposed configuration to evaluate with");
   app.add_flag("--json", o->json, "print one JSON object");
   app.add_flag("--no-pick", o->no_pick,
-               "drop the recording's wall picks and place the wearer by searching the plan "
-               "(sets tracking.global_search)");
+               "drop the recording's wall picks: the wearer is placed by searching the plan");
   app.add_option("--svg", o->svg, "draw the plan, both trajectories and the markers here");
   app.add_option("--track", o->track, "write every scored pose here as CSV");
   app.add_option("--session", o->session,

@@ -119,7 +119,6 @@ bool EvaluateCarmen(const v1::FloorposedConfig& base, const fs::path& recordings
     return false;
   v1::FloorposedConfig config = base;
   config.set_plan_path(run->plan);
-  config.mutable_registration()->set_method("icp");
   if (!Evaluate(config, path, Baseline::kNone, &run->report, error)) return false;
   run->length_m = imported.length_m;
   run->duration_s = imported.duration_s;
@@ -259,7 +258,6 @@ bool EvaluateWalk(const v1::FloorposedConfig& base, const fs::path& recordings, 
   v1::FloorposedConfig config = base;
   config.set_plan_path(floor.plan_path);
   if (!Evaluate(config, path, Baseline::kNone, &run->with_pick, error)) return false;
-  config.mutable_tracking()->set_global_search(true);
   return Evaluate(config, path, Baseline::kNone, &run->without_pick, error, nullptr,
                   /*no_pick=*/true);
 }

@@ -42,7 +42,7 @@ struct SuiteOptions {
   std::string out;
   std::vector<std::string> scenarios = sim::ScenarioNames();
   // The daemon's default first: the reliability tables and the SVGs are of the first.
-  std::vector<std::string> methods = {"icp", "ik", "hough", "none", "best-fit"};
+  std::vector<std::string> methods = {"mcl", "none", "best-fit"};
   double length_m = 0;  // 0: the simulator's default
   int jobs = 0;
   std::string config;  // floorposed configuration to evaluate with
@@ -220,8 +220,6 @@ int RunSuite(const SuiteOptions& o) {
 
   // Work items: one simulation, then its evaluations; spread over the cores.
   std::vector<EvalReport> reports;
-  std::ofstream calibration(fs::path(o.out) / "calibration.csv");
-  calibration << CalibrationCsvHeader() << "\n";
   fs::create_directories(fs::path(o.out) / "plans");
   std::mutex mu;
   std::atomic<int> failures{0};
@@ -259,9 +257,6 @@ int RunSuite(const SuiteOptions& o) {
       v1::FloorposedConfig config = base_config;
       config.set_plan_path(plan_path);
       config.set_log_level("warn");
-      const bool registers = method != "none" && method != "best-fit";
-      config.mutable_registration()->set_method(registers ? method : "icp");
-      if (o.no_pick || o.kidnap) config.mutable_tracking()->set_global_search(true);
       const Baseline baseline = method == "none"       ? Baseline::kNoAlgorithm
                                 : method == "best-fit" ? Baseline::kBestFit
                                                        : Baseline::kNone;
@@ -282,13 +277,6 @@ int RunSuite(const SuiteOptions& o) {
           report.method.c_str(), report.mean_error_m, report.max_error_m,
           100 * report.reliable_fraction, 100 * report.reliable_precision_1m);
       std::fflush(stdout);
-      if (registers) {
-        // Every third pose for calibration: neighbours 0.3 s apart say the same.
-        for (size_t k = 0; k < report.track.size(); k += 3) {
-          const EvalPose& p = report.track[k];
-          calibration << CalibrationCsvLine({p.features, p.error_m <= 1.0}) << "\n";
-        }
-      }
       report.track.shrink_to_fit();
       report.plan_poses.clear();
       reports.push_back(std::move(report));
@@ -496,7 +484,7 @@ Run AddEvalSuiteCommand(CLI::App& app) {
       ->capture_default_str();
   app.add_option("--methods", o->methods, "methods and baselines")
       ->delimiter(',')
-      ->check(CLI::IsMember({"icp", "ik", "hough", "none", "best-fit"}))
+      ->check(CLI::IsMember({"mcl", "none", "best-fit"}))
       ->capture_default_str();
   app.add_option("--length", o->length_m, "walk length per run, metres (0: default)");
   app.add_option("--jobs", o->jobs, "parallel runs (0: one per core)");

@@ -28,8 +28,6 @@ int main(int argc, char** argv) {
       floorpose::tools::AddEvalCommand);
   add("eval-suite", "every plan x scenario x seed x method, as a table",
       floorpose::tools::AddEvalSuiteCommand);
-  add("calibrate", "fit the reliability model on an eval-suite's calibration.csv",
-      floorpose::tools::AddCalibrateCommand);
   add("route", "the shortest route a wearer can walk between two points of a floor plan",
       floorpose::tools::AddRouteCommand);
   add("dashboard", "serve a live map of every wearer to browsers on the local network",

@@ -1,79 +1,11 @@
 #include "tools/lib/calibration.h"
 
-#include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
 
 namespace floorpose::tools {
-namespace {
-
-constexpr int kF = ReliabilityModel::kFeatures;
-
-double Sigmoid(double z) { return 1.0 / (1.0 + std::exp(-z)); }
-
-}  // namespace
-
-ReliabilityModel FitReliabilityModel(const std::vector<CalibrationSample>& samples,
-                                     const ReliabilityModel& start, double ridge) {
-  ReliabilityModel m = start;
-  if (samples.empty()) return m;
-  using Vec = Eigen::Matrix<double, kF + 1, 1>;
-  using Mat = Eigen::Matrix<double, kF + 1, kF + 1>;
-  // Standardise the features so that one ridge suits all of them.
-  Vec mean = Vec::Zero(), sd = Vec::Ones();
-  for (const auto& s : samples)
-    for (int i = 0; i < kF; ++i) mean(i + 1) += s.features[i];
-  mean /= static_cast<double>(samples.size());
-  Vec var = Vec::Zero();
-  for (const auto& s : samples)
-    for (int i = 0; i < kF; ++i) var(i + 1) += std::pow(s.features[i] - mean(i + 1), 2);
-  for (int i = 1; i <= kF; ++i)
-    sd(i) = std::max(1e-9, std::sqrt(var(i) / static_cast<double>(samples.size())));
-  const double n = static_cast<double>(samples.size());
-  Vec w = Vec::Zero();
-  for (int iteration = 0; iteration < 50; ++iteration) {
-    Mat H = Mat::Zero();
-    Vec g = Vec::Zero();
-    for (const auto& s : samples) {
-      Vec x;
-      x(0) = 1.0;
-      for (int i = 0; i < kF; ++i) x(i + 1) = (s.features[i] - mean(i + 1)) / sd(i + 1);
-      const double p = Sigmoid(w.dot(x));
-      g += (p - (s.within_1m ? 1.0 : 0.0)) * x;
-      H += std::max(p * (1 - p), 1e-9) * x * x.transpose();
-    }
-    for (int i = 1; i <= kF; ++i) {  // ridge on the weights, not the bias
-      g(i) += ridge * n * w(i);
-      H(i, i) += ridge * n;
-    }
-    // Projected Newton: a weight held at 0 by its sign stays there unless the gradient
-    // pulls it the allowed way; the others take the Newton step and are clipped at 0.
-    for (int i = 1; i <= kF; ++i) {
-      const int sign = ReliabilityModel::kSigns[i - 1];
-      if (sign * w(i) > 0 || -sign * g(i) > 0) continue;  // free
-      H.row(i).setZero();
-      H.col(i).setZero();
-      H(i, i) = 1.0;
-      g(i) = 0.0;
-    }
-    const Vec step = H.ldlt().solve(g);
-    w -= step;
-    for (int i = 1; i <= kF; ++i) {
-      const int sign = ReliabilityModel::kSigns[i - 1];
-      w(i) = sign * std::max(0.0, sign * w(i));
-    }
-    if (step.norm() < 1e-8) break;
-  }
-  // Back to raw features.
-  m.bias = w(0);
-  for (int i = 0; i < kF; ++i) {
-    m.weights[i] = w(i + 1) / sd(i + 1);
-    m.bias -= m.weights[i] * mean(i + 1);
-  }
-  return m;
-}
-
 std::vector<CalibrationBin> CalibrationCurve(const std::vector<double>& predicted,
                                              const std::vector<bool>& within_1m) {
   std::vector<CalibrationBin> bins(10);
@@ -151,38 +83,6 @@ std::string CalibrationTable(const std::vector<CalibrationBin>& bins) {
       << " |\n";
   }
   return s.str();
-}
-
-std::string CalibrationCsvHeader() {
-  std::string h;
-  for (int i = 0; i < kF; ++i) h += std::string(ReliabilityFeatures::Name(i)) + ",";
-  return h + "within_1m";
-}
-
-std::string CalibrationCsvLine(const CalibrationSample& s) {
-  std::ostringstream o;
-  o.precision(6);
-  for (double v : s.features) o << v << ",";
-  o << (s.within_1m ? 1 : 0);
-  return o.str();
-}
-
-bool ParseCalibrationCsvLine(const std::string& line, CalibrationSample* s) {
-  std::istringstream in(line);
-  std::string cell;
-  for (int i = 0; i <= kF; ++i) {
-    if (!std::getline(in, cell, ',')) return false;
-    char* end = nullptr;
-    const double v = std::strtod(cell.c_str(), &end);
-    if (end == cell.c_str() || *end != '\0' || !std::isfinite(v)) return false;
-    if (i < kF)
-      s->features[i] = v;
-    else if (v == 0 || v == 1)
-      s->within_1m = v == 1;
-    else
-      return false;
-  }
-  return !std::getline(in, cell, ',');
 }
 
 }  // namespace floorpose::tools

@@ -90,7 +90,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
   if (!device_id.empty()) config.mutable_dds()->set_device_id(device_id);
   report->method = baseline == Baseline::kNoAlgorithm ? "none"
                    : baseline == Baseline::kBestFit   ? "best-fit"
-                                                      : config.registration().method();
+                                                      : "mcl";
   int64_t virtual_now = 0;
   uint64_t session_seq = 0;
   std::vector<v1::PlanPose>& plan_poses = report->plan_poses;
@@ -116,8 +116,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
   const HeadsetFrame frame =
       ParseHeadsetFrame(config.headset_frame()).value_or(HeadsetFrame::kUnityLeftHandedYUp);
   std::map<int64_t, Pose2> slam_poses;  // for the best-fit baseline
-  std::map<int64_t, std::array<double, ReliabilityModel::kFeatures>> features;
-  std::set<int64_t> registered;  // poses published under a registered alignment
+  std::set<int64_t> registered;         // poses published under a registered alignment
   std::vector<double> reg_times;
   struct Latest {
     Eigen::Vector2d slam, plan;
@@ -143,7 +142,6 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
         engine.OnHeadsetPose(in.envelope);
         if (plan_poses.size() > published) {
           const int64_t stamp = plan_poses.back().source_stamp_ns();
-          features[stamp] = engine.tracker().CurrentFeatures().Vector();
           if (engine.tracker().alignment().source == AlignmentSource::kRegistration)
             registered.insert(stamp);
         }
@@ -199,7 +197,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
       } else if (latest && done.job.index && spdlog::should_log(spdlog::level::debug)) {
         // What share of the registered walls lies on the plan under each: low under the
         // truth too means the plan lacks what the wearer sees, not a wrong result.
-        const std::vector<Eigen::Vector2d>& cloud = done.refined ? done.job.recent : done.job.cloud;
+        const std::vector<Eigen::Vector2d>& cloud = done.job.cloud;
         const auto on_plan = [&](const Se2& T) {
           RegistrationResult fit;
           EvaluateFit(cloud, *done.job.index, T, config.icp().max_correspondence_m(),
@@ -261,7 +259,6 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     e.unreliable = p.reliability().flag() == v1::Reliability::UNRELIABLE;
     e.probability = p.reliability().probability();
     e.reason = p.reliability().reason();
-    if (auto f = features.find(e.stamp_ns); f != features.end()) e.features = f->second;
     if (best_fit) {
       const auto s = slam_poses.find(e.stamp_ns);
       if (s == slam_poses.end()) continue;

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/floor_plan.h"
-#include "core/tracker.h"
+#include "core/tracking/alignment.h"
 #include "floorpose/v1/config.pb.h"
 #include "floorpose/v1/floorpose.pb.h"
 #include "platform/recording.h"
@@ -32,8 +32,6 @@ struct EvalPose {
   bool unreliable = false;  // flagged UNRELIABLE (not DEGRADED)
   double probability = 0;   // published probability of being within 1 m
   std::string reason;       // published reliability reason
-  // The tracker's reliability features when the pose was published (calibration input).
-  std::array<double, ReliabilityModel::kFeatures> features{};
   uint32_t marker = 0;
   uint64_t alignment_version = 0;
   bool registered = false;  // the alignment in use came from a registration
