@@ -1,42 +1,38 @@
 #include "platform/wgs84.h"
 
-#include <ogr_spatialref.h>
+#include <proj.h>
 
 #include <cmath>
+#include <cstdio>
 #include <memory>
 
 namespace floorpose::platform {
 
 bool ProjectToLocalMetres(const Eigen::Vector2d& origin, std::vector<Eigen::Vector2d>* lon_lat,
                           std::string* error) {
-  OGRSpatialReference geographic, local;
-  geographic.SetWellKnownGeogCS("WGS84");
-  // Longitude first, as GeoJSON (RFC 7946) orders them, whatever EPSG says.
-  geographic.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-  local.SetWellKnownGeogCS("WGS84");
-  local.SetAE(origin.y(), origin.x(), 0.0, 0.0);
-  local.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-  std::unique_ptr<OGRCoordinateTransformation> transform(
-      OGRCreateCoordinateTransformation(&geographic, &local));
+  // Degrees in, longitude first (as GeoJSON, RFC 7946, orders them): a pipeline needs no
+  // CRS database, so nothing but libproj itself is read.
+  char definition[256];
+  std::snprintf(definition, sizeof definition,
+                "+proj=pipeline +step +proj=unitconvert +xy_in=deg +xy_out=rad "
+                "+step +proj=aeqd +lat_0=%.12f +lon_0=%.12f +x_0=0 +y_0=0 +ellps=WGS84",
+                origin.y(), origin.x());
+  const std::unique_ptr<PJ_CONTEXT, decltype(&proj_context_destroy)> context(proj_context_create(),
+                                                                             &proj_context_destroy);
+  const std::unique_ptr<PJ, decltype(&proj_destroy)> transform(
+      context ? proj_create(context.get(), definition) : nullptr, &proj_destroy);
   if (!transform) {
     *error = "PROJ could not build the WGS84 to local metres transformation";
     return false;
   }
-  const size_t n = lon_lat->size();
-  if (n == 0) return true;
-  std::vector<double> x(n), y(n);
-  for (size_t i = 0; i < n; ++i) x[i] = (*lon_lat)[i].x(), y[i] = (*lon_lat)[i].y();
-  std::vector<int> ok(n, 0);
-  if (!transform->Transform(n, x.data(), y.data(), nullptr, ok.data())) {
-    *error = "PROJ could not project the plan's coordinates";
-    return false;
-  }
-  for (size_t i = 0; i < n; ++i) {
-    if (!ok[i] || !std::isfinite(x[i]) || !std::isfinite(y[i])) {
+  for (Eigen::Vector2d& p : *lon_lat) {
+    const PJ_COORD out = proj_trans(transform.get(), PJ_FWD, proj_coord(p.x(), p.y(), 0, 0));
+    if (proj_errno(transform.get()) != 0 || !std::isfinite(out.xy.x) || !std::isfinite(out.xy.y) ||
+        out.xy.x == HUGE_VAL) {
       *error = "PROJ could not project a coordinate of the plan";
       return false;
     }
-    (*lon_lat)[i] = {x[i], y[i]};
+    p = {out.xy.x, out.xy.y};
   }
   return true;
 }

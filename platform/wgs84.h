@@ -1,8 +1,7 @@
-// WGS84 longitude/latitude to a local east-north plane in metres, through PROJ (GDAL's
-// OGRCoordinateTransformation): an azimuthal equidistant projection on the WGS84
-// ellipsoid centred on an origin, which over a building (hundreds of metres) is a tangent
-// plane to well under a millimetre. Floor plans published as RFC 7946 GeoJSON come in
-// longitude/latitude; the tracker works in metres.
+// WGS84 longitude/latitude to a local east-north plane in metres, through PROJ: an
+// azimuthal equidistant projection on the WGS84 ellipsoid centred on an origin, which
+// over a building (hundreds of metres) is a tangent plane to well under a millimetre. Floor plans
+// published as RFC 7946 GeoJSON come in longitude/latitude; the tracker works in metres.
 #pragma once
 
 #include <Eigen/Core>

@@ -13,7 +13,7 @@ cd "$(dirname "$0")/.."
 packages=(build-essential cmake pkg-config clang-format
   cyclonedds-dev cyclonedds-tools libprotobuf-dev protobuf-compiler libeigen3-dev
   libspdlog-dev libgtest-dev libgmock-dev libbenchmark-dev libsystemd-dev
-  libcli11-dev nlohmann-json3-dev libyaml-cpp-dev libpng-dev libgdal-dev libcpp-httplib-dev systemd)
+  libcli11-dev nlohmann-json3-dev libyaml-cpp-dev libpng-dev libgdal-dev libproj-dev libcpp-httplib-dev systemd)
 # The tests also talk to clients that are not ours (label interop): a Fast DDS app and
 # the Python example client. The fuzz tests (label fuzz, tools/fuzz.sh) build with clang
 # and its libFuzzer and sanitizer runtimes; the security tests make their CA and
