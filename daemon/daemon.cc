@@ -21,7 +21,7 @@ namespace floorpose {
 using platform::Topic;
 
 Daemon::Daemon(v1::FloorposedConfig config)
-    : config_(std::move(config)), deterministic_(config_.tracking().deterministic()) {}
+    : config_(std::move(config)), deterministic_(config_.deterministic()) {}
 
 Daemon::~Daemon() { Stop(); }
 

@@ -101,34 +101,33 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
   }
   if (c.dds().device_id().empty()) return "dds.device_id must not be empty";
   {
-    const v1::MclConfig& m = c.tracking().mcl();
+    const v1::TrackingConfig& m = c.tracking();
     for (const auto& [value, name] :
-         {std::pair{m.measurement().sigma_m(), "tracking.mcl.measurement.sigma_m"},
+         {std::pair{m.measurement().sigma_m(), "tracking.measurement.sigma_m"},
           std::pair{m.measurement().independent_points(),
-                    "tracking.mcl.measurement.independent_points"},
-          std::pair{m.measurement().window_s(), "tracking.mcl.measurement.window_s"},
-          std::pair{m.wheel().window_s(), "tracking.mcl.wheel.window_s"},
-          std::pair{m.measurement().update_interval_s(),
-                    "tracking.mcl.measurement.update_interval_s"},
-          std::pair{m.recovery().pick_sigma_m(), "tracking.mcl.recovery.pick_sigma_m"},
-          std::pair{m.recovery().pick_sigma_deg(), "tracking.mcl.recovery.pick_sigma_deg"},
-          std::pair{m.recovery().lost_s(), "tracking.mcl.recovery.lost_s"},
-          std::pair{m.recovery().search_interval_s(), "tracking.mcl.recovery.search_interval_s"},
-          std::pair{m.motion().lost_after_s(), "tracking.mcl.motion.lost_after_s"}})
+                    "tracking.measurement.independent_points"},
+          std::pair{m.measurement().window_s(), "tracking.measurement.window_s"},
+          std::pair{m.wheel().window_s(), "tracking.wheel.window_s"},
+          std::pair{m.measurement().update_interval_s(), "tracking.measurement.update_interval_s"},
+          std::pair{m.recovery().pick_sigma_m(), "tracking.recovery.pick_sigma_m"},
+          std::pair{m.recovery().pick_sigma_deg(), "tracking.recovery.pick_sigma_deg"},
+          std::pair{m.recovery().lost_s(), "tracking.recovery.lost_s"},
+          std::pair{m.recovery().search_interval_s(), "tracking.recovery.search_interval_s"},
+          std::pair{m.motion().lost_after_s(), "tracking.motion.lost_after_s"}})
       if (!(value > 0 && std::isfinite(value))) return std::string(name) + " must be positive";
     if (!(m.recovery().start_doubt() > 0 && m.recovery().start_doubt() < 1))
-      return "tracking.mcl.recovery.start_doubt must be in (0, 1)";
+      return "tracking.recovery.start_doubt must be in (0, 1)";
     if (!(m.motion().through_wall() > 0 && m.motion().through_wall() <= 1))
-      return "tracking.mcl.motion.through_wall must be in (0, 1]";
+      return "tracking.motion.through_wall must be in (0, 1]";
     if (!(m.measurement().clutter() > 0 && m.measurement().clutter() < 1))
-      return "tracking.mcl.measurement.clutter must be in (0, 1)";
+      return "tracking.measurement.clutter must be in (0, 1)";
     if (!(m.samples().min_samples() >= 1 &&
           m.samples().min_samples() <= m.samples().max_samples() &&
           m.samples().max_samples() <= 100000))
-      return "tracking.mcl.samples must have 1 <= min_samples <= max_samples <= 100000";
+      return "tracking.samples must have 1 <= min_samples <= max_samples <= 100000";
     if (!(m.publish().degraded() >= 0 && m.publish().degraded() <= m.publish().reliable() &&
           m.publish().reliable() <= 1))
-      return "tracking.mcl.publish must have 0 <= degraded <= reliable <= 1";
+      return "tracking.publish must have 0 <= degraded <= reliable <= 1";
   }
   if (!(c.walls().density_per_m2() > 0 && c.walls().density_per_m2() <= 10000))
     return "walls.density_per_m2 must be in (0, 10000]";
@@ -136,23 +135,20 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
     return "walls.max_normal_up must be in (0, 1)";
   if (!(c.icp().max_correspondence_m() > 0)) return "icp.max_correspondence_m must be positive";
   if (c.icp().levels() > 8) return "icp.levels must be at most 8";
-  if (!(c.tracking().snapshot_voxel_m() > 0)) return "tracking.snapshot_voxel_m must be positive";
+  if (!(c.walls().voxel_m() > 0)) return "tracking.snapshot_voxel_m must be positive";
   if (!(c.status_period_s() > 0)) return "status_period_s must be positive";
   if (!(c.snapshot_period_s() > 0)) return "snapshot_period_s must be positive";
-  for (const auto& [value, name] : {std::pair{c.tracking().mcl().motion().relocalization_m(),
-                                              "tracking.mcl.motion.relocalization_m"},
-                                    std::pair{c.tracking().mcl().motion().relocalization_deg(),
-                                              "tracking.mcl.motion.relocalization_deg"},
-                                    std::pair{c.tracking().mcl().motion().position_m_per_sqrt_m(),
-                                              "tracking.mcl.motion.position_m_per_sqrt_m"},
-                                    std::pair{c.tracking().mcl().motion().heading_deg_per_sqrt_m(),
-                                              "tracking.mcl.motion.heading_deg_per_sqrt_m"},
-                                    std::pair{c.tracking().mcl().motion().heading_per_turn(),
-                                              "tracking.mcl.motion.heading_per_turn"},
-                                    std::pair{c.tracking().mcl().wheel().heading_deg_per_sqrt_m(),
-                                              "tracking.mcl.wheel.heading_deg_per_sqrt_m"},
-                                    std::pair{c.tracking().mcl().wheel().heading_per_turn(),
-                                              "tracking.mcl.wheel.heading_per_turn"}}) {
+  for (const auto& [value, name] :
+       {std::pair{c.tracking().motion().relocalization_m(), "tracking.motion.relocalization_m"},
+        std::pair{c.tracking().motion().relocalization_deg(), "tracking.motion.relocalization_deg"},
+        std::pair{c.tracking().motion().position_m_per_sqrt_m(),
+                  "tracking.motion.position_m_per_sqrt_m"},
+        std::pair{c.tracking().motion().heading_deg_per_sqrt_m(),
+                  "tracking.motion.heading_deg_per_sqrt_m"},
+        std::pair{c.tracking().motion().heading_per_turn(), "tracking.motion.heading_per_turn"},
+        std::pair{c.tracking().wheel().heading_deg_per_sqrt_m(),
+                  "tracking.wheel.heading_deg_per_sqrt_m"},
+        std::pair{c.tracking().wheel().heading_per_turn(), "tracking.wheel.heading_per_turn"}}) {
     if (!(value >= 0 && std::isfinite(value))) return std::string(name) + " must be >= 0";
   }
   for (const auto& [value, name] :
@@ -185,7 +181,7 @@ std::string ResolvedConfigText(const v1::FloorposedConfig& config) {
 }
 
 tracking::MclOptions ToMclOptions(const v1::FloorposedConfig& c) {
-  const v1::MclConfig& m = c.tracking().mcl();
+  const v1::TrackingConfig& m = c.tracking();
   tracking::MclOptions o;
   o.motion.position_m_per_sqrt_m = m.motion().position_m_per_sqrt_m();
   o.motion.heading_rad_per_sqrt_m = m.motion().heading_deg_per_sqrt_m() * M_PI / 180;
@@ -234,7 +230,7 @@ std::string LoopbackDdsConfigText(uint32_t domain, const std::string& device_id,
 
 v1::FloorposedConfig ForOdometry(v1::FloorposedConfig config, v1::HeadsetPose::Odometry odometry) {
   if (odometry == v1::HeadsetPose::WHEEL) {
-    v1::MclConfig& m = *config.mutable_tracking()->mutable_mcl();
+    v1::TrackingConfig& m = *config.mutable_tracking();
     m.mutable_motion()->set_heading_deg_per_sqrt_m(m.wheel().heading_deg_per_sqrt_m());
     m.mutable_motion()->set_heading_per_turn(m.wheel().heading_per_turn());
     m.mutable_measurement()->set_window_s(m.wheel().window_s());

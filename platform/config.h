@@ -31,10 +31,10 @@ std::string LoopbackDdsConfigText(uint32_t domain, const std::string& device_id,
 // Text format with every option present, defaults included.
 std::string ResolvedConfigText(const v1::FloorposedConfig& config);
 
-// The estimator's options (tracking.mcl), ICP's from `icp`.
+// The estimator's options (tracking), ICP's from `icp`.
 tracking::MclOptions ToMclOptions(const v1::FloorposedConfig& config);
 // The configuration a device moving on this odometry is tracked with: for WHEEL,
-// tracking.mcl.wheel replaces the headset's drift and window.
+// tracking.wheel replaces the headset's drift and window.
 v1::FloorposedConfig ForOdometry(v1::FloorposedConfig config, v1::HeadsetPose::Odometry odometry);
 // The DDS Security files of dds.security, or nothing when it is not set.
 std::optional<DdsSecurity> ToDdsSecurity(const v1::FloorposedConfig& config);

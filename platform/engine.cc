@@ -99,7 +99,7 @@ Engine::Engine(v1::FloorposedConfig config, Publish publish, std::function<int64
           ParseHeadsetFrame(config_.headset_frame()).value_or(HeadsetFrame::kUnityLeftHandedYUp)),
       wall_options_(ToWallExtractionOptions(config_)),
       tracker_(ToMclOptions(config_)),
-      store_(config_.tracking().snapshot_voxel_m()),
+      store_(config_.walls().voxel_m()),
       floor_(config_.floor()),
       clock_({static_cast<int64_t>(config_.limits().max_future_s() * 1e9),
               static_cast<int64_t>(config_.limits().restart_gap_s() * 1e9)}) {}
@@ -613,9 +613,9 @@ void Engine::OnHeadsetPose(const Envelope& e) {
       path_.pop_front();
     while (path_.size() > 20000) path_.pop_front();  // 5 km, when the window is everything
   }
-  if (config_.tracking().track_history_s() > 0) {
+  if (config_.track_history_s() > 0) {
     recent_.emplace_back(pose.pose_slam, out);
-    const auto horizon = static_cast<int64_t>(config_.tracking().track_history_s() * 1e9);
+    const auto horizon = static_cast<int64_t>(config_.track_history_s() * 1e9);
     while (!recent_.empty() && recent_.front().second.source_stamp_ns() < source_stamp_ns - horizon)
       recent_.pop_front();
   }
@@ -808,7 +808,7 @@ void Engine::FinishCommand(const v1::Command& cmd, v1::CommandReply reply, const
 
 std::optional<Engine::Job> Engine::SearchJob(int64_t since, size_t min_points) {
   Job job;
-  job.cloud = store_.Snapshot(config_.tracking().max_points(), nullptr, 0, since);
+  job.cloud = store_.Snapshot(config_.walls().window_max_points(), nullptr, 0, since);
   if (job.cloud.size() < min_points) return std::nullopt;
   // Nothing scanned or dropped since the last search (the wearer stands, or walks
   // where the headset has meshed everything): the same places again, no new evidence.
@@ -847,13 +847,14 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
   }
   if (!tracker_.UpdateDue(now, store_.points())) return std::nullopt;
   Job job;
-  job.cloud = store_.Snapshot(config_.tracking().max_points(), nullptr, 0, since(options.window_s));
+  job.cloud =
+      store_.Snapshot(config_.walls().window_max_points(), nullptr, 0, since(options.window_s));
   if (job.cloud.size() < options.min_points) return std::nullopt;
   store_.TakeNewPoints();
   const int64_t fresh_since =
       std::max(since(options.window_s), tracker_.last_update_ns().value_or(INT64_MIN));
   std::vector<Eigen::Vector2d> fresh =
-      store_.Snapshot(config_.tracking().max_points(), nullptr, 0, fresh_since);
+      store_.Snapshot(config_.walls().window_max_points(), nullptr, 0, fresh_since);
   job.mcl = tracker_.PrepareUpdate(now);
   job.mcl->fresh_slam = std::move(fresh);
   job.mcl_options = options;

@@ -110,7 +110,7 @@ class MclTracker {
   const AlignmentState& alignment() const { return alignment_; }
   const MclOptions& options() const { return options_; }
   // The device's drift and the window its walls stay rigid over: a headset's, or a
-  // wheel's (tracking.mcl.wheel) once its poses say WHEEL.
+  // wheel's (tracking.wheel) once its poses say WHEEL.
   void SetDrift(const MotionModel& motion, double window_s) {
     options_.motion = motion;
     options_.window_s = window_s;

@@ -180,8 +180,8 @@ v1::FloorposedConfig MakeConfig() {
   config.mutable_limits()->set_max_wall_points_per_mesh(20000);
   config.mutable_limits()->set_max_wall_points(50000);
   // Updates in smaller windows and beliefs: the same code, at a tenth of the cost.
-  config.mutable_tracking()->set_max_points(1000);
-  config.mutable_tracking()->mutable_mcl()->mutable_samples()->set_max_samples(300);
+  config.mutable_walls()->set_window_max_points(1000);
+  config.mutable_tracking()->mutable_samples()->set_max_samples(300);
   return config;
 }
 

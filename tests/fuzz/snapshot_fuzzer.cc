@@ -28,7 +28,7 @@ v1::FloorposedConfig MakeConfig() {
   config.mutable_dds()->set_device_id(kDevice);
   config.set_plan_path((fuzz::WorkDir() / "room.geojson").string());
   config.mutable_limits()->set_max_wall_points(50000);
-  config.mutable_tracking()->set_max_points(1000);
+  config.mutable_walls()->set_window_max_points(1000);
   return config;
 }
 

@@ -77,7 +77,7 @@ class HostileTest : public DaemonTest {
 // than the newest taken": no registration ran again, and reset did not help.
 TEST_F(HostileTest, StampsFromTheFarFutureAreRefusedAndTheWalkGoesOn) {
   // Deterministic: the two walks are compared update for update, whatever the load.
-  StartDaemon("tracking { deterministic: true }\n");
+  StartDaemon("deterministic: true\n");
   const sim::DemoWalk walk = DaemonTest::Walk(/*pick_error_m=*/0.3, 5);
   const size_t third = walk.steps.size() / 3;
   const double clean = Walk(walk, third, Same);
@@ -115,7 +115,7 @@ TEST_F(HostileTest, StampsFromTheFarFutureAreRefusedAndTheWalkGoesOn) {
 // 2. A headset whose app restarted (stamps begin again at 0) used to be dropped as
 // "older than the newest taken" for the rest of the walk.
 TEST_F(HostileTest, AHeadsetWhoseClockStartsAgainIsTrackedAsBefore) {
-  StartDaemon("tracking { deterministic: true }\n");
+  StartDaemon("deterministic: true\n");
   const sim::DemoWalk walk = DaemonTest::Walk(/*pick_error_m=*/0.3, 6);
   const size_t half = walk.steps.size() / 2;
   const int64_t restart_ns = walk.steps[half].stamp_ns;

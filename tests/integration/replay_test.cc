@@ -41,7 +41,7 @@ TEST_F(ReplayTest, DaemonGivesTheSamePlanPosesAsEval) {
   const std::string config_path = (dir / "floorposed.conf").string();
   std::ofstream(config_path) << platform::LoopbackDdsConfigText(domain, "sim-headset")
                              << "plan_path: \"" << FLOORPOSE_DEMO_PLAN << "\"\n"
-                             << "tracking { deterministic: true }\nstatus_period_s: 0.2\n";
+                             << "deterministic: true\nstatus_period_s: 0.2\n";
   tools::ChildProcess daemon({FLOORPOSED_PATH, "--config", config_path},
                              (dir / "floorposed.log").string());
   tools::HeadsetLink link(domain, platform::LoopbackCycloneConfig(), "sim-headset");

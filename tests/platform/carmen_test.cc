@@ -190,7 +190,7 @@ TEST_F(CarmenTest, MclTracksTheRobotWithTheWheelsDrift) {
   ASSERT_TRUE(Import(false, &walk, &report, &error)) << error;
   v1::FloorposedConfig config;
   config.set_plan_path(Write("room.txt", testing::ThesisText(plan_)));
-  // The odometry over-turns 2 degrees a metre: the wheel's drift (tracking.mcl.wheel)
+  // The odometry over-turns 2 degrees a metre: the wheel's drift (tracking.wheel)
   // covers it; a headset's (0.3 degrees per square root of a metre) does not.
   auto run = [&](const SimulateRecordingOptions& options, const std::string& name) {
     const std::string recording = Path(name);

@@ -23,7 +23,7 @@ TEST(ConfigTest, EmptyTextGivesDefaults) {
   EXPECT_EQ(c.headset_frame(), "unity");
   EXPECT_EQ(c.walls().density_per_m2(), 50.0);
   EXPECT_EQ(c.icp().max_iterations(), 50u);
-  EXPECT_EQ(c.tracking().max_points(), 20000u);
+  EXPECT_EQ(c.walls().window_max_points(), 20000u);
   EXPECT_EQ(c.dds().device_id(), "hololens-1");
   EXPECT_EQ(c.log_level(), "info");
   EXPECT_THAT(ValidateConfig(c), IsEmpty());
@@ -83,7 +83,7 @@ TEST(ConfigTest, ValuesAreParsedAndConverted) {
       plan_path: "/srv/plans/floor1.geojson"
       walls { density_per_m2: 80 seed: 9 }
       icp { max_iterations: 30 levels: 1 }
-      tracking { mcl { samples { max_samples: 800 } } }
+      tracking { samples { max_samples: 800 } }
   )",
                           &c, &error))
       << error;
@@ -135,14 +135,14 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"icp { max_correspondence_m: -1 }", "max_correspondence_m"},
            Case{"icp { levels: 20 }", "levels"},
            Case{"tracking { snapshot_voxel_m: 0 }", "snapshot_voxel_m"},
-           Case{"tracking { mcl { motion { through_wall: 0 } } }", "through_wall"},
-           Case{"tracking { mcl { measurement { clutter: 1 } } }", "clutter"},
-           Case{"tracking { mcl { measurement { window_s: nan } } }", "measurement.window_s"},
-           Case{"tracking { mcl { wheel { window_s: -1 } } }", "wheel.window_s"},
-           Case{"tracking { mcl { recovery { start_doubt: 1 } } }", "start_doubt"},
-           Case{"tracking { mcl { samples { min_samples: 10 max_samples: 5 } } }", "samples"},
-           Case{"tracking { mcl { publish { reliable: 0.4 } } }", "publish"},
-           Case{"tracking { mcl { motion { heading_per_turn: -1 } } }", "heading_per_turn"},
+           Case{"tracking { motion { through_wall: 0 } }", "through_wall"},
+           Case{"tracking { measurement { clutter: 1 } }", "clutter"},
+           Case{"tracking { measurement { window_s: nan } }", "measurement.window_s"},
+           Case{"tracking { wheel { window_s: -1 } }", "wheel.window_s"},
+           Case{"tracking { recovery { start_doubt: 1 } }", "start_doubt"},
+           Case{"tracking { samples { min_samples: 10 max_samples: 5 } }", "samples"},
+           Case{"tracking { publish { reliable: 0.4 } }", "publish"},
+           Case{"tracking { motion { heading_per_turn: -1 } }", "heading_per_turn"},
            Case{"routes { body_radius_m: 0 }", "routes.body_radius_m"},
            Case{"routes { cell_m: 0.001 }", "cell_m"},
            Case{"routes { snap_m: nan }", "routes.snap_m"},
@@ -167,10 +167,10 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
 TEST(ConfigTest, AWheelsDriftReplacesTheHeadsets) {
   v1::FloorposedConfig c;
   std::string error;
-  ASSERT_TRUE(ParseConfig("tracking { mcl { wheel { window_s: 4 } } }", &c, &error)) << error;
+  ASSERT_TRUE(ParseConfig("tracking { wheel { window_s: 4 } }", &c, &error)) << error;
   const v1::FloorposedConfig headset = ForOdometry(c, v1::HeadsetPose::VISUAL_INERTIAL);
   const v1::FloorposedConfig wheel = ForOdometry(c, v1::HeadsetPose::WHEEL);
-  // The belief's drift and window: a wheel's (tracking.mcl.wheel), else a headset's.
+  // The belief's drift and window: a wheel's (tracking.wheel), else a headset's.
   const tracking::MclOptions mcl_headset = ToMclOptions(headset);
   const tracking::MclOptions mcl_wheel = ToMclOptions(wheel);
   EXPECT_DOUBLE_EQ(mcl_headset.motion.heading_rad_per_sqrt_m, 0.3 * M_PI / 180);

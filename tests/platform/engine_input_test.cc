@@ -279,7 +279,7 @@ TEST_F(EngineInputTest, TheSearchWaitsForNewWalls) {
 // scanned long ago): no job, and the next one is tried as soon as new walls come, not a
 // whole interval later.
 TEST_F(EngineInputTest, AnUpdateWithTooFewWallsInItsWindowIsTriedAgainOnTheNextWalls) {
-  config_.mutable_tracking()->mutable_mcl()->mutable_measurement()->set_window_s(10);
+  config_.mutable_tracking()->mutable_measurement()->set_window_s(10);
   Start(/*with_plan=*/true);
   engine_->OnCommand(Wrap(WallPickAtWall()));
   ASSERT_TRUE(engine_->tracker().has_alignment());

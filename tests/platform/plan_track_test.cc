@@ -36,7 +36,7 @@ TEST_F(PlanTrackTest, RecentPosesAreReprojectedWithEveryNewAlignment) {
   v1::FloorposedConfig config;
   std::string recording, error;
   ASSERT_NO_FATAL_FAILURE(Simulate(&config, &recording));
-  config.mutable_tracking()->set_track_history_s(30.0);
+  config.set_track_history_s(30.0);
   EvalReport report;
   ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &report, &error)) << error;
   ASSERT_GT(report.accepted, 1u);

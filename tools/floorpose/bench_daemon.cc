@@ -422,7 +422,7 @@ Run AddBenchDaemonCommand(CLI::App& bench) {
                   "write every pose's latency here (device, walk time, ms, mesh deltas before it)");
   app->add_option("--config", o->config,
                   "more of the daemons' configuration, text format (for example "
-                  "'tracking { mcl { samples { max_samples: 1000 } } }'); not dds, plan_path, "
+                  "'tracking { samples { max_samples: 1000 } }'); not dds, plan_path, "
                   "log_level or state_dir")
       ->check(CLI::ExistingFile);
   app->add_flag("--json", o->json, "print one JSON object");
