@@ -143,7 +143,7 @@ std::string CarmenRow(const CarmenRun& r) {
 
 constexpr char kCarmenHeader[] =
     "| log | split | walk | mean m | p95 m | max m | poses > 5 m off | RELIABLE | of those "
-    "within 1 m | RELIABLE > 1 m off | median registration ms | CPU s per minute of log |\n"
+    "within 1 m | RELIABLE > 1 m off | median update ms | CPU s per minute of log |\n"
     "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
 
 }  // namespace

@@ -328,7 +328,7 @@ int RunSuite(const SuiteOptions& o) {
   md << "\nMean error in metres over " << o.seeds
      << " seeds. Per method over all runs:\n\n"
         "| method | runs | mean error | p95 error | max error | final error | marker error | "
-        "runs diverged (> 5 m) | reliable | reliable within 1 m | registration ms (median) |\n"
+        "runs diverged (> 5 m) | reliable | reliable within 1 m | update ms (median) |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const std::string& m : o.methods) {
     const auto& rs = by_method[m];
