@@ -7,107 +7,15 @@
 namespace floorpose::tracking {
 namespace {
 
-constexpr double kSwitchRatio = 2.0;
 // The walk kept for the next update: the last minute of poses (a belief seeded by a
 // search weighs the walk that led there; updates that stall keep the latest).
 constexpr size_t kMaxPath = 200;
-// Samples within publish.within_m at the wearer and this in heading are one place.
-constexpr double kPlaceRad = 10.0 * M_PI / 180;
 
 Eigen::Matrix3d PriorCovariance(double sigma_m, double sigma_rad) {
   return Eigen::Vector3d(sigma_rad * sigma_rad, sigma_m * sigma_m, sigma_m * sigma_m).asDiagonal();
 }
 
-// The distinct places holding at least `share` of the belief, heaviest first (at most 4):
-// leading modes taken out one after another.
-std::vector<Mode> Places(const Belief& belief, const Eigen::Vector2d& wearer_slam, double radius_m,
-                         double radius_rad, double share) {
-  Belief rest = belief;
-  std::vector<Mode> places;
-  double left = 1.0;
-  for (int i = 0; i < 4 && !rest.empty() && left >= share; ++i) {
-    Mode m = rest.LeadingMode(wearer_slam, radius_m, radius_rad);
-    m.mass *= left;
-    if (m.mass < share) break;
-    places.push_back(m);
-    left -= m.mass;
-    std::vector<Sample>& s = rest.samples();
-    s.erase(std::remove_if(s.begin(), s.end(),
-                           [&](const Sample& x) {
-                             return SamePlace(x.T_plan_slam, m.T_plan_slam, wearer_slam, radius_m,
-                                              radius_rad);
-                           }),
-            s.end());
-  }
-  return places;
-}
-
 }  // namespace
-
-MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cloud,
-                             const ClosestWallIndex& index, const MclOptions& options) {
-  MclUpdateResult out;
-  out.dt_s = u.dt_s;
-  out.belief_version = u.belief_version;
-  SplitMix64 rng(u.seed);
-  Belief& belief = u.belief;
-  const double reach = index.max_distance_m();
-  // Measurement: the window's new share of evidence, and no more than one independent
-  // measurement per point of a sparse window.
-  const std::vector<Eigen::Vector2d> points = ThinCloud(cloud, 0.1, options.weigh_points);
-  const double exponent = u.evidence * std::min(options.measurement.independent_points,
-                                                static_cast<double>(points.size()));
-  // The fit the recovery filter weighs is predictive: of the walls the belief has not
-  // been weighed on yet, under the belief before this update. The walls that shaped the
-  // belief fit it well wherever it settled, right or wrong.
-  const bool predictive = !u.fresh_slam.empty();
-  const std::vector<Eigen::Vector2d> fresh =
-      predictive ? ThinCloud(u.fresh_slam, 0.1, options.weigh_points)
-                 : std::vector<Eigen::Vector2d>{};
-  const std::vector<double> prior = belief.Weights();
-  double fit = 0;
-  for (size_t i = 0; i < belief.size(); ++i) {
-    Sample& s = belief.samples()[i];
-    const double mll = options.measurement.MeanLogLikelihood(points, s.T_plan_slam, index, reach);
-    fit += prior[i] *
-           (predictive ? options.measurement.MeanLogLikelihood(fresh, s.T_plan_slam, index, reach)
-                       : mll);
-    s.log_weight += exponent * mll + options.motion.PathLogPrior(u.path_slam, s.T_plan_slam, index);
-  }
-  out.fit = fit;
-  out.exponent = exponent;
-  const double radius_m = options.publish.within_m;
-  const double radius_rad = kPlaceRad;
-  belief.Normalize();
-  if (belief.EffectiveSize() < 0.5 * static_cast<double>(belief.size()) ||
-      belief.size() > options.samples.max_samples)
-    belief.Resample(options.samples, u.wearer_slam, rng);
-  // The leading place, polished by ICP on the whole window when that fits the walls
-  // better. The polish is published; the samples stay where the belief put them (moving
-  // them with it collapses the belief onto whatever ICP settles on, right or not).
-  Mode mode = belief.LeadingMode(u.wearer_slam, radius_m, radius_rad);
-  if (u.published) {
-    // The published place stays until another holds kSwitchRatio times its mass: a belief
-    // split about evenly must not make the published pose jump between its places.
-    const Mode kept = belief.ModeAt(*u.published, u.wearer_slam, radius_m, radius_rad);
-    if (kept.mass * kSwitchRatio >= mode.mass) mode = kept;
-  }
-  out.mode_mass = mode.mass;
-  out.published = mode.T_plan_slam;
-  out.icp = RegisterIcp(cloud, index, mode.T_plan_slam, options.icp);
-  const Eigen::Vector2d pivot = mode.T_plan_slam * u.wearer_slam;
-  const Eigen::Vector3d shift = Difference(out.icp.T_plan_slam, mode.T_plan_slam, pivot);
-  if (out.icp.converged && shift.tail<2>().norm() <= radius_m && std::abs(shift(0)) <= radius_rad &&
-      options.measurement.MeanLogLikelihood(points, out.icp.T_plan_slam, index, reach) >=
-          options.measurement.MeanLogLikelihood(points, mode.T_plan_slam, index, reach)) {
-    out.polished = true;
-    out.published = out.icp.T_plan_slam;
-  }
-  out.places =
-      std::max<size_t>(1, Places(belief, u.wearer_slam, radius_m, radius_rad, 0.05).size());
-  out.belief = std::move(belief);
-  return out;
-}
 
 MclTracker::MclTracker(MclOptions options) : options_(std::move(options)) {}
 

@@ -1,13 +1,13 @@
-// Monte Carlo localization of the alignment T_plan_slam (tracking.estimator MCL): one
-// belief that can hold several places, moved by the SLAM's drift (MotionModel), weighted
-// by how the recent wall points fit the plan (MeasurementModel), resampled to as many
-// samples as it needs (Belief), reseeded from searches of the whole plan when the walls
-// stop fitting (Recovery), and published with the share of its mass near the published
-// pose (Assess). ICP polishes the leading place to centimetres. A wall pick and a flip are
-// priors for the belief; without one, a search of the plan seeds it.
+// Monte Carlo localization of the alignment T_plan_slam (config `tracking`): one belief that can
+// hold several places, moved by the SLAM's drift (MotionModel), weighted by how the recent wall
+// points fit the plan (MeasurementModel), resampled to as many samples as it needs (Belief),
+// reseeded from searches of the whole plan when the walls stop fitting (Recovery), and published
+// with the share of its mass near the published pose (Assess). ICP polishes the leading place to
+// centimetres. A wall pick and a flip are priors for the belief; without one, a search of the plan
+// seeds it.
 //
-// The daemon and the tools drive it as they drive the Tracker: poses on the io thread,
-// updates prepared there, run on a worker (RunMclUpdate), and finished back there.
+// The daemon and the tools drive it: poses on the io thread, updates prepared there, run
+// on a worker (RunMclUpdate, update.cc), and finished back there.
 #pragma once
 
 #include <cstdint>
@@ -27,6 +27,9 @@
 #include "core/tracking/reliability.h"
 
 namespace floorpose::tracking {
+
+// Samples within publish.within_m at the wearer and this in heading are one place.
+constexpr double kPlaceRad = 10.0 * M_PI / 180;
 
 struct MclOptions {
   MotionModel motion;

@@ -1,4 +1,4 @@
-// tracking.estimator MCL through the daemon's code (Evaluate drives the Engine as
+// The estimator through the daemon's code (Evaluate drives the Engine as
 // floorposed does): with a wall pick, without one, and after a wrong one, on the bundled
 // office.
 #include <gtest/gtest.h>
