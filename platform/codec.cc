@@ -143,4 +143,77 @@ std::string DecodeCommand(const std::string& payload, v1::Command* out) {
   return {};
 }
 
+v1::RegistrationStats ToProto(const RegistrationResult& r) {
+  v1::RegistrationStats s;
+  s.set_method(r.method);
+  s.set_converged(r.converged);
+  s.set_iterations(r.iterations);
+  s.set_points(r.points);
+  s.set_inliers(r.inliers);
+  s.set_inlier_rmse_m(r.inlier_rmse);
+  s.set_rmse_m(r.rmse);
+  for (int i = 0; i < 3; ++i) s.add_normal_eigenvalues(r.eigenvalues(i));
+  s.set_time_ms(r.time_ms);
+  s.set_reason(r.reason);
+  return s;
+}
+
+v1::Reliability::Flag ToProto(ReliabilityFlag f) {
+  switch (f) {
+    case ReliabilityFlag::kReliable: return v1::Reliability::RELIABLE;
+    case ReliabilityFlag::kDegraded: return v1::Reliability::DEGRADED;
+    case ReliabilityFlag::kUnreliable: return v1::Reliability::UNRELIABLE;
+  }
+  return v1::Reliability::FLAG_UNSPECIFIED;
+}
+
+v1::Reliability ToProto(const Reliability& r) {
+  v1::Reliability out;
+  out.set_flag(ToProto(r.flag));
+  out.set_probability(r.probability);
+  out.set_rmse_m(r.rmse_m);
+  out.set_reason(r.reason);
+  return out;
+}
+
+v1::DaemonStatus::State ToProto(TrackState s) {
+  switch (s) {
+    case TrackState::kWaitingForPlan: return v1::DaemonStatus::WAITING_FOR_PLAN;
+    case TrackState::kWaitingForAlignment: return v1::DaemonStatus::WAITING_FOR_ALIGNMENT;
+    case TrackState::kTracking: return v1::DaemonStatus::TRACKING;
+    case TrackState::kDegraded: return v1::DaemonStatus::DEGRADED;
+    case TrackState::kLost: return v1::DaemonStatus::LOST;
+  }
+  return v1::DaemonStatus::STATE_UNSPECIFIED;
+}
+
+v1::Alignment::Source ToProto(AlignmentSource s) {
+  switch (s) {
+    case AlignmentSource::kWallPick: return v1::Alignment::WALL_PICK;
+    case AlignmentSource::kFlip: return v1::Alignment::FLIP;
+    case AlignmentSource::kRegistration: return v1::Alignment::REGISTRATION;
+    case AlignmentSource::kGlobalSearch: return v1::Alignment::GLOBAL_SEARCH;
+    case AlignmentSource::kNone: break;
+  }
+  return v1::Alignment::SOURCE_UNSPECIFIED;
+}
+
+// The Alignment message of an alignment on `floor` (with its registration's statistics
+// when it has them): published on every change and kept in the state snapshot.
+v1::Alignment ToProto(const AlignmentState& a, const std::string& floor) {
+  v1::Alignment out;
+  out.mutable_t_plan_slam()->set_theta(a.T_plan_slam.theta);
+  out.mutable_t_plan_slam()->set_x(a.T_plan_slam.t.x());
+  out.mutable_t_plan_slam()->set_y(a.T_plan_slam.t.y());
+  out.set_version(a.version);
+  out.set_source(ToProto(a.source));
+  out.set_floor(floor);
+  out.set_stamp_ns(a.stamp_ns);
+  if (a.registration) {
+    *out.mutable_stats() = ToProto(*a.registration);
+    out.mutable_stats()->set_accepted(true);
+  }
+  return out;
+}
+
 }  // namespace floorpose::platform

@@ -9,6 +9,7 @@
 
 #include "core/frames.h"
 #include "core/se2.h"
+#include "core/tracking/alignment.h"
 #include "floorpose/v1/config.pb.h"
 #include "floorpose/v1/floorpose.pb.h"
 
@@ -52,5 +53,15 @@ std::string DecodeHeadsetPose(const std::string& payload, HeadsetFrame frame,
                               Refusal* kind = nullptr);
 
 std::string DecodeCommand(const std::string& payload, v1::Command* out);
+
+// What the daemon publishes, as messages: a registration's (an update's polish)
+// statistics, a reliability, a state, an alignment's source, and the Alignment message
+// of an alignment on `floor` (with its polish's statistics when it has them).
+v1::RegistrationStats ToProto(const RegistrationResult& r);
+v1::Reliability::Flag ToProto(ReliabilityFlag f);
+v1::Reliability ToProto(const Reliability& r);
+v1::DaemonStatus::State ToProto(TrackState s);
+v1::Alignment::Source ToProto(AlignmentSource s);
+v1::Alignment ToProto(const AlignmentState& a, const std::string& floor);
 
 }  // namespace floorpose::platform

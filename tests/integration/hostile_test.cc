@@ -92,6 +92,10 @@ TEST_F(HostileTest, StampsFromTheFarFutureAreRefusedAndTheWalkGoesOn) {
     tools::HeadsetLink& a = Attacker();
     if (k == third) {
       a.Send(Topic::kHeadsetPose, tools::ToHeadsetPose(step.slam, kFrame, kPoisonNs), kPoisonNs);
+      // Refused before the mesh comes: two stamps as far ahead in a row are taken as the
+      // headset's clock jumping, and a busy daemon would read both in one batch.
+      EXPECT_TRUE(WaitForStatus(
+          [](const v1::DaemonStatus& st) { return st.counters().future_stamps() >= 1; }));
     } else {
       sim::SimMesh mesh;  // the latest scan, as a new mesh
       for (size_t j = 0; j < k; ++j)
