@@ -43,7 +43,6 @@ size_t WallStore::Upsert(uint64_t mesh_id, std::vector<WallPoint> points, int64_
   } else {
     it = meshes_.emplace(mesh_id, Mesh{std::move(points), 0}).first;
   }
-  it->second.generation = ++generation_;
   it->second.stamp_ns = stamp_ns;
   IndexMesh(mesh_id, it->second.points);
   points_ += it->second.points.size();
@@ -83,23 +82,16 @@ void WallStore::Clear() {
   new_points_ = 0;
 }
 
-std::vector<Eigen::Vector2d> WallStore::Snapshot(size_t max_points,
-                                                 std::vector<Eigen::Vector2d>* normals,
-                                                 uint64_t since_generation,
-                                                 int64_t min_stamp_ns) const {
+std::vector<Eigen::Vector2d> WallStore::Snapshot(size_t max_points, int64_t min_stamp_ns) const {
   // One point per voxel, the first of the lowest mesh id, in sorted voxel order: the
   // snapshot is independent of hash-map iteration order, so that the daemon and the
   // offline evaluator register the same points.
   std::vector<std::pair<VoxelKey, const WallPoint*>> cells;
-  const auto wanted = [&](const Mesh& mesh) {
-    return !(since_generation && mesh.generation <= since_generation) &&
-           mesh.stamp_ns >= min_stamp_ns;
-  };
-  if (since_generation || min_stamp_ns != INT64_MIN) {
+  if (min_stamp_ns != INT64_MIN) {
     // A window: from its meshes alone, not every voxel of the store.
     std::vector<std::tuple<VoxelKey, uint64_t, uint32_t>> refs;
     for (const auto& [id, mesh] : meshes_) {
-      if (!wanted(mesh)) continue;
+      if (mesh.stamp_ns < min_stamp_ns) continue;
       for (uint32_t i = 0; i < mesh.points.size(); ++i)
         refs.emplace_back(KeyOf(mesh.points[i].p), id, i);
     }
@@ -124,15 +116,7 @@ std::vector<Eigen::Vector2d> WallStore::Snapshot(size_t max_points,
   const size_t take = (max_points == 0 || max_points >= n) ? n : max_points;
   std::vector<Eigen::Vector2d> out;
   out.reserve(take);
-  if (normals) {
-    normals->clear();
-    normals->reserve(take);
-  }
-  for (size_t k = 0; k < take; ++k) {
-    const WallPoint& wp = *cells[k * n / take].second;
-    out.push_back(wp.p.cast<double>());
-    if (normals) normals->push_back(wp.n.cast<double>());
-  }
+  for (size_t k = 0; k < take; ++k) out.push_back(cells[k * n / take].second->p.cast<double>());
   return out;
 }
 

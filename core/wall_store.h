@@ -48,22 +48,15 @@ class WallStore {
   size_t new_points() const { return new_points_; }
 
   // One point per occupied voxel (the point of the lowest mesh id and index in it, in
-  // voxel order), at most max_points (0 = all) spread evenly over the voxels: the
-  // registration input. With `normals`, their wall normals too. With since_generation,
-  // only points of meshes inserted or replaced after that generation (the thesis'
-  // "local" registration; 0 = all, its "global"). With min_stamp_ns, only meshes scanned
-  // at or after it (a window that follows the SLAM drift).
-  std::vector<Eigen::Vector2d> Snapshot(size_t max_points,
-                                        std::vector<Eigen::Vector2d>* normals = nullptr,
-                                        uint64_t since_generation = 0,
-                                        int64_t min_stamp_ns = INT64_MIN) const;
+  // voxel order), at most max_points (0 = all) spread evenly over the voxels: the input
+  // of an update or a search. With min_stamp_ns, only meshes scanned at or after it (a
+  // window that follows the SLAM drift).
+  std::vector<Eigen::Vector2d> Snapshot(size_t max_points, int64_t min_stamp_ns = INT64_MIN) const;
   // Every live mesh as fn(mesh_id, points, stamp_ns), in no particular order.
   template <typename Fn>
   void ForEachMesh(Fn&& fn) const {
     for (const auto& [id, mesh] : meshes_) fn(id, mesh.points, mesh.stamp_ns);
   }
-  // Increments on every Upsert; a mesh remembers the generation that last wrote it.
-  uint64_t generation() const { return generation_; }
   // Live points within radius of a position (slam frame).
   std::vector<WallPoint> QueryRadius(const Eigen::Vector2f& center, float radius) const;
 
@@ -80,14 +73,12 @@ class WallStore {
   double voxel_m_;
   struct Mesh {
     std::vector<WallPoint> points;
-    uint64_t generation = 0;
     int64_t stamp_ns = 0;
   };
   std::unordered_map<uint64_t, Mesh> meshes_;
   std::unordered_map<VoxelKey, std::vector<Ref>> voxels_;
   size_t points_ = 0;
   size_t new_points_ = 0;
-  uint64_t generation_ = 0;
 };
 
 }  // namespace floorpose

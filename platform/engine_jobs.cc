@@ -58,7 +58,7 @@ Engine::Done Engine::Run(Job job, const std::function<int64_t()>& now_ns) {
 
 std::optional<Engine::Job> Engine::SearchJob(int64_t since, size_t min_points) {
   Job job;
-  job.cloud = store_.Snapshot(config_.walls().window_max_points(), nullptr, 0, since);
+  job.cloud = store_.Snapshot(config_.walls().window_max_points(), since);
   if (job.cloud.size() < min_points) return std::nullopt;
   // Nothing scanned or dropped since the last search (the wearer stands, or walks
   // where the headset has meshed everything): the same places again, no new evidence.
@@ -97,14 +97,13 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
   }
   if (!tracker_.UpdateDue(now, store_.points())) return std::nullopt;
   Job job;
-  job.cloud =
-      store_.Snapshot(config_.walls().window_max_points(), nullptr, 0, since(options.window_s));
+  job.cloud = store_.Snapshot(config_.walls().window_max_points(), since(options.window_s));
   if (job.cloud.size() < options.min_points) return std::nullopt;
   store_.TakeNewPoints();
   const int64_t fresh_since =
       std::max(since(options.window_s), tracker_.last_update_ns().value_or(INT64_MIN));
   std::vector<Eigen::Vector2d> fresh =
-      store_.Snapshot(config_.walls().window_max_points(), nullptr, 0, fresh_since);
+      store_.Snapshot(config_.walls().window_max_points(), fresh_since);
   job.mcl = tracker_.PrepareUpdate(now);
   job.mcl->fresh_slam = std::move(fresh);
   job.mcl_options = options;

@@ -153,7 +153,7 @@ TEST(WallStoreTest, SnapshotIsOnePointPerVoxelBoundedAndDeterministic) {
   EXPECT_NE(ten.back(), full[9]);
 }
 
-// A windowed snapshot (by generation or stamp) is built from the window's meshes only;
+// A windowed snapshot (by stamp) is built from the window's meshes only;
 // it is what the whole store's snapshot would be had it held those meshes alone.
 TEST(WallStoreTest, WindowedSnapshotIsTheSnapshotOfTheWindowsMeshes) {
   SplitMix64 rng(45);
@@ -172,14 +172,8 @@ TEST(WallStoreTest, WindowedSnapshotIsTheSnapshotOfTheWindowsMeshes) {
     for (const auto& [id, mesh] : live)
       if (mesh.second >= since) window.Upsert(id, mesh.first, mesh.second);
     for (const size_t max : {size_t{0}, size_t{50}})
-      EXPECT_EQ(store.Snapshot(max, nullptr, 0, since), window.Snapshot(max)) << since;
+      EXPECT_EQ(store.Snapshot(max, since), window.Snapshot(max)) << since;
   }
-  // By generation: the meshes written after it.
-  const uint64_t half = store.generation() / 2;
-  WallStore later(voxel);
-  for (const auto& [id, mesh] : live)
-    if (mesh.second / 10 >= static_cast<int64_t>(half)) later.Upsert(id, mesh.first, mesh.second);
-  EXPECT_EQ(store.Snapshot(0, nullptr, half), later.Snapshot(0));
 }
 
 TEST(WallStoreTest, QueryRadiusMatchesBruteForce) {
