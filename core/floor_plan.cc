@@ -18,35 +18,136 @@ Eigen::Vector2d ClosestPointOnSegment(const Segment& s, const Eigen::Vector2d& p
   return s.a + u * d;
 }
 
+const char* LineKindName(LineKind kind) {
+  switch (kind) {
+    case LineKind::kWall: return "wall";
+    case LineKind::kWindow: return "window";
+    case LineKind::kGlass: return "glass";
+    case LineKind::kStairs: return "stairs";
+    case LineKind::kElevator: return "elevator";
+    case LineKind::kDoor: return "door";
+    case LineKind::kExit: return "exit";
+  }
+  return "wall";
+}
+
+bool ParseLineKind(std::string_view name, LineKind* kind) {
+  static constexpr std::pair<std::string_view, LineKind> kNames[] = {
+      {"wall", LineKind::kWall},          {"window", LineKind::kWindow},
+      {"glass", LineKind::kGlass},        {"glazing", LineKind::kGlass},
+      {"curtain_wall", LineKind::kGlass}, {"stairs", LineKind::kStairs},
+      {"stair", LineKind::kStairs},       {"staircase", LineKind::kStairs},
+      {"elevator", LineKind::kElevator},  {"lift", LineKind::kElevator},
+      {"door", LineKind::kDoor},          {"opening", LineKind::kDoor},
+      {"exit", LineKind::kExit},          {"entrance", LineKind::kExit},
+      {"emergency_exit", LineKind::kExit}};
+  for (const auto& [n, k] : kNames)
+    if (n == name) {
+      *kind = k;
+      return true;
+    }
+  return false;
+}
+
 FloorPlanParse MakeFloorPlan(std::string id, std::vector<Segment> raw) {
+  std::vector<PlanLine> lines;
+  lines.reserve(raw.size());
+  for (const Segment& s : raw) lines.push_back({s, LineKind::kWall});
+  return MakeFloorPlan(std::move(id), lines, {});
+}
+
+namespace {
+
+// A door drawn on a wall (as IMDF's openings lie on its units' outlines, or a CAD door
+// over the wall line) is a gap in it: the barriers lose what the openings cover, where an
+// opening runs along a barrier within 3 degrees and 5 cm.
+std::vector<PlanLine> CutOpenings(const std::vector<PlanLine>& lines) {
+  std::vector<const Segment*> openings;
+  for (const PlanLine& l : lines)
+    if (IsOpening(l.kind)) openings.push_back(&l.segment);
+  if (openings.empty()) return lines;
+  constexpr double kAlongRad = 3.0 * M_PI / 180, kOffM = 0.05;
+  std::vector<PlanLine> out;
+  for (const PlanLine& l : lines) {
+    const Segment& s = l.segment;
+    const double length = s.Length();
+    if (IsOpening(l.kind) || !(length > 0)) {
+      out.push_back(l);
+      continue;
+    }
+    const Eigen::Vector2d d = (s.b - s.a) / length, n(-d.y(), d.x());
+    std::vector<std::pair<double, double>> cuts;  // along s, metres from a
+    for (const Segment* o : openings) {
+      const Eigen::Vector2d od = o->b - o->a;
+      if (std::abs(n.dot(o->a - s.a)) > kOffM || std::abs(n.dot(o->b - s.a)) > kOffM ||
+          std::abs(n.dot(od)) > std::sin(kAlongRad) * od.norm())
+        continue;
+      const double t0 = d.dot(o->a - s.a), t1 = d.dot(o->b - s.a);
+      const double lo = std::max(0.0, std::min(t0, t1)), hi = std::min(length, std::max(t0, t1));
+      if (hi > lo) cuts.emplace_back(lo, hi);
+    }
+    if (cuts.empty()) {
+      out.push_back(l);
+      continue;
+    }
+    std::sort(cuts.begin(), cuts.end());
+    double from = 0;
+    for (const auto& [lo, hi] : cuts) {
+      if (lo > from) out.push_back({{s.a + from * d, s.a + lo * d}, l.kind});
+      from = std::max(from, hi);
+    }
+    if (from < length) out.push_back({{s.a + from * d, s.b}, l.kind});
+  }
+  return out;
+}
+
+}  // namespace
+
+FloorPlanParse MakeFloorPlan(std::string id, const std::vector<PlanLine>& drawn,
+                             std::vector<PlanRoom> rooms) {
+  const std::vector<PlanLine> lines = CutOpenings(drawn);
   FloorPlanParse out;
   out.plan.id = std::move(id);
-  // Duplicates are found on endpoints rounded to 1 mm, in either direction.
-  std::set<std::tuple<long long, long long, long long, long long>> seen;
+  out.plan.rooms = std::move(rooms);
+  // Duplicates are found on endpoints rounded to 1 mm, in either direction, among the
+  // barriers and among the openings.
+  std::set<std::tuple<bool, long long, long long, long long, long long>> seen;
   auto mm = [](double v) { return std::llround(v * 1000.0); };
-  for (Segment s : raw) {
+  bool mixed = false;
+  for (const PlanLine& line : lines) {
+    const Segment& s = line.segment;
     if (!s.a.allFinite() || !s.b.allFinite() || s.Length() < 1e-3) {
       ++out.dropped_segments;
       continue;
     }
-    auto key = std::make_tuple(mm(s.a.x()), mm(s.a.y()), mm(s.b.x()), mm(s.b.y()));
-    auto rev = std::make_tuple(mm(s.b.x()), mm(s.b.y()), mm(s.a.x()), mm(s.a.y()));
+    const bool opening = IsOpening(line.kind);
+    auto key = std::make_tuple(opening, mm(s.a.x()), mm(s.a.y()), mm(s.b.x()), mm(s.b.y()));
+    auto rev = std::make_tuple(opening, mm(s.b.x()), mm(s.b.y()), mm(s.a.x()), mm(s.a.y()));
     if (seen.count(key) || seen.count(rev)) {
       ++out.dropped_segments;
       continue;
     }
     seen.insert(key);
+    if (opening) {
+      out.plan.openings.push_back(line);
+      continue;
+    }
     out.plan.segments.push_back(s);
+    out.plan.kinds.push_back(line.kind);
+    mixed |= line.kind != LineKind::kWall;
   }
+  if (!mixed) out.plan.kinds.clear();  // all walls
   if (out.plan.segments.empty()) {
     out.error = "floor plan has no usable wall segments";
     return out;
   }
   Eigen::Vector2d lo = out.plan.segments[0].a, hi = lo;
-  for (const Segment& s : out.plan.segments) {
+  auto grow = [&](const Segment& s) {
     lo = lo.cwiseMin(s.a).cwiseMin(s.b);
     hi = hi.cwiseMax(s.a).cwiseMax(s.b);
-  }
+  };
+  for (const Segment& s : out.plan.segments) grow(s);
+  for (const PlanLine& o : out.plan.openings) grow(o.segment);
   if (!(hi - lo).allFinite()) {
     out.error = "floor plan extent overflows (coordinates near the double limit)";
     return out;
@@ -80,6 +181,7 @@ FloorPlan ClipFloorPlan(const FloorPlan& plan, const Eigen::Vector2d& lo,
     }
     if (!inside || t0 >= t1) continue;
     out.segments.push_back({s.a + t0 * d, s.a + t1 * d});
+    if (!plan.kinds.empty()) out.kinds.push_back(plan.KindOf(&s - plan.segments.data()));
   }
   if (!out.segments.empty()) {
     out.min = out.segments[0].a;
@@ -182,6 +284,12 @@ uint64_t FloorPlanDigest(const FloorPlan& plan) {
     mix(s.b.x());
     mix(s.b.y());
   }
+  // A plan of walls alone keeps the digest it had before plans had kinds.
+  for (LineKind k : plan.kinds) h = (h ^ static_cast<uint8_t>(k)) * 1099511628211ull;
+  for (const PlanLine& o : plan.openings) {
+    h = (h ^ static_cast<uint8_t>(o.kind)) * 1099511628211ull;
+    for (double v : {o.segment.a.x(), o.segment.a.y(), o.segment.b.x(), o.segment.b.y()}) mix(v);
+  }
   return h;
 }
 
@@ -216,15 +324,19 @@ bool OutsideBox(const Segment& s, const Eigen::Vector2d& lo, const Eigen::Vector
   return smax.x() < lo.x() || smin.x() > hi.x() || smax.y() < lo.y() || smin.y() > hi.y();
 }
 
-// The walls within pad_m of the box of a (non-empty) path.
+// The barriers within pad_m of the box of a (non-empty) path; with meshed_only, those a
+// headset meshes (IsMeshed): it sees through glass and windows.
 std::vector<const Segment*> WallsNearPath(const std::vector<Eigen::Vector2d>& path,
-                                          const FloorPlan& plan, double pad_m) {
+                                          const FloorPlan& plan, double pad_m,
+                                          bool meshed_only = false) {
   Eigen::Vector2d lo = path.front(), hi = path.front();
   for (const Eigen::Vector2d& p : path) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
   const Eigen::Vector2d pad = Eigen::Vector2d::Constant(pad_m);
   std::vector<const Segment*> near;
-  for (const Segment& s : plan.segments)
-    if (!OutsideBox(s, lo - pad, hi + pad)) near.push_back(&s);
+  for (size_t i = 0; i < plan.segments.size(); ++i)
+    if (!OutsideBox(plan.segments[i], lo - pad, hi + pad) &&
+        (!meshed_only || IsMeshed(plan.KindOf(i))))
+      near.push_back(&plan.segments[i]);
   return near;
 }
 
@@ -298,7 +410,7 @@ uint32_t HiddenPoints(const std::vector<Eigen::Vector2d>& points,
                       const std::vector<Eigen::Vector2d>& path, const FloorPlan& plan,
                       double reach_m, double standoff_m, double end_margin_m) {
   if (points.empty() || path.empty()) return 0;
-  const std::vector<const Segment*> near = WallsNearPath(path, plan, reach_m);
+  const std::vector<const Segment*> near = WallsNearPath(path, plan, reach_m, true);
   uint32_t hidden = 0;
   for (const Eigen::Vector2d& q : points) {
     const auto [in_reach, seen] = InSight(q, path, near, reach_m, standoff_m, end_margin_m);
@@ -312,7 +424,7 @@ std::vector<Eigen::Vector2d> WallSamplesInSight(const std::vector<Eigen::Vector2
                                                 const WallSampleOptions& options) {
   std::vector<Eigen::Vector2d> samples;
   if (path.empty() || !(options.reach_m > 0) || !(options.step_m > 0)) return samples;
-  const std::vector<const Segment*> near = WallsNearPath(path, plan, options.reach_m);
+  const std::vector<const Segment*> near = WallsNearPath(path, plan, options.reach_m, true);
   for (const Segment* s : near) {
     const double length = s->Length();
     const double steps = std::ceil(length / options.step_m);

@@ -24,10 +24,46 @@ struct Segment {
 // Closest point on a segment to p.
 Eigen::Vector2d ClosestPointOnSegment(const Segment& s, const Eigen::Vector2d& p);
 
+// What a line of a plan is. Walls, windows, glass and the outlines of stairs and elevators
+// are barriers: nobody walks through them, and the headset may mesh them (glass and
+// windows seldom). Doors and exits are openings: where people walk through.
+enum class LineKind : uint8_t { kWall, kWindow, kGlass, kStairs, kElevator, kDoor, kExit };
+constexpr bool IsOpening(LineKind k) { return k == LineKind::kDoor || k == LineKind::kExit; }
+// Whether a headset that walks past the line meshes it: walls and the walls around stairs
+// and elevators, not glass or windows.
+constexpr bool IsMeshed(LineKind k) {
+  return k == LineKind::kWall || k == LineKind::kStairs || k == LineKind::kElevator;
+}
+// "wall", "window", "glass", "stairs", "elevator", "door", "exit".
+const char* LineKindName(LineKind kind);
+// The name as LineKindName writes it, or a synonym that plans use ("opening" for a door,
+// "glazing" and "curtain_wall" for glass, "stair" and "staircase" for stairs, "lift" for
+// an elevator, "entrance" and "emergency_exit" for an exit); false when unknown.
+bool ParseLineKind(std::string_view name, LineKind* kind);
+
+struct PlanLine {
+  Segment segment;
+  LineKind kind = LineKind::kWall;
+};
+
+// A room or unit the plan names, with its outline (plan frame, a closed ring).
+struct PlanRoom {
+  std::string name;
+  std::vector<Eigen::Vector2d> outline;
+};
+
 struct FloorPlan {
   std::string id;
+  // The barriers, and what each is (kinds[i] of segments[i]; missing entries are walls).
   std::vector<Segment> segments;
+  std::vector<LineKind> kinds;
+  std::vector<PlanLine> openings;  // doors and exits
+  std::vector<PlanRoom> rooms;
   Eigen::Vector2d min = Eigen::Vector2d::Zero(), max = Eigen::Vector2d::Zero();
+
+  LineKind KindOf(size_t segment) const {
+    return segment < kinds.size() ? kinds[segment] : LineKind::kWall;
+  }
 };
 
 // Result of parsing: either a plan or a message saying what is wrong and where.
@@ -44,6 +80,11 @@ struct FloorPlanParse {
 // Cleans a list of raw segments: drops non-finite, zero-length (< 1 mm) and duplicate
 // segments, computes the bounds. Fails on an empty result.
 FloorPlanParse MakeFloorPlan(std::string id, std::vector<Segment> raw);
+// The same for lines of every kind: barriers to segments and kinds, openings to openings
+// (a duplicate is the same line of the same sort), rooms kept as they are. Fails without
+// a barrier.
+FloorPlanParse MakeFloorPlan(std::string id, const std::vector<PlanLine>& lines,
+                             std::vector<PlanRoom> rooms);
 
 // The segments of a plan inside a box, cut at its border (Liang-Barsky), for the thesis'
 // "floor plan clipped to the points' box + 2 m" (section 6.4.3). May be empty.

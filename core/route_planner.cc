@@ -1,5 +1,6 @@
 #include "core/route_planner.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -9,6 +10,13 @@
 namespace floorpose {
 
 RoutePlanner::RoutePlanner(const FloorPlan& plan, const RouteOptions& options) : options_(options) {
+  for (const PlanLine& o : plan.openings)
+    if (o.kind == LineKind::kExit) exits_.push_back(0.5 * (o.segment.a + o.segment.b));
+  for (size_t i = 0; i < plan.segments.size() && exits_.empty(); ++i)
+    if (plan.KindOf(i) == LineKind::kStairs)
+      for (; i < plan.segments.size(); ++i)
+        if (plan.KindOf(i) == LineKind::kStairs)
+          exits_.push_back(0.5 * (plan.segments[i].a + plan.segments[i].b));
   // No margin: a route stays within the plan's bounds.
   grid_ = GridGeometry::Cover(plan.min, plan.max, options_.cell_m, 0.0, options_.max_cells);
   const double keep = options_.body_radius_m + grid_.cell_m * M_SQRT1_2;
@@ -160,6 +168,32 @@ Route RoutePlanner::Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to)
   if (goal_snapped) route.goal_moved_m = (route.path.back() - to).norm();
   route.length_m = PolylineLength(route.path);
   return route;
+}
+
+Route RoutePlanner::WayOut(const Eigen::Vector2d& from) const {
+  if (exits_.empty()) {
+    Route none;
+    none.error = "the plan marks no exit and no stairs";
+    return none;
+  }
+  // The eight nearest as the crow flies; a route is at least that long, so the search
+  // stops once the crow's distance passes the best route found.
+  std::vector<Eigen::Vector2d> by_distance = exits_;
+  std::sort(by_distance.begin(), by_distance.end(), [&](const auto& a, const auto& b) {
+    return (a - from).squaredNorm() < (b - from).squaredNorm();
+  });
+  if (by_distance.size() > 8) by_distance.resize(8);
+  Route best;
+  for (const Eigen::Vector2d& exit : by_distance) {
+    if (best.ok() && !best.path.empty() && (exit - from).norm() >= best.length_m) break;
+    Route route = Plan(from, exit);
+    if (route.ok() && (best.path.empty() || route.length_m < best.length_m)) {
+      best = std::move(route);
+    } else if (!route.ok() && best.path.empty()) {
+      best.error = "no route to an exit: " + route.error;
+    }
+  }
+  return best;
 }
 
 }  // namespace floorpose

@@ -46,6 +46,10 @@ class RoutePlanner {
   // A route from `from` to `to`, or the reason there is none (outside the plan, in a
   // wall, or no opening at least twice the body radius wide leads there).
   Route Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to) const;
+  // The way out: the shortest route to one of the plan's exits, or on a plan without
+  // them to its stairs (the way down); the reason when there is none.
+  Route WayOut(const Eigen::Vector2d& from) const;
+  const std::vector<Eigen::Vector2d>& exits() const { return exits_; }
 
   const RouteOptions& options() const { return options_; }
   const GridGeometry& grid() const { return grid_; }
@@ -61,6 +65,7 @@ class RoutePlanner {
   std::vector<float> CoarseDistances(int goal, int start) const;
 
   RouteOptions options_;
+  std::vector<Eigen::Vector2d> exits_;  // the middles of the exits (or stairs' lines)
   GridGeometry grid_;
   std::vector<uint8_t> passable_;
   std::vector<int> component_;  // LabelComponents of passable_

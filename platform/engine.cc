@@ -241,8 +241,10 @@ std::string Engine::PlanRoute(const v1::Command::Route& request, v1::RouteReply*
   if (!last_plan_pose_ || last_plan_pose_->alignment_version() == 0)
     return "no position on the plan yet";
   const int64_t t0 = now_ns_();
-  const Route route = plan_.routes->Plan({last_plan_pose_->x(), last_plan_pose_->y()},
-                                         {request.to_x(), request.to_y()});
+  const Eigen::Vector2d from(last_plan_pose_->x(), last_plan_pose_->y());
+  const Route route = request.way_out()
+                          ? plan_.routes->WayOut(from)
+                          : plan_.routes->Plan(from, {request.to_x(), request.to_y()});
   if (!route.ok()) return route.error;
   for (const Eigen::Vector2d& p : route.path) {
     v1::PlanPoint* point = reply->add_path();

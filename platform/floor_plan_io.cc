@@ -181,16 +181,39 @@ FloorPlanParse ParseGeoJsonFloorPlan(std::string_view text, std::string id) {
     out.error = "GeoJSON: not valid JSON";
     return out;
   }
+  // Every line as read, and what it belongs to: a LineKind, or the room of that index
+  // (kRoomTag - index) for the outline of a room or unit.
   std::vector<Segment> raw;
+  std::vector<int> tags;
+  std::vector<std::string> room_names;
+  constexpr int kRoomTag = -1;
   auto add_feature = [&](const Json& f) -> std::string {
     if (!f.is_object()) return "feature is not an object";
-    // Features marked as something other than a wall (doors, rooms' labels) are skipped.
-    if (f.contains("properties") && f["properties"].is_object() &&
-        f["properties"].contains("kind") && f["properties"]["kind"].is_string() &&
-        f["properties"]["kind"] != "wall")
-      return {};
     if (!f.contains("geometry") || f["geometry"].is_null()) return {};
-    return AddGeometry(f["geometry"], &raw, 0);
+    // properties.kind says what the lines are (core/floor_plan.h, LineKind): walls when
+    // it says nothing; a room or unit is an outline with a name; other features (labels,
+    // furniture) carry no lines of the plan.
+    int tag = static_cast<int>(LineKind::kWall);
+    const Json* props =
+        f.contains("properties") && f["properties"].is_object() ? &f["properties"] : nullptr;
+    if (props && props->contains("kind") && (*props)["kind"].is_string()) {
+      const std::string kind = (*props)["kind"];
+      LineKind k;
+      if (kind == "room" || kind == "unit") {
+        tag = kRoomTag - static_cast<int>(room_names.size());
+        const bool named = props->contains("name") && (*props)["name"].is_string();
+        room_names.push_back(named ? (*props)["name"].get<std::string>() : std::string());
+      } else if (ParseLineKind(kind, &k)) {
+        tag = static_cast<int>(k);
+      } else {
+        return {};
+      }
+    }
+    const size_t before = raw.size();
+    std::string e = AddGeometry(f["geometry"], &raw, 0);
+    tags.resize(raw.size(), tag);
+    if (tag <= kRoomTag && raw.size() == before) room_names.pop_back();
+    return e;
   };
   std::string error;
   if (!doc.is_object() || !doc.contains("type") || !doc["type"].is_string()) {
@@ -208,6 +231,7 @@ FloorPlanParse ParseGeoJsonFloorPlan(std::string_view text, std::string id) {
     error = add_feature(doc);
   } else {
     error = AddGeometry(doc, &raw, 0);
+    tags.resize(raw.size(), static_cast<int>(LineKind::kWall));
   }
   std::string frame;
   if (error.empty() && IsLonLat(doc, raw)) error = ProjectLonLat(doc, &raw, &frame);
@@ -215,9 +239,53 @@ FloorPlanParse ParseGeoJsonFloorPlan(std::string_view text, std::string id) {
     out.error = "GeoJSON: " + error;
     return out;
   }
-  out = MakeFloorPlan(std::move(id), std::move(raw));
+  std::vector<PlanLine> lines;
+  std::vector<PlanRoom> rooms(room_names.size());
+  for (size_t i = 0; i < raw.size(); ++i) {
+    if (tags[i] >= 0) {
+      lines.push_back({raw[i], static_cast<LineKind>(tags[i])});
+      continue;
+    }
+    PlanRoom& room = rooms[static_cast<size_t>(kRoomTag - tags[i])];
+    if (room.outline.empty()) room.outline.push_back(raw[i].a);
+    room.outline.push_back(raw[i].b);
+  }
+  for (size_t i = 0; i < rooms.size(); ++i) rooms[i].name = std::move(room_names[i]);
+  out = MakeFloorPlan(std::move(id), lines, std::move(rooms));
   out.frame = std::move(frame);
   return out;
+}
+
+std::string ToGeoJson(const FloorPlan& plan, const std::string& source) {
+  // One feature a line: diffable, and small enough to read.
+  const nlohmann::ordered_json properties = {{"units", "m"}, {"source", source}};
+  std::string out = "{\"type\": \"FeatureCollection\", \"properties\": " +
+                    properties.dump(-1, ' ', false, Json::error_handler_t::replace) +
+                    ", \"features\": [\n";
+  auto round = [](double v) { return std::round(v * 1e4) / 1e4; };  // 0.1 mm
+  auto point = [&](const Eigen::Vector2d& p) { return Json::array({round(p.x()), round(p.y())}); };
+  std::vector<std::string> features;
+  auto line = [&](const Segment& s, LineKind kind) {
+    const nlohmann::ordered_json f = {
+        {"type", "Feature"},
+        {"properties", {{"kind", LineKindName(kind)}}},
+        {"geometry", {{"type", "LineString"}, {"coordinates", {point(s.a), point(s.b)}}}}};
+    features.push_back(f.dump());
+  };
+  for (size_t i = 0; i < plan.segments.size(); ++i) line(plan.segments[i], plan.KindOf(i));
+  for (const PlanLine& o : plan.openings) line(o.segment, o.kind);
+  for (const PlanRoom& room : plan.rooms) {
+    Json ring = Json::array();
+    for (const Eigen::Vector2d& p : room.outline) ring.push_back(point(p));
+    const nlohmann::ordered_json f = {
+        {"type", "Feature"},
+        {"properties", {{"kind", "room"}, {"name", room.name}}},
+        {"geometry", {{"type", "Polygon"}, {"coordinates", Json::array({ring})}}}};
+    features.push_back(f.dump(-1, ' ', false, Json::error_handler_t::replace));
+  }
+  for (size_t i = 0; i < features.size(); ++i)
+    out += features[i] + (i + 1 < features.size() ? ",\n" : "\n");
+  return out + "]}\n";
 }
 
 FloorPlanParse LoadFloorPlan(const std::string& path) {

@@ -16,6 +16,10 @@ namespace floorpose::platform {
 // Never throws: failures come back in FloorPlanParse::error, naming the file.
 FloorPlanParse LoadFloorPlan(const std::string& path);
 FloorPlanParse ParseGeoJsonFloorPlan(std::string_view text, std::string id);
+// The plan as GeoJSON that ParseGeoJsonFloorPlan reads back: one LineString feature per
+// line with properties.kind (LineKind's name), one Polygon per room with kind "room" and
+// its name, top-level properties {"units": "m", "source": ...}. Coordinates to 0.1 mm.
+std::string ToGeoJson(const FloorPlan& plan, const std::string& source);
 
 // A building of several floors: a `.floors` text file, one floor per line,
 //   <floor id> <height of its floor above the set's zero, metres> <plan file>

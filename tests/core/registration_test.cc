@@ -31,7 +31,7 @@ Cloud SlamCloudWithNormals(const FloorPlan& plan, const Se2& T_slam_plan, double
   Cloud out;
   for (const Segment& s : plan.segments) {
     const Eigen::Vector2d n = T_slam_plan.R() * s.Normal() * (rng.Uniform() < 0.5 ? -1.0 : 1.0);
-    const FloorPlan one{"", {s}, {}, {}};
+    const FloorPlan one{"", {s}, {}, {}, {}, {}, {}};
     for (const Eigen::Vector2d& p : testing::SampleWalls(one, 0.02)) {
       const Eigen::Vector2d noise(rng.Gaussian(), rng.Gaussian());
       out.points.push_back(T_slam_plan * p + noise_m * noise);
@@ -362,7 +362,7 @@ class OneWallOfTwoTest : public ::testing::Test {
   }
   OneWallOfTwoTest() : index_(TwoWalls()) {
     // 7 m of the wall at y = 0, with 2 cm of noise, in a slam frame equal to the plan's.
-    const FloorPlan seen{"", {{{5, 0}, {12, 0}}}, {}, {}};
+    const FloorPlan seen{"", {{{5, 0}, {12, 0}}}, {}, {}, {}, {}, {}};
     points_ = testing::SampleWalls(seen, 0.05);
     SplitMix64 rng(3);
     for (Eigen::Vector2d& p : points_) p += 0.02 * Eigen::Vector2d(rng.Gaussian(), rng.Gaussian());
@@ -398,7 +398,7 @@ TEST(WallNormalShiftTest, SlidingAlongTheWallsIsNoShiftAcrossIsTheOffset) {
   const auto plan = MakeFloorPlan("corridor", {{{0, 0}, {20, 0}}, {{0, 2}, {20, 2}}});
   ASSERT_TRUE(plan.ok()) << plan.error;
   const ClosestWallIndex index(plan.plan);
-  const FloorPlan seen{"", {{{5, 0}, {12, 0}}, {{5, 2}, {12, 2}}}, {}, {}};
+  const FloorPlan seen{"", {{{5, 0}, {12, 0}}, {{5, 2}, {12, 2}}}, {}, {}, {}, {}, {}};
   const std::vector<Eigen::Vector2d> points = testing::SampleWalls(seen, 0.1);
   const Se2 at{0.0, {0.0, 0.0}};
   EXPECT_NEAR(WallNormalShift(points, index, at, Se2{0.0, {2.0, 0.0}}, 0.2), 0.0, 1e-9);
@@ -415,7 +415,7 @@ TEST(RegistrationAmbiguityTest, CorridorSlidAlongItselfIsNotAnotherPlace) {
   const auto plan = MakeFloorPlan("corridor", {{{0, 0}, {30, 0}}, {{0, 2}, {30, 2}}});
   ASSERT_TRUE(plan.ok()) << plan.error;
   const ClosestWallIndex index(plan.plan);
-  const FloorPlan seen{"", {{{10, 0}, {16, 0}}, {{10, 2}, {16, 2}}}, {}, {}};
+  const FloorPlan seen{"", {{{10, 0}, {16, 0}}, {{10, 2}, {16, 2}}}, {}, {}, {}, {}, {}};
   std::vector<Eigen::Vector2d> points = testing::SampleWalls(seen, 0.05);
   SplitMix64 rng(5);
   for (Eigen::Vector2d& p : points) p += 0.02 * Eigen::Vector2d(rng.Gaussian(), rng.Gaussian());

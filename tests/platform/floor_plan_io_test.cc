@@ -77,19 +77,60 @@ TEST(GeoJsonTest, GeometryKinds) {
   EXPECT_EQ(SegmentCount(R"({"type":"LineString","coordinates":[[0,0,3],[0,2,3]]})"), 1u);
 }
 
-TEST(GeoJsonTest, DoorsAndPointsAreSkipped) {
+TEST(GeoJsonTest, ADoorOnAWallIsAGapAndPointsAreSkipped) {
   const std::string wall = Feature(R"({"type":"LineString","coordinates":[[0,0],[4,0]]})");
   const std::string door = Feature(R"({"type":"LineString","coordinates":[[1,0],[2,0]]})", "door");
   const std::string door_point = Feature(R"({"type":"Point","coordinates":[1.5,0]})", "door");
   const std::string point = Feature(R"({"type":"Point","coordinates":[9,9]})");
+  const std::string label =
+      Feature(R"({"type":"LineString","coordinates":[[0,9],[9,9]]})", "label");
   const std::string no_geometry = R"({"type":"Feature","properties":{},"geometry":null})";
-  const auto parse = ParseGeoJsonFloorPlan(
-      Collection(wall + "," + door + "," + door_point + "," + point + "," + no_geometry), "t");
+  const auto parse = ParseGeoJsonFloorPlan(Collection(wall + "," + door + "," + door_point + "," +
+                                                      point + "," + label + "," + no_geometry),
+                                           "t");
   ASSERT_TRUE(parse.ok()) << parse.error;
-  ASSERT_EQ(parse.plan.segments.size(), 1u);
-  EXPECT_EQ(parse.plan.segments[0].b, Eigen::Vector2d(4, 0));
-  // The Point at (9, 9) did not stretch the bounds.
+  // The wall keeps what the door does not cover: 0-1 and 2-4.
+  ASSERT_EQ(parse.plan.segments.size(), 2u);
+  EXPECT_EQ(parse.plan.segments[0].b, Eigen::Vector2d(1, 0));
+  EXPECT_EQ(parse.plan.segments[1].a, Eigen::Vector2d(2, 0));
+  ASSERT_EQ(parse.plan.openings.size(), 1u);
+  EXPECT_EQ(parse.plan.openings[0].kind, LineKind::kDoor);
+  // Neither the Point at (9, 9) nor the label stretched the bounds.
   EXPECT_EQ(parse.plan.max, Eigen::Vector2d(4, 0));
+}
+
+// Every kind, with the synonyms plans use, and rooms with their names, read back from the
+// GeoJSON we write; a name with a quote stays valid JSON.
+TEST(GeoJsonTest, KindsAndRoomsSurviveTheRoundTrip) {
+  std::string features;
+  const char* kinds[] = {"wall", "window", "glazing", "stairs", "lift", "opening", "exit"};
+  for (int i = 0; i < 7; ++i) {
+    const std::string y = std::to_string(i);
+    features +=
+        Feature(R"({"type":"LineString","coordinates":[[0,)" + y + "],[3," + y + "]]}", kinds[i]) +
+        ",";
+  }
+  features += R"({"type":"Feature","properties":{"kind":"room","name":"Lab \"B\""},"geometry":)"
+              R"({"type":"Polygon","coordinates":[[[0,0],[3,0],[3,6],[0,6],[0,0]]]}})";
+  const auto first = ParseGeoJsonFloorPlan(Collection(features), "t");
+  ASSERT_TRUE(first.ok()) << first.error;
+  const auto again = ParseGeoJsonFloorPlan(ToGeoJson(first.plan, "test \"quoted\""), "t");
+  ASSERT_TRUE(again.ok()) << again.error;
+  for (const FloorPlan* plan : {&first.plan, &again.plan}) {
+    ASSERT_EQ(plan->segments.size(), 5u);
+    EXPECT_EQ(plan->KindOf(0), LineKind::kWall);
+    EXPECT_EQ(plan->KindOf(1), LineKind::kWindow);
+    EXPECT_EQ(plan->KindOf(2), LineKind::kGlass);
+    EXPECT_EQ(plan->KindOf(3), LineKind::kStairs);
+    EXPECT_EQ(plan->KindOf(4), LineKind::kElevator);
+    ASSERT_EQ(plan->openings.size(), 2u);
+    EXPECT_EQ(plan->openings[0].kind, LineKind::kDoor);
+    EXPECT_EQ(plan->openings[1].kind, LineKind::kExit);
+    ASSERT_EQ(plan->rooms.size(), 1u);
+    EXPECT_EQ(plan->rooms[0].name, "Lab \"B\"");
+    EXPECT_EQ(plan->rooms[0].outline.size(), 5u);
+  }
+  EXPECT_EQ(FloorPlanDigest(first.plan), FloorPlanDigest(again.plan));
 }
 
 TEST(GeoJsonTest, DuplicateEdgesOfTouchingRoomsAreDropped) {

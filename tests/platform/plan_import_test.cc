@@ -75,7 +75,7 @@ TEST_F(PlanImportTest, KeepsOnlyTheWallLayerInMetres) {
   EXPECT_NEAR(plan.max.y(), 5.0, 1e-9);
 
   // Written as GeoJSON, it loads as the same plan.
-  const std::string out = Write("plan.geojson", ToGeoJson(plan, "test"));
+  const std::string out = Write("plan.geojson", platform::ToGeoJson(plan, "test"));
   const FloorPlanParse loaded = platform::LoadFloorPlan(out);
   ASSERT_TRUE(loaded.ok()) << loaded.error;
   ASSERT_EQ(loaded.plan.segments.size(), 3u);

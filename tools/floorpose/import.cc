@@ -6,6 +6,7 @@
 #include <fstream>
 #include <memory>
 
+#include "platform/floor_plan_io.h"
 #include "tools/floorpose/commands.h"
 #include "tools/lib/plan_import.h"
 
@@ -26,7 +27,7 @@ int RunImport(const ImportOptions& o) {
     return 1;
   }
   std::ofstream out(o.to);
-  out << ToGeoJson(plan, "floorpose import " + o.from);
+  out << platform::ToGeoJson(plan, "floorpose import " + o.from);
   if (!out.flush()) {
     spdlog::error("{}: cannot write", o.to);
     return 1;

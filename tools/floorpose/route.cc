@@ -22,6 +22,7 @@ struct RouteCommandOptions {
   std::vector<double> from, to;
   RouteOptions route;
   bool json = false;
+  bool way_out = false;
   int routes = 200;  // bench: random pairs
   uint64_t seed = 1;
 };
@@ -54,7 +55,8 @@ int RunRoute(const RouteCommandOptions& o) {
   if (!loaded) return 1;
   const RoutePlanner& planner = *loaded;
   const auto asked = Clock::now();
-  const Route route = planner.Plan({o.from[0], o.from[1]}, {o.to[0], o.to[1]});
+  const Eigen::Vector2d from(o.from[0], o.from[1]);
+  const Route route = o.way_out ? planner.WayOut(from) : planner.Plan(from, {o.to[0], o.to[1]});
   const double route_ms = MsSince(asked);
   if (o.json) {
     nlohmann::json j;
@@ -159,10 +161,15 @@ Run AddRouteCommand(CLI::App& app) {
       ->required()
       ->delimiter(',')
       ->expected(2);
-  app.add_option("--to", o->to, "destination X,Y on the plan, metres")
-      ->required()
-      ->delimiter(',')
-      ->expected(2);
+  CLI::Option* to = app.add_option("--to", o->to, "destination X,Y on the plan, metres")
+                        ->delimiter(',')
+                        ->expected(2);
+  CLI::Option* out = app.add_flag(
+      "--way-out", o->way_out, "to the nearest exit by route (the plan's stairs when it has none)");
+  to->excludes(out);
+  app.callback([to, out] {
+    if (!to->count() && !out->count()) throw CLI::ValidationError("--to or --way-out is required");
+  });
   return [o] { return RunRoute(*o); };
 }
 

@@ -166,23 +166,4 @@ bool ImportPlan(const std::string& path, const PlanImportOptions& options, Floor
   return true;
 }
 
-std::string ToGeoJson(const FloorPlan& plan, const std::string& source) {
-  // One feature a line: diffable, and small enough to read.
-  const nlohmann::ordered_json properties = {{"units", "m"}, {"source", source}};
-  std::string out = "{\"type\": \"FeatureCollection\", \"properties\": " + properties.dump() +
-                    ", \"features\": [\n";
-  auto round = [](double v) { return std::round(v * 1e4) / 1e4; };  // 0.1 mm
-  for (size_t i = 0; i < plan.segments.size(); ++i) {
-    const Segment& s = plan.segments[i];
-    const nlohmann::ordered_json feature = {
-        {"type", "Feature"},
-        {"properties", {{"kind", "wall"}}},
-        {"geometry",
-         {{"type", "LineString"},
-          {"coordinates", {{round(s.a.x()), round(s.a.y())}, {round(s.b.x()), round(s.b.y())}}}}}};
-    out += feature.dump() + (i + 1 < plan.segments.size() ? ",\n" : "\n");
-  }
-  return out + "]}\n";
-}
-
 }  // namespace floorpose::tools

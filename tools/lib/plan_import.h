@@ -34,8 +34,4 @@ struct PlanImportReport {
 bool ImportPlan(const std::string& path, const PlanImportOptions& options, FloorPlan* plan,
                 PlanImportReport* report, std::string* error);
 
-// The plan as GeoJSON floorposed loads: one LineString feature per segment with
-// {"kind": "wall"}, top-level properties {"units": "m", "source": ...}.
-std::string ToGeoJson(const FloorPlan& plan, const std::string& source);
-
 }  // namespace floorpose::tools

@@ -146,7 +146,7 @@ bool PlanDiffersFromInput(const sim::Simulation& simulation, const FloorPlan& in
 bool WriteDrawnPlan(const sim::Simulation& simulation, const std::string& path,
                     std::string* error) {
   std::ofstream out(path);
-  out << ToGeoJson(simulation.plan, "floorpose simulate: the plan as drawn");
+  out << platform::ToGeoJson(simulation.plan, "floorpose simulate: the plan as drawn");
   out.close();
   if (!out) {
     *error = path + ": write failed";
