@@ -10,6 +10,7 @@
 #include "platform/config.h"
 #include "platform/logging.h"
 #include "platform/systemd.h"
+#include "platform/version.h"
 
 int main(int argc, char** argv) {
   using namespace floorpose;
@@ -19,6 +20,7 @@ int main(int argc, char** argv) {
   std::string plan_override;
   int domain_override = -1;
   std::string device_override;
+  app.set_version_flag("--version", std::string("floorposed ") + platform::Version());
   app.add_option("-c,--config", config_path, "configuration file (protobuf text format)");
   app.add_flag("--print-config", print_config, "print the resolved configuration and exit");
   app.add_option("--plan", plan_override, "floor plan to load (overrides plan_path)");

@@ -18,10 +18,11 @@ packages=(build-essential cmake pkg-config clang-format
 # the Python example client. The fuzz tests (label fuzz, tools/fuzz.sh) build with clang
 # and its libFuzzer and sanitizer runtimes; the security tests make their CA and
 # identities with openssl (tools/make-dds-security.sh); the dashboard test (label browser)
-# drives Debian's headless Chromium through chromedriver.
+# drives Debian's headless Chromium through chromedriver; the package test (label package,
+# tools/check-package.sh) runs lintian and man on the .deb.
 if [ "${1:-build}" = test ]; then
   packages+=(libfastrtps-dev fastddsgen python3-protobuf clang libclang-rt-14-dev openssl
-    chromium chromium-driver)
+    chromium chromium-driver lintian man-db)
 fi
 
 missing=()

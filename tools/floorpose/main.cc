@@ -2,10 +2,12 @@
 #include <spdlog/spdlog.h>
 
 #include "platform/logging.h"
+#include "platform/version.h"
 #include "tools/floorpose/commands.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"floorpose: indoor positioning on floor plans for AR headsets"};
+  app.set_version_flag("--version", std::string("floorpose ") + floorpose::platform::Version());
   app.require_subcommand(1);
   std::string log_level = "info";
   app.add_option("--log-level", log_level, "trace, debug, info, warn or error");
