@@ -59,19 +59,21 @@ FloorPlanParse MakeFloorPlan(std::string id, std::vector<Segment> raw) {
 namespace {
 
 // A door drawn on a wall (as IMDF's openings lie on its units' outlines, or a CAD door
-// over the wall line) is a gap in it: the barriers lose what the openings cover, where an
-// opening runs along a barrier within 3 degrees and 5 cm.
+// over the wall line) is a gap in it, and a window or glass drawn on one replaces that
+// part of it: walls lose what those lines cover, where one runs along a wall within 3
+// degrees and 5 cm.
 std::vector<PlanLine> CutOpenings(const std::vector<PlanLine>& lines) {
   std::vector<const Segment*> openings;
   for (const PlanLine& l : lines)
-    if (IsOpening(l.kind)) openings.push_back(&l.segment);
+    if (IsOpening(l.kind) || l.kind == LineKind::kWindow || l.kind == LineKind::kGlass)
+      openings.push_back(&l.segment);
   if (openings.empty()) return lines;
   constexpr double kAlongRad = 3.0 * M_PI / 180, kOffM = 0.05;
   std::vector<PlanLine> out;
   for (const PlanLine& l : lines) {
     const Segment& s = l.segment;
     const double length = s.Length();
-    if (IsOpening(l.kind) || !(length > 0)) {
+    if (l.kind != LineKind::kWall || !(length > 0)) {
       out.push_back(l);
       continue;
     }

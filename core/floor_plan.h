@@ -81,7 +81,8 @@ struct FloorPlanParse {
 // segments, computes the bounds. Fails on an empty result.
 FloorPlanParse MakeFloorPlan(std::string id, std::vector<Segment> raw);
 // The same for lines of every kind: barriers to segments and kinds, openings to openings
-// (a duplicate is the same line of the same sort), rooms kept as they are. Fails without
+// (a duplicate is the same line of the same sort), rooms kept as they are. A door, exit,
+// window or glass line drawn along a wall cuts that part out of the wall. Fails without
 // a barrier.
 FloorPlanParse MakeFloorPlan(std::string id, const std::vector<PlanLine>& lines,
                              std::vector<PlanRoom> rooms);

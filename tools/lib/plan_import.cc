@@ -49,6 +49,23 @@ std::optional<int> DxfInsUnits(const std::string& path) {
   return std::nullopt;
 }
 
+// The AIA CAD layer names (US National CAD Standard) by prefix, for files drawn to it.
+const std::pair<const char*, LineKind> kAiaLayers[] = {
+    {"A-WALL", LineKind::kWall},          {"A-DOOR", LineKind::kDoor},
+    {"A-GLAZ", LineKind::kGlass},         {"A-WIND", LineKind::kWindow},
+    {"A-FLOR-STRS", LineKind::kStairs},   {"A-STRS", LineKind::kStairs},
+    {"A-FLOR-EVTR", LineKind::kElevator}, {"A-EVTR", LineKind::kElevator}};
+
+bool LayerMatches(const std::string& pattern, const std::string& layer) {
+  auto upper = [](std::string s) {
+    for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    return s;
+  };
+  const std::string p = upper(pattern), l = upper(layer);
+  if (!p.empty() && p.back() == '*') return l.rfind(p.substr(0, p.size() - 1), 0) == 0;
+  return p == l;
+}
+
 void AddGeometry(OGRGeometryH g, double scale, std::vector<Segment>* out, int depth = 0) {
   if (!g || depth > 8) return;
   const OGRwkbGeometryType type = wkbFlatten(OGR_G_GetGeometryType(g));
@@ -121,9 +138,17 @@ bool ImportPlan(const std::string& path, const PlanImportOptions& options, Floor
     report->units = "metres (the file's coordinates)";
   }
 
-  const std::set<std::string> wanted(options.layers.begin(), options.layers.end());
+  // Which layers are kept, as what: --layer-map, else --layer as walls, else the AIA
+  // names when the file uses them, else everything as walls.
+  std::vector<std::pair<LineKind, std::string>> map = options.layer_map;
+  for (const std::string& l : options.layers) map.emplace_back(LineKind::kWall, l);
+  const bool chosen = !map.empty();
+  struct Entity {
+    std::string layer;
+    std::vector<Segment> segments;
+  };
+  std::vector<Entity> entities;
   std::set<std::string> seen;
-  std::vector<Segment> raw;
   for (int l = 0; l < GDALDatasetGetLayerCount(ds); ++l) {
     OGRLayerH layer = GDALDatasetGetLayer(ds, l);
     const std::string layer_name = OGR_L_GetName(layer);
@@ -133,37 +158,97 @@ bool ImportPlan(const std::string& path, const PlanImportOptions& options, Floor
     OGRFeatureH f = nullptr;
     while ((f = OGR_L_GetNextFeature(layer)) != nullptr) {
       ++report->features;
-      std::string name = layer_name;
+      Entity e{layer_name, {}};
       if (cad_layer_field >= 0 && OGR_F_IsFieldSetAndNotNull(f, cad_layer_field))
-        name = OGR_F_GetFieldAsString(f, cad_layer_field);
-      seen.insert(name);
-      const size_t before = raw.size();
-      if (wanted.empty() || wanted.count(name) || wanted.count(layer_name))
-        AddGeometry(OGR_F_GetGeometryRef(f), report->scale, &raw);
-      if (raw.size() == before) ++report->skipped_features;
+        e.layer = OGR_F_GetFieldAsString(f, cad_layer_field);
+      seen.insert(e.layer);
+      AddGeometry(OGR_F_GetGeometryRef(f), report->scale, &e.segments);
+      entities.push_back(std::move(e));
       OGR_F_Destroy(f);
     }
   }
   report->layers_seen.assign(seen.begin(), seen.end());
-  report->segments = raw.size();
-  for (const std::string& w : wanted) {
-    if (!seen.count(w)) {
-      *error = path + ": no layer '" + w + "' (layers: ";
+  if (!chosen)
+    for (const auto& [prefix, kind] : kAiaLayers)
+      for (const std::string& layer : seen)
+        if (LayerMatches(std::string(prefix) + "*", layer))
+          map.emplace_back(kind, prefix + std::string("*"));
+  for (const auto& [kind, pattern] : map) {
+    if (!chosen) break;
+    if (std::none_of(seen.begin(), seen.end(),
+                     [&](const std::string& l) { return LayerMatches(pattern, l); })) {
+      *error = path + ": no layer '" + pattern + "' (layers: ";
       for (size_t i = 0; i < report->layers_seen.size(); ++i)
         *error += (i ? ", " : "") + report->layers_seen[i];
       *error += ")";
       return false;
     }
   }
-  FloorPlanParse parsed =
-      MakeFloorPlan(std::filesystem::path(path).stem().string(), std::move(raw));
+  std::vector<PlanLine> lines;
+  for (const Entity& e : entities) {
+    std::optional<LineKind> kind;
+    if (map.empty()) kind = LineKind::kWall;
+    for (const auto& [k, pattern] : map)
+      if (!kind && LayerMatches(pattern, e.layer)) kind = k;
+    if (!kind || e.segments.empty()) {
+      ++report->skipped_features;
+      continue;
+    }
+    for (const Segment& s : e.segments) lines.push_back({s, *kind});
+  }
+  report->segments = lines.size();
+  FloorPlanParse parsed = MakeFloorPlan(std::filesystem::path(path).stem().string(), lines, {});
   if (!parsed.ok()) {
     *error = path + ": " + parsed.error + " on the chosen layers";
     return false;
   }
+  // Metres "assumed" is the only case where nobody said what the numbers are.
+  const bool stated = report->units.find("assumed") == std::string::npos;
+  if (const std::string why = CheckPlanSize(parsed.plan, report->scale, stated); !why.empty()) {
+    *error = path + ": " + why;
+    return false;
+  }
   report->dropped = parsed.dropped_segments;
+  CountKinds(parsed.plan, &report->kept);
   *plan = std::move(parsed.plan);
   return true;
+}
+
+std::string CheckPlanSize(const FloorPlan& plan, double scale, bool units_stated) {
+  const double across = (plan.max - plan.min).maxCoeff();
+  char text[300];
+  // The units that would make it a building of tens to hundreds of metres.
+  auto hint = [&]() -> std::string {
+    for (const auto& [name, metres] : {std::pair{"mm", 0.001}, std::pair{"cm", 0.01}}) {
+      const double fixed = across / scale * metres;
+      if (fixed <= 1000 && metres < scale) {
+        std::snprintf(text, sizeof(text), "; with --units %s it is %.1f m across", name, fixed);
+        return text;
+      }
+    }
+    return "; give its drawing units with --units m|cm|mm";
+  };
+  if (across > 2000) {
+    std::snprintf(text, sizeof(text), "the plan is %.0f m across, more than a building's 2 km",
+                  across);
+    const std::string why = text;
+    return why + hint();
+  }
+  if (across > 1000 && !units_stated) {
+    std::snprintf(text, sizeof(text),
+                  "the plan is %.0f m across in metres assumed (no units in the file): a drawing "
+                  "in millimetres or centimetres?",
+                  across);
+    const std::string why = text;
+    return why + hint();
+  }
+  return {};
+}
+
+void CountKinds(const FloorPlan& plan, std::map<std::string, size_t>* kept) {
+  for (size_t i = 0; i < plan.segments.size(); ++i) ++(*kept)[LineKindName(plan.KindOf(i))];
+  for (const PlanLine& o : plan.openings) ++(*kept)[LineKindName(o.kind)];
+  if (!plan.rooms.empty()) (*kept)["room"] += plan.rooms.size();
 }
 
 }  // namespace floorpose::tools
