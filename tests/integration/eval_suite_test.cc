@@ -2,7 +2,9 @@
 // files it promises (results.md with the Tracking targets table, results.json, the
 // calibration data).
 #include <gtest/gtest.h>
+
 #include <unistd.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -68,6 +70,49 @@ void ExpectTablesWellFormed(const std::string& md) {
   }
 }
 
+// Every JSON the tools print goes through a JSON library: a plan whose name has a quote
+// and a space gives lines a JSON parser reads, in eval-suite's results and eval --json.
+TEST(EvalSuiteTest, APlanNamedWithAQuoteGivesValidJson) {
+  const fs::path dir = fs::path(::testing::TempDir()) / ("quoted-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path plan = dir / "o\"ff ice.geojson";
+  fs::copy_file(FLOORPOSE_DEMO_PLAN, plan);
+  const fs::path suite =
+      RunSuite("quoted-suite",
+               {"--seeds", "1", "--length", "30", "--methods", "mcl", "--scenarios", "office"},
+               std::chrono::seconds(60), {"--plans", plan.string()});
+  ASSERT_FALSE(suite.empty());
+  std::ifstream results(suite / "results.json");
+  std::string line;
+  ASSERT_TRUE(std::getline(results, line));
+  const nlohmann::json run = nlohmann::json::parse(line, nullptr, false);
+  ASSERT_TRUE(run.is_object()) << line;
+  EXPECT_EQ(run.value("plan", ""), "o\"ff ice");
+
+  const fs::path recording = suite / "recordings";
+  ASSERT_TRUE(fs::is_directory(recording));
+  const fs::path rec = fs::directory_iterator(recording)->path();
+  const fs::path out = dir / "eval.json";
+  tools::ChildProcess eval(
+      {FLOORPOSE_PATH, "eval", "--plan", plan.string(), "--recording", rec.string(), "--json"},
+      out.string());
+  ASSERT_TRUE(eval.started());
+  ASSERT_EQ(eval.Wait(std::chrono::seconds(60)), 0) << testing::ReadText(out);
+  std::ifstream printed(out);
+  bool parsed = false;
+  for (std::string l; std::getline(printed, l);)
+    if (!l.empty() && l[0] == '{') {
+      const nlohmann::json j = nlohmann::json::parse(l, nullptr, false);
+      EXPECT_TRUE(j.is_object()) << l;
+      EXPECT_EQ(j.value("plan", ""), "o\"ff ice");
+      parsed = true;
+    }
+  EXPECT_TRUE(parsed) << testing::ReadText(out);
+  RemoveSuite(suite);
+  fs::remove_all(dir);
+}
+
 TEST(EvalSuiteTest, WritesResultsAndTheTrackingTargets) {
   const fs::path dir =
       RunSuite("suite", {"--seeds", "1", "--length", "40", "--methods", "mcl", "best-fit"},
@@ -80,7 +125,9 @@ TEST(EvalSuiteTest, WritesResultsAndTheTrackingTargets) {
   for (std::string line; std::getline(json, line);) {
     if (line.empty()) continue;
     ++lines;
-    EXPECT_NE(line.find("\"split\": \"validation\""), std::string::npos) << line;
+    const nlohmann::json run = nlohmann::json::parse(line, nullptr, false);
+    ASSERT_TRUE(run.is_object()) << line;
+    EXPECT_EQ(run.value("split", ""), "validation") << line;
   }
   EXPECT_EQ(lines, 18);
 
@@ -126,8 +173,9 @@ TEST(EvalSuiteTest, TheKidnapTableCountsTheRunsOfResultsJson) {
   ASSERT_FALSE(dir.empty());
 
   auto number = [](const std::string& line, const std::string& key) {
-    const size_t at = line.find("\"" + key + "\": ");
-    return at == std::string::npos ? -2.0 : std::stod(line.substr(at + key.size() + 4));
+    const nlohmann::json run = nlohmann::json::parse(line, nullptr, false);
+    return run.is_object() && run.contains(key) && run[key].is_number() ? run[key].get<double>()
+                                                                        : -2.0;
   };
   int runs = 0, flagged = 0, recovered = 0, both = 0, trusted_wrong = 0, false_reliable = 0;
   std::ifstream json(dir / "results.json");

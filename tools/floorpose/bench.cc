@@ -9,6 +9,8 @@
 // preempted run on a shared machine.
 #include <spdlog/spdlog.h>
 
+#include <nlohmann/json.hpp>
+
 #include <unistd.h>
 #include <Eigen/Cholesky>
 #include <algorithm>
@@ -242,8 +244,8 @@ struct Row {
   size_t points = 0;
   double median_ms = 0;
   int runs = 0;
-  std::string extra_text;  // for the table
-  std::string extra_json;  // `"key": value` pairs, comma-led
+  std::string extra_text;                                           // for the table
+  nlohmann::ordered_json extra = nlohmann::ordered_json::object();  // more fields of its line
 };
 
 int RunBenchRegistration(const BenchOptions& o) {
@@ -275,11 +277,14 @@ int RunBenchRegistration(const BenchOptions& o) {
   std::vector<Row> rows;
   auto add = [&](Row row) {
     if (o.json) {
-      std::printf(
-          "{\"method\": \"%s\", \"points\": %zu, \"median_ms\": %.4f, "
-          "\"runs\": %d, \"segments\": %zu%s}\n",
-          row.method.c_str(), row.points, row.median_ms, row.runs, plan.segments.size(),
-          row.extra_json.c_str());
+      nlohmann::ordered_json line = {{"method", row.method},
+                                     {"points", row.points},
+                                     {"median_ms", row.median_ms},
+                                     {"runs", row.runs},
+                                     {"segments", plan.segments.size()}};
+      line.update(row.extra);
+      std::printf("%s\n",
+                  line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
       std::fflush(stdout);
     }
     rows.push_back(std::move(row));
@@ -312,13 +317,17 @@ int RunBenchRegistration(const BenchOptions& o) {
         r = Register(cloud.points, cloud.normals, index, initial, options);
       });
       if (m == RegistrationMethod::kIcp) icp_iterations = r.iterations;
-      char text[128], json[160];
+      char text[128];
       std::snprintf(text, sizeof text, "%4u iterations, %.2f cm, %.3f deg off", r.iterations,
                     error_cm(r.T_plan_slam), error_deg(r.T_plan_slam));
-      std::snprintf(json, sizeof json,
-                    ", \"iterations\": %u, \"error_cm\": %.3f, \"error_deg\": %.4f", r.iterations,
-                    error_cm(r.T_plan_slam), error_deg(r.T_plan_slam));
-      add({ToString(m), n, ms, o.repetitions, text, json});
+      add({ToString(m),
+           n,
+           ms,
+           o.repetitions,
+           text,
+           {{"iterations", r.iterations},
+            {"error_cm", error_cm(r.T_plan_slam)},
+            {"error_deg", error_deg(r.T_plan_slam)}}});
     }
     // The baseline, and the same loop on the index to separate the query's share. At
     // 100k points brute force takes seconds a run: one run is enough to see it.
@@ -334,13 +343,15 @@ int RunBenchRegistration(const BenchOptions& o) {
                   : PlainIcp(cloud.points, initial, iterations, max_corr,
                              [&](const Eigen::Vector2d& p) { return index.Query(p); });
       });
-      char text[128], json[160];
+      char text[128];
       std::snprintf(text, sizeof text, "%4d iterations, %.2f cm, %.3f deg off", iterations,
                     error_cm(T), error_deg(T));
-      std::snprintf(json, sizeof json,
-                    ", \"iterations\": %d, \"error_cm\": %.3f, \"error_deg\": %.4f", iterations,
-                    error_cm(T), error_deg(T));
-      add({brute ? "icp_loop_bruteforce" : "icp_loop_index", n, ms, runs, text, json});
+      add({brute ? "icp_loop_bruteforce" : "icp_loop_index",
+           n,
+           ms,
+           runs,
+           text,
+           {{"iterations", iterations}, {"error_cm", error_cm(T)}, {"error_deg", error_deg(T)}}});
     }
     if (n == 100000) largest = cloud;
   }
@@ -359,11 +370,15 @@ int RunBenchRegistration(const BenchOptions& o) {
                         : index.Query(queries[i]))
                      .has_value();
     });
-    char text[128], json[96];
+    char text[128];
     const double ns = 1e6 * ms / static_cast<double>(count);
     std::snprintf(text, sizeof text, "%.1f ns per query (%zu queries a run)", ns, count);
-    std::snprintf(json, sizeof json, ", \"ns_per_query\": %.2f", ns);
-    add({brute ? "query_bruteforce" : "query_index", count, ms, o.repetitions, text, json});
+    add({brute ? "query_bruteforce" : "query_index",
+         count,
+         ms,
+         o.repetitions,
+         text,
+         {{"ns_per_query", ns}}});
   }
 
   // Index memory and build time for a building of 230 x 100 m.
@@ -373,18 +388,22 @@ int RunBenchRegistration(const BenchOptions& o) {
   const double build_ms = MedianMs(
       build_runs, [&] { memory = ClosestWallIndex(building, index_options).MemoryBytes(); });
   {
-    char text[192], json[192];
+    char text[192];
     std::snprintf(text, sizeof text,
                   "%.1f MB for %s (%zu segments, %.0f x %.0f m), cell %.2f m, max distance %.1f m",
                   memory / 1e6, building.id.c_str(), building.segments.size(),
                   building.max.x() - building.min.x(), building.max.y() - building.min.y(),
                   index_options.cell_m, index_options.max_distance_m);
-    std::snprintf(json, sizeof json,
-                  ", \"memory_bytes\": %zu, \"plan\": \"%s\", \"plan_segments\": %zu, "
-                  "\"cell_m\": %.2f, \"max_distance_m\": %.1f",
-                  memory, building.id.c_str(), building.segments.size(), index_options.cell_m,
-                  index_options.max_distance_m);
-    add({"index_build", 0, build_ms, build_runs, text, json});
+    add({"index_build",
+         0,
+         build_ms,
+         build_runs,
+         text,
+         {{"memory_bytes", memory},
+          {"plan", building.id},
+          {"plan_segments", building.segments.size()},
+          {"cell_m", index_options.cell_m},
+          {"max_distance_m", index_options.max_distance_m}}});
   }
   if (o.json) return 0;
 
@@ -463,10 +482,13 @@ int RunBenchSnapshot(const BenchOptions& o) {
     });
     const double mb = static_cast<double>(fs::file_size(path)) / 1e6;
     if (o.json)
-      std::printf(
-          "{\"points\": %zu, \"meshes\": %zu, \"save_state_ms\": %.3f, "
-          "\"write_ms\": %.3f, \"file_mb\": %.2f}\n",
-          engine.store().points(), engine.store().meshes(), save_ms, write_ms, mb);
+      std::printf("%s\n", nlohmann::ordered_json({{"points", engine.store().points()},
+                                                  {"meshes", engine.store().meshes()},
+                                                  {"save_state_ms", save_ms},
+                                                  {"write_ms", write_ms},
+                                                  {"file_mb", mb}})
+                              .dump()
+                              .c_str());
     else
       std::printf("%10zu %10zu %16.2f %16.2f %12.2f\n", engine.store().points(),
                   engine.store().meshes(), save_ms, write_ms, mb);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -356,34 +357,42 @@ const char* IlcSplit(const std::string& floor) {
 }
 
 std::string ToJson(const EvalReport& r) {
-  std::ostringstream s;
-  s.precision(6);
-  s << "{\"method\": \"" << r.method << "\", \"scenario\": \"" << r.scenario << "\", \"plan\": \""
-    << r.plan_id << "\", \"seed\": " << r.seed << ", \"split\": \"" << r.split
-    << "\", \"cpu_s\": " << r.cpu_s << ", \"mean_error_m\": " << r.mean_error_m
-    << ", \"p95_error_m\": " << r.p95_error_m << ", \"max_error_m\": " << r.max_error_m
-    << ", \"final_error_m\": " << r.final_error_m
-    << ", \"marker_mean_error_m\": " << r.marker_mean_error_m
-    << ", \"divergences\": " << r.divergences << ", \"pick_error_m\": " << r.pick_error_m
-    << ", \"first_fix_s\": " << r.first_fix_s
-    << ", \"settled_mean_error_m\": " << r.settled_mean_error_m
-    << ", \"settled_max_error_m\": " << r.settled_max_error_m
-    << ", \"registrations\": " << r.registrations << ", \"accepted\": " << r.accepted
-    << ", \"reg_time_ms_median\": " << r.reg_time_ms_median
-    << ", \"reg_time_ms_max\": " << r.reg_time_ms_max
-    << ", \"reliable_fraction\": " << r.reliable_fraction
-    << ", \"reliable_precision_1m\": " << r.reliable_precision_1m << ", \"poses\": " << r.poses
-    << ", \"unaligned_poses\": " << r.unaligned_poses
-    << ", \"time_to_first_reliable_s\": " << r.time_to_first_reliable_s
-    << ", \"first_reliable_error_m\": " << r.first_reliable_error_m
-    << ", \"false_reliable_poses\": " << r.false_reliable_poses
-    << ", \"time_to_unreliable_s\": " << r.time_to_unreliable_s
-    << ", \"time_to_recovered_s\": " << r.time_to_recovered_s
-    << ", \"false_reliable_before_recovered\": " << r.false_reliable_before_recovered
-    << ", \"global_searches\": " << r.global_searches
-    << ", \"wrong_floor_poses\": " << r.wrong_floor_poses
-    << ", \"floor_changes\": " << r.floor_changes << "}";
-  return s.str();
+  // Through the library, so that any plan name is valid JSON and a NaN is null.
+  const nlohmann::ordered_json j = {
+      {"method", r.method},
+      {"scenario", r.scenario},
+      {"plan", r.plan_id},
+      {"seed", r.seed},
+      {"split", r.split},
+      {"cpu_s", r.cpu_s},
+      {"mean_error_m", r.mean_error_m},
+      {"p95_error_m", r.p95_error_m},
+      {"max_error_m", r.max_error_m},
+      {"final_error_m", r.final_error_m},
+      {"marker_mean_error_m", r.marker_mean_error_m},
+      {"divergences", r.divergences},
+      {"pick_error_m", r.pick_error_m},
+      {"first_fix_s", r.first_fix_s},
+      {"settled_mean_error_m", r.settled_mean_error_m},
+      {"settled_max_error_m", r.settled_max_error_m},
+      {"registrations", r.registrations},
+      {"accepted", r.accepted},
+      {"reg_time_ms_median", r.reg_time_ms_median},
+      {"reg_time_ms_max", r.reg_time_ms_max},
+      {"reliable_fraction", r.reliable_fraction},
+      {"reliable_precision_1m", r.reliable_precision_1m},
+      {"poses", r.poses},
+      {"unaligned_poses", r.unaligned_poses},
+      {"time_to_first_reliable_s", r.time_to_first_reliable_s},
+      {"first_reliable_error_m", r.first_reliable_error_m},
+      {"false_reliable_poses", r.false_reliable_poses},
+      {"time_to_unreliable_s", r.time_to_unreliable_s},
+      {"time_to_recovered_s", r.time_to_recovered_s},
+      {"false_reliable_before_recovered", r.false_reliable_before_recovered},
+      {"global_searches", r.global_searches},
+      {"wrong_floor_poses", r.wrong_floor_poses},
+      {"floor_changes", r.floor_changes}};
+  return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
 }
 
 std::string ToText(const EvalReport& r) {
