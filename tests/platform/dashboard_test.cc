@@ -271,14 +271,21 @@ TEST(DashboardExploredTest, TheTeamsMapIsEveryWearersGridSummedNorthUp) {
 TEST(DashboardPlansTest, ListsEveryPlanWithItsBoundsAndWalls) {
   const FloorPlanParse plan = platform::ParseGeoJsonFloorPlan(
       R"({"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {},
-          "geometry": {"type": "LineString", "coordinates": [[0, 0], [4, 0], [4, 3]]}}]})",
+          "geometry": {"type": "LineString", "coordinates": [[0, 0], [4, 0], [4, 3]]}},
+          {"type": "Feature", "properties": {"kind": "door"},
+          "geometry": {"type": "LineString", "coordinates": [[1, 0], [2, 0]]}},
+          {"type": "Feature", "properties": {"kind": "window"},
+          "geometry": {"type": "LineString", "coordinates": [[0, 3], [4, 3]]}}]})",
       "lab");
   ASSERT_TRUE(plan.ok()) << plan.error;
   const json plans = json::parse(PlansJson({plan.plan}));
   ASSERT_EQ(plans["plans"].size(), 1u);
   EXPECT_EQ(plans["plans"][0]["id"], "lab");
   EXPECT_EQ(plans["plans"][0]["max"], json::parse("[4.0, 3.0]"));
-  EXPECT_EQ(plans["plans"][0]["walls"].size(), 2u);
+  // The south wall less the door, and the east wall; the door and the window by kind.
+  EXPECT_EQ(plans["plans"][0]["walls"].size(), 3u);
+  EXPECT_EQ(plans["plans"][0]["lines"]["door"], json::parse("[[1.0, 0.0, 2.0, 0.0]]"));
+  EXPECT_EQ(plans["plans"][0]["lines"]["window"].size(), 1u);
 }
 
 // The server: DDS in, HTTP out, on loopback.

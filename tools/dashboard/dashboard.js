@@ -26,6 +26,15 @@ function projection(plan) {
   return {w, h, s, px: (x) => ox + s * (x - plan.min[0]), py: (y) => oy + s * (plan.max[1] - y)};
 }
 
+const LINE_STYLES = {
+  window: {color: '#56B4E9', width: 0.6, dash: []},
+  glass: {color: '#56B4E9', width: 0.6, dash: []},
+  stairs: {color: '#E69F00', width: 1, dash: []},
+  elevator: {color: '#CC79A7', width: 1, dash: []},
+  door: {color: '#009E73', width: 0.8, dash: [1.5, 1.5]},
+  exit: {color: '#D55E00', width: 1.4, dash: [1.5, 1]},
+};
+
 function drawPlan() {
   const canvas = $('#plan');
   const plan = plans.get(planId);
@@ -55,6 +64,24 @@ function drawPlan() {
     ctx.lineTo(p.px(bx), p.py(by));
   }
   ctx.stroke();
+  // The other lines by kind, in the Okabe-Ito colours (told apart with any colour vision):
+  // glass and windows thin and light, doors and exits dashed (an opening), stairs and
+  // elevators solid.
+  const width = ctx.lineWidth;
+  for (const [kind, style] of Object.entries(LINE_STYLES)) {
+    const lines = (plan.lines || {})[kind];
+    if (!lines) continue;
+    ctx.strokeStyle = style.color;
+    ctx.lineWidth = width * style.width;
+    ctx.setLineDash(style.dash.map((d) => d * width));
+    ctx.beginPath();
+    for (const [ax, ay, bx, by] of lines) {
+      ctx.moveTo(p.px(ax), p.py(ay));
+      ctx.lineTo(p.px(bx), p.py(by));
+    }
+    ctx.stroke();
+  }
+  ctx.setLineDash([]);
   if (team) {
     ctx.fillStyle = '#1946a0';
     ctx.font = '12px system-ui, sans-serif';

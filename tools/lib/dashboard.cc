@@ -319,13 +319,26 @@ size_t DashboardState::devices() const {
 std::string PlansJson(const std::vector<FloorPlan>& plans) {
   json out = {{"plans", json::array()}};
   for (const FloorPlan& plan : plans) {
-    json walls = json::array();
-    for (const Segment& s : plan.segments)
-      walls.push_back({Mm(s.a.x()), Mm(s.a.y()), Mm(s.b.x()), Mm(s.b.y())});
+    // Walls as [x1, y1, x2, y2]; every other line (windows, glass, stairs, elevators,
+    // doors, exits) by kind, each drawn its own way.
+    json walls = json::array(), lines = json::object();
+    auto coords = [](const Segment& s) {
+      return json::array({Mm(s.a.x()), Mm(s.a.y()), Mm(s.b.x()), Mm(s.b.y())});
+    };
+    for (size_t i = 0; i < plan.segments.size(); ++i) {
+      const LineKind kind = plan.KindOf(i);
+      if (kind == LineKind::kWall)
+        walls.push_back(coords(plan.segments[i]));
+      else
+        lines[LineKindName(kind)].push_back(coords(plan.segments[i]));
+    }
+    for (const PlanLine& o : plan.openings)
+      lines[LineKindName(o.kind)].push_back(coords(o.segment));
     out["plans"].push_back({{"id", plan.id},
                             {"min", {Mm(plan.min.x()), Mm(plan.min.y())}},
                             {"max", {Mm(plan.max.x()), Mm(plan.max.y())}},
-                            {"walls", std::move(walls)}});
+                            {"walls", std::move(walls)},
+                            {"lines", std::move(lines)}});
   }
   return out.dump(-1, ' ', false, json::error_handler_t::replace);
 }
