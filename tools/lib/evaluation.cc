@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -442,9 +443,48 @@ std::string ToTrackCsv(const EvalReport& r) {
   return s.str();
 }
 
+namespace {
+
+// Okabe and Ito's colours: told apart with any colour vision.
+constexpr const char* kReliableColour = "#0072B2";  // blue
+constexpr const char* kOtherColour = "#E69F00";     // orange
+constexpr const char* kTruthColour = "#000000";
+
+std::string XmlText(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '&')
+      out += "&amp;";
+    else if (c == '<')
+      out += "&lt;";
+    else if (c == '>')
+      out += "&gt;";
+    else
+      out += c;
+  }
+  return out;
+}
+
+// A round length (1, 2 or 5 times a power of ten) near a fifth of `span`.
+double ScaleBarLength(double span) {
+  const double target = std::max(span / 5, 1e-3);
+  const double power = std::pow(10.0, std::floor(std::log10(target)));
+  for (double f : {5.0, 2.0, 1.0})
+    if (f * power <= target) return f * power;
+  return power;
+}
+
+std::string BarLabel(double metres) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g m", metres);
+  return text;
+}
+
+}  // namespace
+
 std::string ToSvg(const FloorPlan& plan, const EvalReport& r) {
-  // Plan metres to pixels, y up on the plan, down in SVG.
-  const double margin = 2.0, scale = 20.0;
+  // Plan metres to pixels, y up on the plan, down in SVG; the error plot to the right.
+  const double margin = 2.0, scale = 20.0, plot_w = 420, gap = 30;
   Eigen::Vector2d lo = plan.min, hi = plan.max;
   for (const EvalPose& p : r.track) {
     lo = lo.cwiseMin(Eigen::Vector2d(p.x, p.y)).cwiseMin(Eigen::Vector2d(p.true_x, p.true_y));
@@ -454,39 +494,86 @@ std::string ToSvg(const FloorPlan& plan, const EvalReport& r) {
   hi += Eigen::Vector2d::Constant(margin);
   auto X = [&](double x) { return (x - lo.x()) * scale; };
   auto Y = [&](double y) { return (hi.y() - y) * scale; };
+  const double map_w = (hi.x() - lo.x()) * scale, map_h = (hi.y() - lo.y()) * scale;
+  const double height = std::max(map_h, 260.0), width = map_w + gap + plot_w;
   std::ostringstream s;
   s.setf(std::ios::fixed);
   s.precision(2);
-  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << (hi.x() - lo.x()) * scale
-    << "\" height=\"" << (hi.y() - lo.y()) * scale << "\">\n"
+  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
+    << "\" font-family=\"sans-serif\">\n"
     << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
-    << "<title>" << r.plan_id << " " << r.scenario << " seed " << r.seed << " " << r.method
-    << ": mean " << r.mean_error_m << " m, max " << r.max_error_m << " m</title>\n"
-    << "<path fill=\"none\" stroke=\"black\" stroke-width=\"2\" d=\"";
+    << "<title>" << XmlText(r.plan_id) << " " << XmlText(r.scenario) << " seed " << r.seed << " "
+    << XmlText(r.method) << ": mean " << r.mean_error_m << " m, max " << r.max_error_m
+    << " m</title>\n"
+    << "<path fill=\"none\" stroke=\"#555\" stroke-width=\"2\" d=\"";
   // One path, to a tenth of a pixel (5 mm): a raster plan has tens of thousands of segments.
   s.precision(1);
   for (const Segment& seg : plan.segments)
     s << "M" << X(seg.a.x()) << " " << Y(seg.a.y()) << "L" << X(seg.b.x()) << " " << Y(seg.b.y());
   s << "\"/>\n";
-  auto polyline = [&](bool estimate, const char* colour) {
-    s.precision(1);
-    s << "<polyline fill=\"none\" stroke=\"" << colour << "\" stroke-width=\"2\" points=\"";
-    for (const EvalPose& p : r.track)
-      s << X(estimate ? p.x : p.true_x) << "," << Y(estimate ? p.y : p.true_y) << " ";
+  // The truth thin and dashed; the estimate in runs of one colour, blue while RELIABLE,
+  // orange while not.
+  s << "<polyline fill=\"none\" stroke=\"" << kTruthColour
+    << "\" stroke-width=\"1.5\" stroke-dasharray=\"6 4\" points=\"";
+  for (const EvalPose& p : r.track) s << X(p.true_x) << "," << Y(p.true_y) << " ";
+  s << "\"/>\n";
+  for (size_t i = 1; i < r.track.size();) {
+    const bool reliable = r.track[i].reliable;
+    s << "<polyline fill=\"none\" stroke-width=\"2.5\" stroke=\""
+      << (reliable ? kReliableColour : kOtherColour) << "\" points=\"" << X(r.track[i - 1].x) << ","
+      << Y(r.track[i - 1].y);
+    for (; i < r.track.size() && r.track[i].reliable == reliable; ++i)
+      s << " " << X(r.track[i].x) << "," << Y(r.track[i].y);
     s << "\"/>\n";
-  };
-  polyline(false, "#2a9d2a");
-  polyline(true, "#d62728");
+  }
   s.precision(2);
   for (const EvalPose& p : r.track) {
     if (!p.marker) continue;
     s << "<circle cx=\"" << X(p.true_x) << "\" cy=\"" << Y(p.true_y)
-      << "\" r=\"5\" fill=\"#2a9d2a\"/><circle cx=\"" << X(p.x) << "\" cy=\"" << Y(p.y)
-      << "\" r=\"5\" fill=\"#d62728\"/><text x=\"" << X(p.true_x) + 6 << "\" y=\""
-      << Y(p.true_y) - 6 << "\" font-size=\"14\">" << p.marker << "</text>\n";
+      << "\" r=\"4\" fill=\"none\" stroke=\"" << kTruthColour << "\" stroke-width=\"1.5\"/>"
+      << "<circle cx=\"" << X(p.x) << "\" cy=\"" << Y(p.y) << "\" r=\"4\" fill=\""
+      << (p.reliable ? kReliableColour : kOtherColour) << "\"/><text x=\"" << X(p.true_x) + 6
+      << "\" y=\"" << Y(p.true_y) - 6 << "\" font-size=\"13\">" << p.marker << "</text>\n";
   }
-  s << "<text x=\"10\" y=\"20\" font-size=\"16\">green: truth, red: " << r.method << " (mean "
-    << r.mean_error_m << " m)</text>\n</svg>\n";
+  // A scale bar in metres, bottom left.
+  const double bar = ScaleBarLength(hi.x() - lo.x());
+  s << "<path d=\"M10 " << map_h - 12 << "h" << bar * scale << "M10 " << map_h - 17 << "v10M"
+    << 10 + bar * scale << " " << map_h - 17 << "v10\" stroke=\"black\" stroke-width=\"2\"/>"
+    << "<text x=\"" << 14 + bar * scale << "\" y=\"" << map_h - 8 << "\" font-size=\"13\">"
+    << BarLabel(bar) << "</text>\n";
+  s << "<text x=\"10\" y=\"20\" font-size=\"15\">" << XmlText(r.method) << " (mean "
+    << r.mean_error_m << " m): <tspan fill=\"" << kReliableColour << "\">RELIABLE</tspan>, "
+    << "<tspan fill=\"" << kOtherColour << "\">not RELIABLE</tspan>; truth dashed</text>\n";
+
+  // Error over time: the same colours, a line at 1 m.
+  if (!r.track.empty()) {
+    const double x0 = map_w + gap, top = 30, bottom = height - 30, left = x0 + 40;
+    const double t0 = static_cast<double>(r.track.front().stamp_ns) * 1e-9;
+    const double t1 = std::max(t0 + 1, static_cast<double>(r.track.back().stamp_ns) * 1e-9);
+    double emax = 2.0;
+    for (const EvalPose& p : r.track) emax = std::max(emax, std::min(p.error_m, 20.0));
+    auto PX = [&](int64_t ns) {
+      return left + (static_cast<double>(ns) * 1e-9 - t0) / (t1 - t0) * (plot_w - 50);
+    };
+    auto PY = [&](double e) { return bottom - std::min(e, emax) / emax * (bottom - top); };
+    s << "<text x=\"" << left << "\" y=\"20\" font-size=\"15\">error (m) over " << t1 - t0
+      << " s</text>\n"
+      << "<path d=\"M" << left << " " << top << "V" << bottom << "H" << left + plot_w - 50
+      << "\" fill=\"none\" stroke=\"black\"/>\n"
+      << "<path d=\"M" << left << " " << PY(1.0) << "H" << left + plot_w - 50
+      << "\" stroke=\"#999\" stroke-dasharray=\"4 3\"/><text x=\"" << left - 30 << "\" y=\""
+      << PY(1.0) + 4 << "\" font-size=\"12\">1 m</text><text x=\"" << left - 36 << "\" y=\""
+      << top + 4 << "\" font-size=\"12\">" << emax << "</text>\n";
+    s.precision(1);
+    for (const bool reliable : {false, true}) {
+      s << "<path fill=\"" << (reliable ? kReliableColour : kOtherColour) << "\" d=\"";
+      for (const EvalPose& p : r.track)
+        if (p.reliable == reliable)
+          s << "M" << PX(p.stamp_ns) << " " << PY(p.error_m) << "h1.5v1.5h-1.5z";
+      s << "\"/>\n";
+    }
+  }
+  s << "</svg>\n";
   return s.str();
 }
 
