@@ -94,9 +94,10 @@ TEST(EvalSuiteTest, APlanNamedWithAQuoteGivesValidJson) {
   ASSERT_TRUE(fs::is_directory(recording));
   const fs::path rec = fs::directory_iterator(recording)->path();
   const fs::path out = dir / "eval.json";
-  tools::ChildProcess eval(
-      {FLOORPOSE_PATH, "eval", "--plan", plan.string(), "--recording", rec.string(), "--json"},
-      out.string());
+  const fs::path svg = dir / "track.svg";
+  tools::ChildProcess eval({FLOORPOSE_PATH, "eval", "--plan", plan.string(), "--recording",
+                            rec.string(), "--json", "--svg", svg.string()},
+                           out.string());
   ASSERT_TRUE(eval.started());
   ASSERT_EQ(eval.Wait(std::chrono::seconds(60)), 0) << testing::ReadText(out);
   std::ifstream printed(out);
@@ -109,6 +110,12 @@ TEST(EvalSuiteTest, APlanNamedWithAQuoteGivesValidJson) {
       parsed = true;
     }
   EXPECT_TRUE(parsed) << testing::ReadText(out);
+  // The picture: the estimate in the colour-blind-safe pair, a scale bar in metres, the
+  // error over time beside it.
+  const std::string picture = testing::ReadText(svg);
+  EXPECT_NE(picture.find("#0072B2"), std::string::npos);
+  EXPECT_NE(picture.find(" m</text>"), std::string::npos);
+  EXPECT_NE(picture.find("error (m) over"), std::string::npos);
   RemoveSuite(suite);
   fs::remove_all(dir);
 }
