@@ -482,15 +482,7 @@ void Engine::OnHeadsetPose(const Envelope& e) {
     est.reliability.reason = "headset tracking lost";
   }
   const v1::PlanPose out = ToPlanPose(est, source_stamp_ns);
-  if (pose.pose_slam.position.allFinite()) {
-    if (path_.empty() || (pose.pose_slam.position - path_.back().second).norm() >= 0.25)
-      path_.emplace_back(pose.stamp_ns, pose.pose_slam.position);
-    const double window_s = tracker_.options().search_window_s;
-    while (window_s > 0 && !path_.empty() &&
-           path_.front().first < pose.stamp_ns - static_cast<int64_t>(window_s * 1e9))
-      path_.pop_front();
-    while (path_.size() > 20000) path_.pop_front();  // 5 km, when the window is everything
-  }
+  searches_.AddPosition(pose.stamp_ns, pose.pose_slam.position, tracker_.options().search_window_s);
   if (config_.track_history_s() > 0) {
     recent_.emplace_back(pose.pose_slam, out);
     const auto horizon = static_cast<int64_t>(config_.track_history_s() * 1e9);

@@ -30,6 +30,7 @@
 #include "platform/dds.h"
 #include "platform/device_clock.h"
 #include "platform/floor_plan_io.h"
+#include "platform/search_memory.h"
 
 namespace floorpose::platform {
 
@@ -172,8 +173,6 @@ class Engine {
   // A search of the whole plan over the walls since `since_ns`; nothing when those walls
   // were searched already or are too few.
   std::optional<Job> SearchJob(int64_t since_ns, size_t min_points);
-  // The wearer's slam positions (path_) stamped since_ns or later, in order.
-  std::vector<Eigen::Vector2d> PathSince(int64_t since_ns) const;
   // The recent trajectory under the alignment in use (PlanTrack).
   void PublishTrack();
   v1::PlanPose ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) const;
@@ -262,20 +261,7 @@ class Engine {
   std::optional<double> eye_z_;  // slam height of the latest pose
   // Recent poses: slam, and as published (for PlanTrack).
   std::deque<std::pair<Pose2, v1::PlanPose>> recent_;
-  // The wearer's path for the search of the plan: slam positions 0.25 m apart, with
-  // stamps, over the search's window.
-  std::deque<std::pair<int64_t, Eigen::Vector2d>> path_;
-  // The walls the last search ran on (count, sum, the alignment it checked): a search on
-  // the same walls finds the same places, and would count twice towards their lead.
-  struct SearchedWalls {
-    size_t points = 0;
-    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
-    uint64_t version = 0;
-    bool operator==(const SearchedWalls& o) const {
-      return points == o.points && sum == o.sum && version == o.version;
-    }
-  };
-  std::optional<SearchedWalls> last_searched_;
+  SearchMemory searches_;  // the path and walls of the plan's searches
   bool running_ = false;
 };
 

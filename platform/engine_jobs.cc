@@ -62,11 +62,8 @@ std::optional<Engine::Job> Engine::SearchJob(int64_t since, size_t min_points) {
   if (job.cloud.size() < min_points) return std::nullopt;
   // Nothing scanned or dropped since the last search (the wearer stands, or walks
   // where the headset has meshed everything): the same places again, no new evidence.
-  SearchedWalls walls{job.cloud.size(), Eigen::Vector2d::Zero(), alignment().version};
-  for (const Eigen::Vector2d& p : job.cloud) walls.sum += p;
-  if (last_searched_ == walls) return std::nullopt;
-  last_searched_ = walls;
-  job.path = PathSince(since);
+  if (!searches_.NewSearch(job.cloud, alignment().version)) return std::nullopt;
+  job.path = searches_.PathSince(since);
   job.global = plan_.global;
   job.index = tracker_.index();
   job.icp = tracker_.options().icp;
@@ -137,13 +134,6 @@ void Engine::OnRegistrationDone(Done done) {
   counters_.set_registrations_accepted(counters_.registrations_accepted() + 1);
   PublishAlignment();
   PublishTrack();
-}
-
-std::vector<Eigen::Vector2d> Engine::PathSince(int64_t since_ns) const {
-  std::vector<Eigen::Vector2d> path;
-  for (const auto& [stamp, position] : path_)
-    if (stamp >= since_ns) path.push_back(position);
-  return path;
 }
 
 }  // namespace floorpose::platform
