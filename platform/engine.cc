@@ -117,9 +117,7 @@ std::string Engine::UseLoad(PlanLoad load) {
   }
   floor_ = load.floor;
   plan_path_ = load.path;
-  floors_ = std::move(load.set);
-  floor_reference_.reset();
-  floor_candidate_.reset();
+  floors_.Reset(std::move(load.set));
   other_floors_ = std::move(load.others);
   UsePlan(std::move(load.assets), /*another_floor=*/false);
   return {};
@@ -191,32 +189,13 @@ void Engine::UsePlan(PlanAssets assets, bool another_floor) {
 }
 
 void Engine::FollowFloors(const DecodedPose& pose) {
-  const FloorEntry* current = floors_.Find(floor_);
-  if (floors_.floors.size() < 2 || !current) return;
-  const double z = pose.pose_slam.z;
-  if (!floor_reference_) {
-    floor_reference_ = FloorReference{z, current->height_m};
-    return;
-  }
-  const double height = floor_reference_->height_m + (z - floor_reference_->slam_z);
-  const FloorEntry& nearest = floors_.Nearest(height);
-  if (nearest.id == floor_ ||
-      std::abs(height - nearest.height_m) > config_.floors().change_margin_m()) {
-    floor_candidate_.reset();
-    return;
-  }
-  if (!floor_candidate_ || floor_candidate_->id != nearest.id) {
-    floor_candidate_ = FloorCandidate{nearest.id, pose.stamp_ns};
-    return;
-  }
-  if (static_cast<double>(pose.stamp_ns - floor_candidate_->since_ns) * 1e-9 <
-      config_.floors().change_hold_s())
-    return;
-  ChangeFloor(nearest, z, height);
+  const auto change =
+      floors_.Observe(floor_, pose.pose_slam.z, pose.stamp_ns, config_.floors().change_margin_m(),
+                      config_.floors().change_hold_s());
+  if (change) ChangeFloor(*change->to, pose.pose_slam.z, change->height_m);
 }
 
 void Engine::ChangeFloor(const FloorEntry& to, double slam_z, double height_m) {
-  floor_candidate_.reset();
   const auto next = other_floors_.find(to.id);
   if (next == other_floors_.end()) return;  // built with the set: cannot happen
   // The walls in the store are the floor's left behind: registered against this floor's
@@ -231,7 +210,7 @@ void Engine::ChangeFloor(const FloorEntry& to, double slam_z, double height_m) {
   other_floors_[floor_] = std::move(plan_);
   floor_ = to.id;  // what is published from here on carries it
   UsePlan(std::move(arriving), /*another_floor=*/true);
-  floor_reference_ = FloorReference{slam_z, to.height_m};
+  floors_.Changed(to, slam_z);
   counters_.set_floor_changes(counters_.floor_changes() + 1);
   PublishAlignment();
 }

@@ -29,6 +29,7 @@
 #include "platform/codec.h"
 #include "platform/dds.h"
 #include "platform/device_clock.h"
+#include "platform/floor_follower.h"
 #include "platform/floor_plan_io.h"
 #include "platform/search_memory.h"
 
@@ -205,16 +206,7 @@ class Engine {
   WallStore store_;
   std::string floor_;
   std::string plan_path_;  // as loaded (a plan or a .floors set), with its FloorPlanDigest
-  FloorSet floors_;        // of a .floors set; empty for a single plan
-  struct FloorReference {  // the headset's slam z when the floor in use was taken
-    double slam_z = 0, height_m = 0;
-  };
-  std::optional<FloorReference> floor_reference_;
-  struct FloorCandidate {  // another floor the height has said since
-    std::string id;
-    int64_t since_ns = 0;
-  };
-  std::optional<FloorCandidate> floor_candidate_;
+  FloorFollower floors_;   // the floor of a .floors set the headset's height says
   // A floor's plan and what is made from it: the index, the plan search, routes, rooms
   // and the explored map.
   struct PlanAssets {
