@@ -12,11 +12,10 @@ namespace floorpose {
 RoutePlanner::RoutePlanner(const FloorPlan& plan, const RouteOptions& options) : options_(options) {
   for (const PlanLine& o : plan.openings)
     if (o.kind == LineKind::kExit) exits_.push_back(0.5 * (o.segment.a + o.segment.b));
-  for (size_t i = 0; i < plan.segments.size() && exits_.empty(); ++i)
-    if (plan.KindOf(i) == LineKind::kStairs)
-      for (; i < plan.segments.size(); ++i)
-        if (plan.KindOf(i) == LineKind::kStairs)
-          exits_.push_back(0.5 * (plan.segments[i].a + plan.segments[i].b));
+  if (exits_.empty())  // an upper floor: the way out is down the stairs
+    for (size_t i = 0; i < plan.segments.size(); ++i)
+      if (plan.KindOf(i) == LineKind::kStairs)
+        exits_.push_back(0.5 * (plan.segments[i].a + plan.segments[i].b));
   // No margin: a route stays within the plan's bounds.
   grid_ = GridGeometry::Cover(plan.min, plan.max, options_.cell_m, 0.0, options_.max_cells);
   const double keep = options_.body_radius_m + grid_.cell_m * M_SQRT1_2;
@@ -185,7 +184,7 @@ Route RoutePlanner::WayOut(const Eigen::Vector2d& from) const {
   if (by_distance.size() > 8) by_distance.resize(8);
   Route best;
   for (const Eigen::Vector2d& exit : by_distance) {
-    if (best.ok() && !best.path.empty() && (exit - from).norm() >= best.length_m) break;
+    if (!best.path.empty() && (exit - from).norm() >= best.length_m) break;
     Route route = Plan(from, exit);
     if (route.ok() && (best.path.empty() || route.length_m < best.length_m)) {
       best = std::move(route);

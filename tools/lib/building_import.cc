@@ -17,6 +17,7 @@
 
 #include "platform/floor_plan_io.h"
 #include "platform/wgs84.h"
+#include "tools/lib/plan_import.h"
 
 namespace floorpose::tools {
 namespace {
@@ -159,11 +160,7 @@ bool FinishLevels(std::vector<RawLevel> raw, double storey_m, std::vector<Import
       ++report->skipped_features;
       continue;  // a level with nothing but labels
     }
-    std::map<std::string, size_t>& kept = report->kept[l.id];
-    for (size_t i = 0; i < parsed.plan.segments.size(); ++i)
-      ++kept[LineKindName(parsed.plan.KindOf(i))];
-    for (const PlanLine& o : parsed.plan.openings) ++kept[LineKindName(o.kind)];
-    if (!parsed.plan.rooms.empty()) kept["room"] = parsed.plan.rooms.size();
+    CountKinds(parsed.plan, &report->kept[l.id]);
     levels->push_back({l.id, l.ordinal * storey_m, std::move(parsed.plan)});
   }
   if (levels->empty()) {

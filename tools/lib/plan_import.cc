@@ -168,15 +168,16 @@ bool ImportPlan(const std::string& path, const PlanImportOptions& options, Floor
     }
   }
   report->layers_seen.assign(seen.begin(), seen.end());
-  if (!chosen)
+  auto in_file = [&](const std::string& pattern) {
+    return std::any_of(seen.begin(), seen.end(),
+                       [&](const std::string& l) { return LayerMatches(pattern, l); });
+  };
+  if (!chosen) {
     for (const auto& [prefix, kind] : kAiaLayers)
-      for (const std::string& layer : seen)
-        if (LayerMatches(std::string(prefix) + "*", layer))
-          map.emplace_back(kind, prefix + std::string("*"));
-  for (const auto& [kind, pattern] : map) {
-    if (!chosen) break;
-    if (std::none_of(seen.begin(), seen.end(),
-                     [&](const std::string& l) { return LayerMatches(pattern, l); })) {
+      if (in_file(prefix + std::string("*"))) map.emplace_back(kind, prefix + std::string("*"));
+  } else {
+    for (const auto& [kind, pattern] : map) {
+      if (in_file(pattern)) continue;
       *error = path + ": no layer '" + pattern + "' (layers: ";
       for (size_t i = 0; i < report->layers_seen.size(); ++i)
         *error += (i ? ", " : "") + report->layers_seen[i];
