@@ -81,7 +81,30 @@ bool RoutePlanner::LineOfSight(const Eigen::Vector2d& a, const Eigen::Vector2d& 
   return WalkSegmentCells(grid_, a, b, [this](int cell) { return Passable(cell); });
 }
 
-int RoutePlanner::Snap(const Eigen::Vector2d& p, int component) const {
+std::vector<uint8_t> RoutePlanner::WithKeepOuts(const Eigen::Vector2d& from,
+                                                const std::vector<KeepOut>& keep_out) const {
+  std::vector<uint8_t> passable = passable_;
+  const double margin = options_.body_radius_m + grid_.cell_m * M_SQRT1_2;
+  for (const KeepOut& k : keep_out) {
+    if (!k.centre.allFinite() || !(k.radius_m >= 0) || (from - k.centre).norm() <= k.radius_m)
+      continue;
+    const double reach = k.radius_m + margin;
+    const int x0 =
+        static_cast<int>(std::floor((k.centre.x() - reach - grid_.origin.x()) / grid_.cell_m));
+    const int y0 =
+        static_cast<int>(std::floor((k.centre.y() - reach - grid_.origin.y()) / grid_.cell_m));
+    const int n = static_cast<int>(std::ceil(2 * reach / grid_.cell_m)) + 1;
+    for (int y = std::max(0, y0); y < std::min(grid_.ny, y0 + n); ++y)
+      for (int x = std::max(0, x0); x < std::min(grid_.nx, x0 + n); ++x) {
+        const int cell = y * grid_.nx + x;
+        if ((grid_.CellCentre(cell) - k.centre).norm() <= reach) passable[cell] = 0;
+      }
+  }
+  return passable;
+}
+
+int RoutePlanner::Snap(const std::vector<uint8_t>& passable, const Eigen::Vector2d& p,
+                       int component) const {
   const int reach = static_cast<int>(std::ceil(options_.snap_m / grid_.cell_m));
   const Eigen::Vector2d f = (p - grid_.origin) / grid_.cell_m;
   const int cx = static_cast<int>(std::floor(f.x())), cy = static_cast<int>(std::floor(f.y()));
@@ -91,14 +114,15 @@ int RoutePlanner::Snap(const Eigen::Vector2d& p, int component) const {
     for (int x = cx - reach; x <= cx + reach; ++x) {
       if (!grid_.InGrid(x, y)) continue;
       const int cell = y * grid_.nx + x;
-      if (!passable_[cell] || (component >= 0 && component_[cell] != component)) continue;
+      if (!passable[cell] || (component >= 0 && component_[cell] != component)) continue;
       const double d = (grid_.CellCentre(cell) - p).norm();
       if (d <= options_.snap_m && d < best_d) best = cell, best_d = d;
     }
   return best;
 }
 
-Route RoutePlanner::Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to) const {
+Route RoutePlanner::Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to,
+                         const std::vector<KeepOut>& keep_out) const {
   Route route;
   char text[256];
   auto fail = [&](const char* format, double a, double b) {
@@ -114,14 +138,22 @@ Route RoutePlanner::Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to)
     return fail("start (%.2f, %.2f) is outside the plan", from.x(), from.y());
   if (grid_.CellOf(to) < 0)
     return fail("destination (%.2f, %.2f) is outside the plan", to.x(), to.y());
-  const int start = Passable(grid_.CellOf(from)) ? grid_.CellOf(from) : Snap(from, -1);
+  for (const KeepOut& k : keep_out)
+    if ((to - k.centre).norm() <= k.radius_m && (from - k.centre).norm() > k.radius_m)
+      return fail("destination (%.2f, %.2f) is in a blocked area", to.x(), to.y());
+  const std::vector<uint8_t> blocked_copy =
+      keep_out.empty() ? std::vector<uint8_t>{} : WithKeepOuts(from, keep_out);
+  const std::vector<uint8_t>& passable = keep_out.empty() ? passable_ : blocked_copy;
+  auto open = [&](int cell) { return cell >= 0 && passable[cell]; };
+  const int start = open(grid_.CellOf(from)) ? grid_.CellOf(from) : Snap(passable, from, -1);
   if (start < 0)
     return fail("start (%.2f, %.2f) has no free space around it (a wall, or the outside)", from.x(),
                 from.y());
   int goal = grid_.CellOf(to);
-  if (!Passable(goal) || component_[goal] != component_[start]) goal = Snap(to, component_[start]);
+  if (!open(goal) || component_[goal] != component_[start])
+    goal = Snap(passable, to, component_[start]);
   if (goal < 0) {
-    if (Snap(to, -1) < 0)
+    if (Snap(passable, to, -1) < 0)
       return fail("destination (%.2f, %.2f) has no free space around it (a wall, or the outside)",
                   to.x(), to.y());
     std::snprintf(text, sizeof(text),
@@ -134,7 +166,7 @@ Route RoutePlanner::Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to)
   const std::vector<float> coarse = CoarseDistances(goal, start);
   const int gx = goal % grid_.nx, gy = goal / grid_.nx;
   const std::vector<int> cells = GridAStar(
-      grid_, passable_, start, goal, nullptr,
+      grid_, passable, start, goal, nullptr,
       [&](int cell) {
         const double dx = std::abs(cell % grid_.nx - gx), dy = std::abs(cell / grid_.nx - gy);
         const double octile = std::max(dx, dy) + (M_SQRT2 - 1.0) * std::min(dx, dy);
@@ -145,9 +177,16 @@ Route RoutePlanner::Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to)
         return 1.001 * std::max(octile, (static_cast<double>(d) - 2 * M_SQRT2) * kCoarse);
       },
       &scratch_);
+  if (cells.empty()) {
+    std::snprintf(text, sizeof(text),
+                  "no path: the blocked areas close every way from (%.2f, %.2f) to (%.2f, %.2f)",
+                  from.x(), from.y(), to.x(), to.y());
+    route.error = text;
+    return route;
+  }
   std::vector<Eigen::Vector2d> points;
   points.reserve(cells.size() + 2);
-  const bool start_snapped = !Passable(grid_.CellOf(from));
+  const bool start_snapped = !open(grid_.CellOf(from));
   const bool goal_snapped = grid_.CellOf(to) != goal;
   if (start_snapped) points.push_back(from);  // where the wearer stands, then off the wall
   for (int c : cells) points.push_back(grid_.CellCentre(c));
@@ -155,8 +194,8 @@ Route RoutePlanner::Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to)
   if (!goal_snapped) points.back() = to;
   // The first leg of a snapped start leaves the wall: not pulled, as it is not clear.
   std::vector<Eigen::Vector2d> tail(points.begin() + (start_snapped ? 1 : 0), points.end());
-  auto sight = [this](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-    return LineOfSight(a, b);
+  auto sight = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return WalkSegmentCells(grid_, a, b, open);
   };
   route.path = PullString(tail, sight);
   DropCorners(&route.path, sight);
@@ -169,7 +208,8 @@ Route RoutePlanner::Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to)
   return route;
 }
 
-Route RoutePlanner::WayOut(const Eigen::Vector2d& from) const {
+Route RoutePlanner::WayOut(const Eigen::Vector2d& from,
+                           const std::vector<KeepOut>& keep_out) const {
   if (exits_.empty()) {
     Route none;
     none.error = "the plan marks no exit and no stairs";
@@ -185,7 +225,7 @@ Route RoutePlanner::WayOut(const Eigen::Vector2d& from) const {
   Route best;
   for (const Eigen::Vector2d& exit : by_distance) {
     if (!best.path.empty() && (exit - from).norm() >= best.length_m) break;
-    Route route = Plan(from, exit);
+    Route route = Plan(from, exit, keep_out);
     if (route.ok() && (best.path.empty() || route.length_m < best.length_m)) {
       best = std::move(route);
     } else if (!route.ok() && best.path.empty()) {
@@ -193,6 +233,32 @@ Route RoutePlanner::WayOut(const Eigen::Vector2d& from) const {
     }
   }
   return best;
+}
+
+Route RoutePlanner::Through(const Eigen::Vector2d& from, const std::vector<Eigen::Vector2d>& via,
+                            const Eigen::Vector2d& to, const std::vector<KeepOut>& keep_out) const {
+  Route route;
+  route.path = {from};
+  Eigen::Vector2d at = from;
+  for (size_t i = 0; i <= via.size(); ++i) {
+    const bool last = i == via.size();
+    Route leg = Plan(at, last ? to : via[i], keep_out);
+    if (!leg.ok()) {
+      if (last) return leg;
+      continue;  // passed over; the next waypoint is tried from here
+    }
+    route.path.insert(route.path.end(), leg.path.begin() + 1, leg.path.end());
+    if (last) route.goal_moved_m = leg.goal_moved_m;
+    at = route.path.back();
+  }
+  auto open = [&, passable = WithKeepOuts(from, keep_out)](int cell) {
+    return cell >= 0 && passable[cell];
+  };
+  DropCorners(&route.path, [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return WalkSegmentCells(grid_, a, b, open);
+  });
+  route.length_m = PolylineLength(route.path);
+  return route;
 }
 
 }  // namespace floorpose

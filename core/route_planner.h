@@ -39,16 +39,31 @@ struct Route {
   bool ok() const { return error.empty(); }
 };
 
+// A disc a route keeps out of (a hazard, a blocked exit), plan metres. The route's body
+// keeps clear of it as of a wall.
+struct KeepOut {
+  Eigen::Vector2d centre;
+  double radius_m = 1.0;
+};
+
 class RoutePlanner {
  public:
   RoutePlanner(const FloorPlan& plan, const RouteOptions& options = {});
 
   // A route from `from` to `to`, or the reason there is none (outside the plan, in a
   // wall, or no opening at least twice the body radius wide leads there).
-  Route Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to) const;
+  // Keep-outs that hold `from` are left out: a wearer standing in one walks out of it.
+  Route Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to,
+             const std::vector<KeepOut>& keep_out = {}) const;
   // The way out: the shortest route to one of the plan's exits, or on a plan without
-  // them to its stairs (the way down); the reason when there is none.
-  Route WayOut(const Eigen::Vector2d& from) const;
+  // them to its stairs (the way down); the reason when there is none. An exit inside a
+  // keep-out is not a way out.
+  Route WayOut(const Eigen::Vector2d& from, const std::vector<KeepOut>& keep_out = {}) const;
+  // Through `via` in order, then to `to`: each leg a route of its own. A waypoint that
+  // cannot be reached (in a keep-out, beyond a new wall) is passed over; the route then
+  // goes on to the next.
+  Route Through(const Eigen::Vector2d& from, const std::vector<Eigen::Vector2d>& via,
+                const Eigen::Vector2d& to, const std::vector<KeepOut>& keep_out = {}) const;
   const std::vector<Eigen::Vector2d>& exits() const { return exits_; }
 
   const RouteOptions& options() const { return options_; }
@@ -58,8 +73,12 @@ class RoutePlanner {
   bool LineOfSight(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
 
  private:
-  // The passable cell nearest p within snap_m (of the given component when >= 0), or -1.
-  int Snap(const Eigen::Vector2d& p, int component) const;
+  // The cell nearest p within snap_m that is passable in `passable` (and of the given
+  // component when >= 0), or -1.
+  int Snap(const std::vector<uint8_t>& passable, const Eigen::Vector2d& p, int component) const;
+  // passable_ less the cells a body centred in them would reach into a keep-out.
+  std::vector<uint8_t> WithKeepOuts(const Eigen::Vector2d& from,
+                                    const std::vector<KeepOut>& keep_out) const;
   // Distances to the goal on the coarse grid (Dijkstra, coarse cells), for A*'s estimate:
   // exact up to a bit beyond the start's, and that bound (a lower one) beyond.
   std::vector<float> CoarseDistances(int goal, int start) const;

@@ -54,10 +54,16 @@ bool Daemon::Start(std::string* error) {
     track_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kPlanTrack);
     reply_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kCommandReply);
     explored_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kExplored);
+    alert_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kAlert);
+    marker_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kMarker);
+    marker_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kMarker);
+    team_pose_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kPlanPose);
+    team_status_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kStatus);
     waiter_ = std::make_unique<platform::Waiter>(*participant_);
     waiter_->Attach(*mesh_reader_);
     waiter_->Attach(*pose_reader_);
     waiter_->Attach(*command_reader_);
+    waiter_->Attach(*marker_reader_);
   } catch (const std::exception& e) {
     *error = std::string("DDS: ") + e.what();
     return false;
@@ -88,7 +94,15 @@ bool Daemon::Start(std::string* error) {
     snapshot_path_ = platform::SnapshotPath(state_dir, config_.dds().device_id());
     ResumeFromSnapshot();
     snapshot_thread_ = std::thread([this] { SnapshotLoop(); });
+    markers_path_ = (std::filesystem::path(state_dir) / "markers.pb").string();
+    std::string markers_error;
+    if (!engine_->markers().Load(markers_path_, &markers_error))
+      spdlog::warn("markers {} not read: {}", markers_path_, markers_error);
+    saved_markers_ = engine_->markers().revision();
+    if (!engine_->markers().markers().empty())
+      spdlog::info("{} markers from {}", engine_->markers().markers().size(), markers_path_);
   }
+  engine_->PublishMarkers();
   engine_->PublishStatus(plan_error.empty() ? "started" : plan_error);
   running_ = true;
   io_heartbeat_ns_ = platform::MonotonicNs();
@@ -199,6 +213,10 @@ void Daemon::IoLoop() {
       AfterInput();
     }
     ApplyFinished(false);
+    // The team: at a person's pace, a bounded take a turn is plenty.
+    for (auto* reader : {marker_reader_.get(), team_pose_reader_.get(), team_status_reader_.get()})
+      for (const platform::Envelope& e : reader->Take(256)) engine_->OnTeam(reader->topic(), e);
+    SaveMarkers();
     const int64_t now = platform::MonotonicNs();
     MaybeSnapshot(now, false);
     if (now >= next_status_ns_) {
@@ -271,16 +289,29 @@ void Daemon::Publish(Topic topic, const google::protobuf::Message& msg) {
                              : topic == Topic::kPlanTrack    ? track_writer_.get()
                              : topic == Topic::kCommandReply ? reply_writer_.get()
                              : topic == Topic::kExplored     ? explored_writer_.get()
+                             : topic == Topic::kAlert        ? alert_writer_.get()
+                             : topic == Topic::kMarker       ? marker_writer_.get()
                                                              : nullptr;
   if (!writer) return;
   platform::Envelope e;
-  e.device_id = config_.dds().device_id();
+  // A marker is its own instance, keyed by its id; everything else is the device's.
+  e.device_id = topic == Topic::kMarker ? static_cast<const v1::Marker&>(msg).id()
+                                        : config_.dds().device_id();
   e.seq = writer->NextSeq();
   e.stamp_ns = platform::WallClockNs();
   msg.SerializeToString(&e.payload);
   std::string error;
   if (!writer->Write(e, &error))
     spdlog::warn("publishing on {} failed: {}", platform::TopicName(topic), error);
+}
+
+void Daemon::SaveMarkers() {
+  const uint64_t revision = engine_->markers().revision();
+  if (markers_path_.empty() || revision == saved_markers_) return;
+  std::string error;
+  if (!engine_->markers().Save(markers_path_, &error))
+    spdlog::warn("markers not saved to {}: {}", markers_path_, error);
+  saved_markers_ = revision;
 }
 
 void Daemon::ResumeFromSnapshot() {

@@ -54,8 +54,10 @@ class Daemon {
 
   std::unique_ptr<platform::Participant> participant_;
   std::unique_ptr<platform::Reader> mesh_reader_, pose_reader_, command_reader_;
+  // The team's markers, plan poses and statuses (every device's; Engine::OnTeam).
+  std::unique_ptr<platform::Reader> marker_reader_, team_pose_reader_, team_status_reader_;
   std::unique_ptr<platform::Writer> plan_pose_writer_, alignment_writer_, status_writer_,
-      track_writer_, reply_writer_, explored_writer_;
+      track_writer_, reply_writer_, explored_writer_, alert_writer_, marker_writer_;
   std::unique_ptr<platform::Waiter> waiter_;
   std::unique_ptr<platform::Engine> engine_;  // io thread only
   int64_t next_status_ns_ = 0;
@@ -74,7 +76,10 @@ class Daemon {
   std::thread plan_thread_;
   std::mutex posted_mu_;
   std::vector<std::function<void()>> posted_;
-  std::string snapshot_path_;  // empty: no snapshots
+  std::string snapshot_path_;   // empty: no snapshots
+  std::string markers_path_;    // state_dir/markers.pb; empty: not kept
+  uint64_t saved_markers_ = 0;  // MarkerBoard::revision() last saved
+  void SaveMarkers();
   std::mutex snapshot_mu_;
   std::condition_variable snapshot_cv_;
   std::optional<v1::StateSnapshot> snapshot_;

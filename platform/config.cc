@@ -160,6 +160,13 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
         std::pair{c.explored().max_door_m(), "explored.max_door_m"}}) {
     if (!(value > 0 && value <= 1000)) return std::string(name) + " must be in (0, 1000]";
   }
+  for (const auto& [value, name] : {std::pair{c.alerts().motion_m(), "alerts.motion_m"},
+                                    std::pair{c.alerts().no_motion_s(), "alerts.no_motion_s"},
+                                    std::pair{c.alerts().pre_alert_s(), "alerts.pre_alert_s"}}) {
+    if (!(value > 0 && value <= 3600)) return std::string(name) + " must be in (0, 3600]";
+  }
+  if (c.alerts().pre_alert_s() > c.alerts().no_motion_s())
+    return "alerts.pre_alert_s must not be longer than alerts.no_motion_s";
   if (!(c.routes().snap_m() >= 0 && c.routes().snap_m() <= 100))
     return "routes.snap_m must be in [0, 100]";
   if (c.routes().cell_m() < 0.01 || c.explored().cell_m() < 0.01)

@@ -17,7 +17,7 @@ struct TopicSpec {
   int32_t depth;  // keep-last depth; 0 = keep-all
 };
 
-constexpr std::array<TopicSpec, 9> kSpecs = {{
+constexpr std::array<TopicSpec, 11> kSpecs = {{
     {Topic::kMeshDelta, "floorpose/v1/mesh_delta", false, 0},
     {Topic::kHeadsetPose, "floorpose/v1/headset_pose", false, 64},
     {Topic::kCommand, "floorpose/v1/command", false, 0},
@@ -29,6 +29,10 @@ constexpr std::array<TopicSpec, 9> kSpecs = {{
     // replies whose request ids it may reuse.
     {Topic::kCommandReply, "floorpose/v1/command_reply", false, 0},
     {Topic::kExplored, "floorpose/v1/explored", true, 1},
+    {Topic::kAlert, "floorpose/v1/alert", true, 1},
+    // Keyed by the marker's id (the envelope's device_id on this topic): a writer keeps
+    // the latest revision of every marker it wrote for the readers that join later.
+    {Topic::kMarker, "floorpose/v1/marker", true, 1},
 }};
 
 const TopicSpec& Spec(Topic t) { return kSpecs[static_cast<size_t>(t)]; }

@@ -27,10 +27,13 @@ enum class Topic {
   kPlanTrack,     // daemon -> all: reliable, transient-local, keep-last 1 per device
   kCommandReply,  // daemon -> app: reliable, keep-all (bounded), volatile
   kExplored,      // daemon -> all: reliable, transient-local, keep-last 1 per device
+  kAlert,         // daemon -> all: reliable, transient-local, keep-last 1 per device
+  kMarker,        // all -> all: reliable, transient-local, keep-last 1 per marker id
 };
 inline constexpr Topic kAllTopics[] = {Topic::kMeshDelta, Topic::kHeadsetPose,  Topic::kCommand,
                                        Topic::kPlanPose,  Topic::kAlignment,    Topic::kStatus,
-                                       Topic::kPlanTrack, Topic::kCommandReply, Topic::kExplored};
+                                       Topic::kPlanTrack, Topic::kCommandReply, Topic::kExplored,
+                                       Topic::kAlert,     Topic::kMarker};
 const char* TopicName(Topic topic);
 std::optional<Topic> TopicFromName(std::string_view name);
 

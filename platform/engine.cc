@@ -26,7 +26,9 @@ Engine::Engine(v1::FloorposedConfig config, Publish publish, std::function<int64
       store_(config_.walls().voxel_m()),
       floor_(config_.floor()),
       clock_({static_cast<int64_t>(config_.limits().max_future_s() * 1e9),
-              static_cast<int64_t>(config_.limits().restart_gap_s() * 1e9)}) {}
+              static_cast<int64_t>(config_.limits().restart_gap_s() * 1e9)}),
+      alarm_({config_.alerts().motion_m(), config_.alerts().pre_alert_s(),
+              config_.alerts().no_motion_s()}) {}
 
 std::string Engine::Start() {
   if (config_.plan_path().empty()) return {};
@@ -213,28 +215,6 @@ void Engine::ChangeFloor(const FloorEntry& to, double slam_z, double height_m) {
   floors_.Changed(to, slam_z);
   counters_.set_floor_changes(counters_.floor_changes() + 1);
   PublishAlignment();
-}
-
-std::string Engine::PlanRoute(const v1::Command::Route& request, v1::RouteReply* reply) {
-  if (!plan_.routes) return "no floor plan";
-  if (!last_plan_pose_ || last_plan_pose_->alignment_version() == 0)
-    return "no position on the plan yet";
-  const int64_t t0 = now_ns_();
-  const Eigen::Vector2d from(last_plan_pose_->x(), last_plan_pose_->y());
-  const Route route = request.way_out()
-                          ? plan_.routes->WayOut(from)
-                          : plan_.routes->Plan(from, {request.to_x(), request.to_y()});
-  if (!route.ok()) return route.error;
-  for (const Eigen::Vector2d& p : route.path) {
-    v1::PlanPoint* point = reply->add_path();
-    point->set_x(p.x());
-    point->set_y(p.y());
-  }
-  reply->set_length_m(route.length_m);
-  reply->set_goal_moved_m(route.goal_moved_m);
-  *reply->mutable_from_reliability() = last_plan_pose_->reliability();
-  reply->set_time_ms(static_cast<double>(now_ns_() - t0) * 1e-6);
-  return {};
 }
 
 void Engine::ExploreWalls(const std::vector<WallPoint>& points) {
@@ -472,6 +452,7 @@ void Engine::OnHeadsetPose(const Envelope& e) {
   counters_.set_plan_poses_out(counters_.plan_poses_out() + 1);
   if (pose.stamp_ns != *last_pose_stamp_ns_) return;  // a late pose: not where the wearer is
   last_plan_pose_ = out;
+  WatchWearer(pose);
   if (plan_.explored) {
     if (out.reliability().flag() == v1::Reliability::RELIABLE && out.alignment_version() > 0)
       plan_.explored->AddVisit({out.x(), out.y()});
@@ -536,6 +517,9 @@ const char* CommandName(v1::Command::CommandCase c) {
     case v1::Command::kReset: return "reset";
     case v1::Command::kGetState: return "get_state";
     case v1::Command::kRoute: return "route";
+    case v1::Command::kPlaceMarker: return "place_marker";
+    case v1::Command::kAcknowledgeAlert: return "acknowledge_alert";
+    case v1::Command::kGetTeammates: return "get_teammates";
     case v1::Command::COMMAND_NOT_SET: break;
   }
   return "";
@@ -607,7 +591,9 @@ void Engine::OnCommand(const Envelope& e) {
         tracker_.Reset();
         store_.Clear();
         clock_.Reset();
-        done = "reset: alignment, wall store and the headset's clock cleared";
+        crumbs_.Clear();
+        alarm_.Reset();
+        done = "reset: alignment, wall store, way back and the headset's clock cleared";
         break;
       case v1::Command::kGetState:
         for (std::string& id : ListPlanIds(config_.plan_dir())) reply.add_plans(std::move(id));
@@ -616,17 +602,35 @@ void Engine::OnCommand(const Envelope& e) {
       case v1::Command::kRoute: {
         error = PlanRoute(cmd.route(), reply.mutable_route());
         if (error.empty()) {
-          char text[160];
-          std::snprintf(text, sizeof(text), "route of %.1f m in %zu legs to (%.2f, %.2f)",
-                        reply.route().length_m(),
-                        static_cast<size_t>(reply.route().path_size() - 1), cmd.route().to_x(),
-                        cmd.route().to_y());
-          done = text;
+          const v1::RouteReply& r = reply.route();
+          const v1::PlanPoint& to = r.path(r.path_size() - 1);
+          done = fmt::format("route of {:.1f} m in {} legs to ({:.2f}, {:.2f})", r.length_m(),
+                             r.path_size() - 1, to.x(), to.y());
         } else {
           reply.clear_route();
         }
         break;
       }
+      case v1::Command::kPlaceMarker:
+        error = PlaceMarker(cmd.place_marker(), reply.mutable_marker());
+        if (error.empty()) {
+          done = fmt::format("marker {} placed at ({:.2f}, {:.2f})", reply.marker().id(),
+                             reply.marker().x(), reply.marker().y());
+          publish_(Topic::kMarker, reply.marker());
+        }
+        break;
+      case v1::Command::kAcknowledgeAlert:
+        if (!alarm_.Acknowledge(cmd.acknowledge_alert().by().substr(0, 64))) {
+          error = "no alert to acknowledge";
+          break;
+        }
+        done = "alert acknowledged";
+        publish_(Topic::kAlert, AlertMessage());
+        break;
+      case v1::Command::kGetTeammates:
+        for (v1::Teammate& t : roster_.Teammates(now_ns_())) *reply.add_teammates() = std::move(t);
+        done = fmt::format("{} teammates", reply.teammates_size());
+        break;
       case v1::Command::COMMAND_NOT_SET: break;
     }
   }
@@ -641,8 +645,10 @@ void Engine::FinishCommand(const v1::Command& cmd, v1::CommandReply reply, const
   if (!error.empty()) {
     counters_.set_commands_refused(counters_.commands_refused() + 1);
     Warn("command refused", "command refused: " + prefix + error);
-  } else if (cmd.command_case() != v1::Command::kGetState &&
-             cmd.command_case() != v1::Command::kRoute) {
+  } else if (cmd.command_case() == v1::Command::kLoadPlan ||
+             cmd.command_case() == v1::Command::kWallPick ||
+             cmd.command_case() == v1::Command::kFlip ||
+             cmd.command_case() == v1::Command::kReset) {
     spdlog::info("command: {}{}", prefix, done);
     // Always: after a reset or a new plan, version 0 tells late joiners the old one is void.
     PublishAlignment();
@@ -678,6 +684,7 @@ v1::DaemonStatus Engine::Status(const std::string& message) const {
   s.set_stamp_ns(now_ns_());
   s.set_message(message);
   *s.mutable_reliability() = ToProto(reliability());
+  *s.mutable_alert() = AlertMessage();
   return s;
 }
 

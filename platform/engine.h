@@ -15,9 +15,11 @@
 #include <unordered_map>
 #include <vector>
 
+#include "core/breadcrumbs.h"
 #include "core/explored_map.h"
 #include "core/frames.h"
 #include "core/global_search.h"
+#include "core/no_motion.h"
 #include "core/registration.h"
 #include "core/rooms.h"
 #include "core/route_planner.h"
@@ -32,6 +34,7 @@
 #include "platform/floor_follower.h"
 #include "platform/floor_plan_io.h"
 #include "platform/search_memory.h"
+#include "platform/team.h"
 
 namespace floorpose::platform {
 
@@ -111,6 +114,10 @@ class Engine {
   void OnMeshDelta(const Envelope& e);
   void OnHeadsetPose(const Envelope& e);
   void OnCommand(const Envelope& e);
+  // What the rest of the team publishes, of every device: markers (kept, re-published
+  // when new, so that they outlive their author's writer), plan poses and statuses (the
+  // teammates).
+  void OnTeam(Topic topic, const Envelope& e);
   // Samples of `topic` DDS lost or rejected before they reached us: counted and logged.
   void OnDdsLosses(Topic topic, uint64_t lost, uint64_t rejected);
 
@@ -145,6 +152,12 @@ class Engine {
   const ExploredMap* explored() const { return plan_.explored.get(); }
   // Publishes the explored map now if it changed since the last one.
   void PublishExplored();
+  // The markers this daemon holds (the daemon saves and restores them: markers.pb), and
+  // publishing every one of them (at start, for those who join later).
+  MarkerBoard& markers() { return markers_; }
+  void PublishMarkers();
+  // The wearer's no-motion alert, as published.
+  v1::Alert AlertMessage() const;
 
  private:
   // A plan file, or floor `floor` of a .floors set.
@@ -189,8 +202,15 @@ class Engine {
   bool Mine(const Envelope& e) const { return e.device_id == config_.dds().device_id(); }
   // Tracks the device with the options for its odometry from now on (ForOdometry).
   void UseOdometry(v1::HeadsetPose::Odometry odometry);
-  // Command.route: the route from the latest plan pose, or why there is none.
+  // Command.route: the route from the latest plan pose, or why there is none
+  // (platform/engine_team.cc, with the other commands for the team).
   std::string PlanRoute(const v1::Command::Route& request, v1::RouteReply* reply);
+  // Where the wearer entered the floor in use, on the plan; none before a crumb is kept.
+  std::optional<Eigen::Vector2d> EntryOnPlan() const;
+  // Command.place_marker: the marker at the gaze point, or why there is none.
+  std::string PlaceMarker(const v1::Command::PlaceMarker& request, v1::Marker* marker);
+  // The alarm and the crumbs after a pose taken in order.
+  void WatchWearer(const DecodedPose& pose);
   // The walls of a mesh just stored, traced from the wearer into the explored map while
   // the position is RELIABLE.
   void ExploreWalls(const std::vector<WallPoint>& points);
@@ -254,6 +274,10 @@ class Engine {
   // Recent poses: slam, and as published (for PlanTrack).
   std::deque<std::pair<Pose2, v1::PlanPose>> recent_;
   SearchMemory searches_;  // the path and walls of the plan's searches
+  NoMotionAlarm alarm_;    // of the wearer's head, headset time
+  Breadcrumbs crumbs_;     // the way back, slam frame
+  MarkerBoard markers_;    // the team's markers, every plan
+  Roster roster_;          // the team's latest poses and states
   bool running_ = false;
 };
 

@@ -31,7 +31,7 @@ using std::chrono::seconds;
 constexpr HeadsetFrame kFrame = HeadsetFrame::kUnityLeftHandedYUp;
 
 // A 10 m x 6 m room with an inner wall and a pillar, so no direction is unconstrained.
-const char* kRoomGeoJson = R"({"type": "FeatureCollection", "features": [
+inline const char* kRoomGeoJson = R"({"type": "FeatureCollection", "features": [
   {"type": "Feature", "properties": {"kind": "wall"}, "geometry": {"type": "Polygon",
    "coordinates": [[[0, 0], [10, 0], [10, 6], [0, 6], [0, 0]]]}},
   {"type": "Feature", "properties": {"kind": "wall"}, "geometry": {"type": "LineString",

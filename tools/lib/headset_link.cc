@@ -52,11 +52,15 @@ bool HeadsetLink::Send(Topic topic, const google::protobuf::Message& msg, int64_
 std::optional<v1::CommandReply> HeadsetLink::Request(v1::Command command,
                                                      std::chrono::milliseconds timeout) {
   command.set_request_id(++last_request_id_);
+  Poll();
+  // Only a reply that comes after the request: a command sent with Send may have used the
+  // same id before.
+  const size_t before = replies.size();
   if (!Send(Topic::kCommand, command, 0)) return std::nullopt;
   const uint64_t id = command.request_id();
   auto find = [&]() -> const v1::CommandReply* {
-    for (const v1::CommandReply& r : replies)
-      if (r.request_id() == id) return &r;
+    for (size_t i = before; i < replies.size(); ++i)
+      if (replies[i].request_id() == id) return &replies[i];
     return nullptr;
   };
   if (!WaitUntil([&] { return find() != nullptr; }, timeout)) return std::nullopt;
