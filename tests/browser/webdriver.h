@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
@@ -110,15 +111,45 @@ class Browser {
   nlohmann::json Run(const std::string& script, nlohmann::json args = nlohmann::json::array()) {
     return Call("POST", session_ + "/execute/sync", {{"script", script}, {"args", args}});
   }
+  // A real mouse click at (x, y) CSS pixels of the viewport (WebDriver actions).
+  void Click(double x, double y) {
+    Actions({{{"type", "pointer"},
+              {"id", "mouse"},
+              {"parameters", {{"pointerType", "mouse"}}},
+              {"actions",
+               {{{"type", "pointerMove"},
+                 {"x", std::lround(x)},
+                 {"y", std::lround(y)},
+                 {"origin", "viewport"}},
+                {{"type", "pointerDown"}, {"button", 0}},
+                {{"type", "pointerUp"}, {"button", 0}}}}}});
+  }
+  // A mouse wheel turned by delta_y pixels at (x, y).
+  void Wheel(double x, double y, int delta_y) {
+    Actions({{{"type", "wheel"},
+              {"id", "wheel"},
+              {"actions",
+               {{{"type", "scroll"},
+                 {"x", std::lround(x)},
+                 {"y", std::lround(y)},
+                 {"deltaX", 0},
+                 {"deltaY", delta_y},
+                 {"origin", "viewport"}}}}}});
+  }
   std::string ScreenshotPng() {
     return Base64Decode(Call("GET", session_ + "/screenshot").get<std::string>());
   }
 
  private:
+  void Actions(const nlohmann::json& sources) {
+    Call("POST", session_ + "/actions", {{"actions", sources}});
+    Call("DELETE", session_ + "/actions");
+  }
   nlohmann::json Call(const std::string& method, const std::string& path,
                       const nlohmann::json& body = nullptr) {
-    httplib::Result r = method == "GET"
-                            ? http_->Get(path.c_str())
+    httplib::Result r = method == "GET" ? http_->Get(path.c_str())
+                        : method == "DELETE"
+                            ? http_->Delete(path.c_str())
                             : http_->Post(path.c_str(), body.dump(), "application/json");
     if (!r) throw std::runtime_error("WebDriver " + path + ": " + httplib::to_string(r.error()));
     nlohmann::json reply = nlohmann::json::parse(r->body, nullptr, false);

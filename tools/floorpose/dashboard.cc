@@ -3,6 +3,8 @@
 #include <spdlog/spdlog.h>
 
 #include <csignal>
+#include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <thread>
 
@@ -20,12 +22,45 @@ struct DashboardCommandOptions {
   std::vector<std::string> names;  // ID=NAME
   std::string security_dir;
   std::string identity = "dashboard";
+  std::string state_dir;
   DashboardServerOptions server;
   DdsOptions dds;
 };
 
+// A plan file, or every floor of a .floors set; false (logged) when it does not load.
+bool LoadDrawn(const std::string& path, std::vector<DashboardPlan>* plans) {
+  if (!platform::IsFloorSet(path)) {
+    FloorPlanParse parse = platform::LoadFloorPlan(path);
+    if (!parse.ok()) {
+      spdlog::error("{}: {}", path, parse.error);
+      return false;
+    }
+    spdlog::info("plan '{}': {} walls from {}", parse.plan.id, parse.plan.segments.size(), path);
+    plans->push_back({std::move(parse.plan), "", ""});
+    return true;
+  }
+  const platform::FloorSet set = platform::LoadFloorSet(path);
+  if (!set.ok()) {
+    spdlog::error("{}", set.error);
+    return false;
+  }
+  const std::string name = std::filesystem::path(path).stem().string();
+  std::vector<DashboardPlan> floors;
+  for (const platform::FloorEntry& f : set.floors) {
+    FloorPlanParse parse = platform::LoadFloorPlan(f.plan_path);
+    if (!parse.ok()) {
+      spdlog::error("{}: floor {}: {}", path, f.id, parse.error);
+      return false;
+    }
+    floors.push_back({std::move(parse.plan), name, f.id});
+  }
+  spdlog::info("plan set '{}': {} floors from {}", name, floors.size(), path);
+  for (DashboardPlan& f : floors) plans->push_back(std::move(f));
+  return true;
+}
+
 // The plans to draw: one file, or every plan of a directory (as the daemon's plan_dir).
-bool LoadPlans(const DashboardCommandOptions& o, std::vector<FloorPlan>* plans) {
+bool LoadPlans(const DashboardCommandOptions& o, std::vector<DashboardPlan>* plans) {
   std::vector<std::string> paths;
   if (!o.plan.empty()) paths.push_back(o.plan);
   if (!o.plans_dir.empty()) {
@@ -39,16 +74,9 @@ bool LoadPlans(const DashboardCommandOptions& o, std::vector<FloorPlan>* plans) 
       if (platform::FindPlanFile(o.plans_dir, id, &path, &error)) paths.push_back(path);
     }
   }
-  for (const std::string& path : paths) {
-    FloorPlanParse parse = platform::LoadFloorPlan(path);
-    if (!parse.ok()) {
-      spdlog::error("{}: {}", path, parse.error);
-      if (!o.plan.empty()) return false;  // the one plan asked for
-      continue;                           // one bad file of a directory: the others still show
-    }
-    spdlog::info("plan '{}': {} walls from {}", parse.plan.id, parse.plan.segments.size(), path);
-    plans->push_back(std::move(parse.plan));
-  }
+  for (const std::string& path : paths)
+    if (!LoadDrawn(path, plans) && !o.plan.empty()) return false;  // the one plan asked for
+  // (one bad file of a directory: the others still show)
   if (plans->empty())
     spdlog::warn(
         "no floor plan to draw: wearers are listed, not shown on a map "
@@ -69,8 +97,16 @@ int RunDashboard(DashboardCommandOptions o) {
     spdlog::error("--stale-after must be positive");
     return 2;
   }
-  std::vector<FloorPlan> plans;
+  std::vector<DashboardPlan> plans;
   if (!LoadPlans(o, &plans)) return 1;
+  if (o.state_dir.empty())
+    if (const char* systemd_dir = std::getenv("STATE_DIRECTORY"))
+      o.state_dir = std::string(systemd_dir).substr(0, std::string(systemd_dir).find(':'));
+  if (!o.state_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(o.state_dir, ec);
+    o.server.markers_path = (std::filesystem::path(o.state_dir) / "markers.pb").string();
+  }
   o.server.domain_id = o.dds.domain_id;
   o.server.cyclone_config = o.dds.Config();
   if (!o.security_dir.empty()) {
@@ -120,6 +156,12 @@ Run AddDashboardCommand(CLI::App& app) {
   app.add_option("--security-dir", o->security_dir,
                  "join a DDS-Security domain with the files tools/make-dds-security.sh made here");
   app.add_option("--identity", o->identity, "the identity (NAME.pem, NAME.key) in --security-dir")
+      ->capture_default_str();
+  app.add_option("--state-dir", o->state_dir,
+                 "keep the team's markers here across restarts (default: systemd's "
+                 "$STATE_DIRECTORY, else not kept)");
+  app.add_option("--lead", o->server.name,
+                 "who places markers and acknowledges alerts from this dashboard")
       ->capture_default_str();
   o->dds.Add(app);
   return [o] { return RunDashboard(*o); };

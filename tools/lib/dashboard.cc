@@ -12,6 +12,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "platform/clock.h"
 #include "platform/dds.h"
 #include "platform/explored_codec.h"
 
@@ -41,6 +42,11 @@ const char* FlagClass(int flag) {
     case v1::Reliability::DEGRADED: return "degraded";
     default: return "lost";
   }
+}
+
+std::string Lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
 }
 
 bool Finite(const v1::PlanPose& p) {
@@ -137,9 +143,51 @@ void DashboardState::OnStatus(const std::string& device, const v1::DaemonStatus&
                               Clock::time_point now) {
   {
     std::lock_guard lock(mu_);
-    if (Device* d = Touch(device, now)) d->status = status;
+    if (Device* d = Touch(device, now)) {
+      d->status = status;
+      d->alert = status.alert();
+    }
   }
   changed_.notify_all();
+}
+
+void DashboardState::OnAlert(const std::string& device, const v1::Alert& alert,
+                             Clock::time_point now) {
+  {
+    std::lock_guard lock(mu_);
+    if (Device* d = Touch(device, now)) d->alert = alert;
+  }
+  changed_.notify_all();
+}
+
+bool DashboardState::OnMarker(const v1::Marker& marker, std::string* why) {
+  bool changed = false;
+  {
+    std::lock_guard lock(mu_);
+    const platform::MarkerBoard::Take take = markers_.Merge(marker, why);
+    changed =
+        take == platform::MarkerBoard::Take::kNew || take == platform::MarkerBoard::Take::kReplaced;
+    if (changed) ++version_;
+    if (take == platform::MarkerBoard::Take::kRefused) return false;
+  }
+  if (changed) changed_.notify_all();
+  return changed;
+}
+
+std::optional<v1::Marker> DashboardState::MarkerById(const std::string& id) const {
+  std::lock_guard lock(mu_);
+  auto it = markers_.markers().find(id);
+  if (it == markers_.markers().end()) return std::nullopt;
+  return it->second;
+}
+
+void DashboardState::SaveMarkers(const std::string& path) {
+  if (path.empty()) return;
+  std::lock_guard lock(mu_);
+  if (markers_.revision() == saved_markers_) return;
+  std::string error;
+  if (!markers_.Save(path, &error)) spdlog::warn("markers not saved to {}: {}", path, error);
+  saved_markers_ = markers_.revision();
 }
 
 bool DashboardState::OnExplored(const std::string& device, const v1::ExploredMap& map,
@@ -255,6 +303,11 @@ std::string DashboardState::Frame(Cursor* cursor, Clock::time_point now) const {
                      {"alignment_version", p.alignment_version()},
                      {"stamp_ns", p.source_stamp_ns()}};
     }
+    if (d.alert && d.alert->kind() != v1::Alert::NONE)
+      dev["alert"] = {{"kind", d.alert->kind() == v1::Alert::NO_MOTION ? "no_motion" : "pre_alert"},
+                      {"still_s", std::round(d.alert->still_s() * 10.0) / 10.0},
+                      {"acknowledged", d.alert->acknowledged()},
+                      {"by", d.alert->acknowledged_by()}};
     if (d.alignment)
       dev["alignment"] = {{"version", d.alignment->version()},
                           {"source", v1::Alignment::Source_Name(d.alignment->source())},
@@ -293,6 +346,22 @@ std::string DashboardState::Frame(Cursor* cursor, Clock::time_point now) const {
     }
     cursor->explored_version = explored_version_;
   }
+  if (cursor->markers_revision != markers_.revision()) {
+    // Every marker, removed ones as such: few, and the page replaces its set.
+    json& list = frame["markers"] = json::array();
+    for (const auto& [id, m] : markers_.markers())
+      list.push_back({{"id", id},
+                      {"kind", Lower(v1::Marker::Kind_Name(m.kind()))},
+                      {"plan", m.plan_id()},
+                      {"floor", m.floor()},
+                      {"x", Mm(m.x())},
+                      {"y", Mm(m.y())},
+                      {"radius_m", Mm(m.radius_m())},
+                      {"text", m.text()},
+                      {"author", m.author()},
+                      {"removed", m.removed()}});
+    cursor->markers_revision = markers_.revision();
+  }
   cursor->version = version_;
   // Device ids and reasons come off the network: invalid UTF-8 is replaced, not thrown.
   return frame.dump(-1, ' ', false, json::error_handler_t::replace);
@@ -316,9 +385,10 @@ size_t DashboardState::devices() const {
   return devices_.size();
 }
 
-std::string PlansJson(const std::vector<FloorPlan>& plans) {
+std::string PlansJson(const std::vector<DashboardPlan>& plans) {
   json out = {{"plans", json::array()}};
-  for (const FloorPlan& plan : plans) {
+  for (const DashboardPlan& drawn : plans) {
+    const FloorPlan& plan = drawn.plan;
     // Walls as [x1, y1, x2, y2]; every other line (windows, glass, stairs, elevators,
     // doors, exits) by kind, each drawn its own way.
     json walls = json::array(), lines = json::object();
@@ -338,7 +408,9 @@ std::string PlansJson(const std::vector<FloorPlan>& plans) {
                             {"min", {Mm(plan.min.x()), Mm(plan.min.y())}},
                             {"max", {Mm(plan.max.x()), Mm(plan.max.y())}},
                             {"walls", std::move(walls)},
-                            {"lines", std::move(lines)}});
+                            {"lines", std::move(lines)},
+                            {"set", drawn.set},
+                            {"floor", drawn.floor}});
   }
   return out.dump(-1, ' ', false, json::error_handler_t::replace);
 }
@@ -353,9 +425,79 @@ struct Dashboard::Impl {
   std::atomic<bool> stop{false};
   httplib::Server http;
   std::atomic<int> clients{0};
+  // Markers placed here and re-published, and the leads' acknowledgements (commands to a
+  // device's daemon). Written from the DDS thread and the HTTP threads.
+  std::mutex write_mu;
+  std::unique_ptr<platform::Writer> marker_writer, command_writer;
+  uint64_t next_request_id = 1;
+  // Replies to this dashboard's commands, by device and request id, until taken.
+  std::mutex reply_mu;
+  std::condition_variable reply_cv;
+  std::map<std::pair<std::string, uint64_t>, std::optional<v1::CommandReply>> replies;
 
   void ReadDds(DashboardState& state);
+  void PublishMarker(const v1::Marker& marker);
+  // Returns the request id.
+  uint64_t SendCommand(const std::string& device, v1::Command command);
+  // Sends and waits for the reply; none after the timeout.
+  std::optional<v1::CommandReply> Ask(const std::string& device, v1::Command command,
+                                      std::chrono::milliseconds timeout);
+  void OnReply(const std::string& device, const v1::CommandReply& reply);
 };
+
+std::optional<v1::CommandReply> Dashboard::Impl::Ask(const std::string& device, v1::Command command,
+                                                     std::chrono::milliseconds timeout) {
+  std::unique_lock lock(reply_mu);
+  const uint64_t id = next_request_id++;
+  command.set_request_id(id);
+  const auto key = std::make_pair(device, id);
+  replies[key];
+  lock.unlock();
+  SendCommand(device, command);
+  lock.lock();
+  reply_cv.wait_for(lock, timeout, [&] { return replies[key].has_value() || stop; });
+  std::optional<v1::CommandReply> reply = std::move(replies[key]);
+  replies.erase(key);
+  return reply;
+}
+
+void Dashboard::Impl::OnReply(const std::string& device, const v1::CommandReply& reply) {
+  {
+    std::lock_guard lock(reply_mu);
+    auto it = replies.find({device, reply.request_id()});
+    if (it == replies.end()) return;  // another app's, or given up
+    it->second = reply;
+  }
+  reply_cv.notify_all();
+}
+
+void Dashboard::Impl::PublishMarker(const v1::Marker& marker) {
+  std::lock_guard lock(write_mu);
+  platform::Envelope e;
+  e.device_id = marker.id();  // the instance key of the marker topic
+  e.seq = marker_writer->NextSeq();
+  e.stamp_ns = platform::WallClockNs();
+  marker.SerializeToString(&e.payload);
+  std::string error;
+  if (!marker_writer->Write(e, &error))
+    spdlog::warn("marker {} not published: {}", marker.id(), error);
+}
+
+uint64_t Dashboard::Impl::SendCommand(const std::string& device, v1::Command command) {
+  if (command.request_id() == 0) {
+    std::lock_guard lock(reply_mu);
+    command.set_request_id(next_request_id++);
+  }
+  std::lock_guard lock(write_mu);
+  platform::Envelope e;
+  e.device_id = device;
+  e.seq = command_writer->NextSeq();
+  e.stamp_ns = platform::WallClockNs();
+  command.SerializeToString(&e.payload);
+  std::string error;
+  if (!command_writer->Write(e, &error)) spdlog::warn("command to {} not sent: {}", device, error);
+  return command.request_id();
+}
 
 void Dashboard::Impl::ReadDds(DashboardState& state) {
   size_t malformed = 0;
@@ -393,9 +535,28 @@ void Dashboard::Impl::ReadDds(DashboardState& state) {
             ok = m.ParseFromString(e.payload) && state.OnExplored(e.device_id, m, now, &why);
             break;
           }
+          case Topic::kCommandReply: {
+            v1::CommandReply m;
+            if ((ok = m.ParseFromString(e.payload))) OnReply(e.device_id, m);
+            break;
+          }
+          case Topic::kAlert: {
+            v1::Alert m;
+            if ((ok = m.ParseFromString(e.payload))) state.OnAlert(e.device_id, m, now);
+            break;
+          }
+          case Topic::kMarker: {
+            v1::Marker m;
+            ok = m.ParseFromString(e.payload);
+            why.clear();
+            if (ok && state.OnMarker(m, &why)) PublishMarker(m);  // held for later joiners
+            ok = ok && why.empty();
+            break;
+          }
           default: ok = true;
         }
         if (!ok) {
+          if (why.empty()) why = "not the topic's message";
           ++malformed;
           if (now - last_warning > std::chrono::seconds(1)) {
             spdlog::warn("{} bad message(s) so far; the latest on {} from device '{}': {}",
@@ -405,10 +566,11 @@ void Dashboard::Impl::ReadDds(DashboardState& state) {
         }
       }
     }
+    state.SaveMarkers(options.markers_path);
   }
 }
 
-Dashboard::Dashboard(DashboardServerOptions options, std::vector<FloorPlan> plans)
+Dashboard::Dashboard(DashboardServerOptions options, std::vector<DashboardPlan> plans)
     : impl_(std::make_unique<Impl>()), state_(std::make_unique<DashboardState>(options.dashboard)) {
   Impl& m = *impl_;
   m.options = std::move(options);
@@ -417,10 +579,25 @@ Dashboard::Dashboard(DashboardServerOptions options, std::vector<FloorPlan> plan
       std::make_unique<platform::Participant>(m.options.domain_id, m.options.cyclone_config,
                                               m.options.security ? &*m.options.security : nullptr);
   m.waiter = std::make_unique<platform::Waiter>(*m.participant);
-  for (Topic t :
-       {Topic::kStatus, Topic::kAlignment, Topic::kPlanTrack, Topic::kPlanPose, Topic::kExplored}) {
+  for (Topic t : {Topic::kStatus, Topic::kAlignment, Topic::kPlanTrack, Topic::kPlanPose,
+                  Topic::kExplored, Topic::kAlert, Topic::kMarker, Topic::kCommandReply}) {
     m.readers.push_back(std::make_unique<platform::Reader>(*m.participant, t));
     m.waiter->Attach(*m.readers.back());
+  }
+  m.marker_writer = std::make_unique<platform::Writer>(*m.participant, Topic::kMarker);
+  m.command_writer = std::make_unique<platform::Writer>(*m.participant, Topic::kCommand);
+  if (!m.options.markers_path.empty()) {
+    platform::MarkerBoard saved;
+    std::string error;
+    if (!saved.Load(m.options.markers_path, &error))
+      spdlog::warn("markers {} not read: {}", m.options.markers_path, error);
+    for (const auto& [id, marker] : saved.markers()) {
+      std::string why;
+      state_->OnMarker(marker, &why);
+      m.PublishMarker(marker);
+    }
+    if (!saved.markers().empty())
+      spdlog::info("{} markers from {}", saved.markers().size(), m.options.markers_path);
   }
 
   // One thread per open event stream: a team's few dashboards, not the public.
@@ -482,10 +659,111 @@ Dashboard::Dashboard(DashboardServerOptions options, std::vector<FloorPlan> plan
           spdlog::info("browser {} disconnected ({} open)", remote, --impl_->clients);
         });
   });
+  // A marker placed or removed by the lead: {"kind", "plan", "floor", "x", "y", "text",
+  // "radius_m"}, or {"id", "removed": true}.
+  m.http.Post("/api/markers", [this](const httplib::Request& req, httplib::Response& res) {
+    const json body = json::parse(req.body, nullptr, false);
+    auto refuse = [&](const std::string& why) {
+      res.status = 400;
+      res.set_content(json{{"error", why}}.dump(), "application/json");
+    };
+    if (!body.is_object()) return refuse("not a JSON object");
+    v1::Marker marker;
+    const int64_t now = platform::WallClockNs();
+    if (body.value("removed", false)) {
+      const std::optional<v1::Marker> held = state_->MarkerById(body.value("id", ""));
+      if (!held) return refuse("no such marker");
+      marker = *held;
+      marker.set_removed(true);
+      marker.set_revision(held->revision() + 1);
+    } else {
+      v1::Marker::Kind kind{};
+      std::string name = body.value("kind", "");
+      for (char& c : name) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+      if (!v1::Marker::Kind_Parse(name, &kind) || kind == v1::Marker::KIND_UNSPECIFIED)
+        return refuse("kind must be hazard, victim, searched, blocked or note");
+      if (!body.contains("x") || !body.contains("y") || !body["x"].is_number() ||
+          !body["y"].is_number())
+        return refuse("x and y (plan metres) are needed");
+      marker.set_id(impl_->options.name + "-" + std::to_string(now / 1'000'000));
+      marker.set_kind(kind);
+      marker.set_plan_id(body.value("plan", ""));
+      marker.set_floor(body.value("floor", ""));
+      marker.set_x(body["x"].get<double>());
+      marker.set_y(body["y"].get<double>());
+      marker.set_radius_m(body.value("radius_m", 0.0));
+      marker.set_text(body.value("text", ""));
+      marker.set_author(impl_->options.name);
+      marker.set_revision(1);
+    }
+    marker.set_created_unix_ns(now);
+    std::string why;
+    if (!state_->OnMarker(marker, &why)) return refuse(why.empty() ? "not newer" : why);
+    impl_->PublishMarker(marker);
+    state_->SaveMarkers(impl_->options.markers_path);
+    res.set_content(json{{"id", marker.id()}}.dump(), "application/json");
+  });
+  // The lead acknowledges a wearer's alert: {"device"}; the wearer's daemon marks it
+  // acknowledged (Command.acknowledge_alert) and every dashboard sees it so.
+  m.http.Post("/api/alerts/ack", [this](const httplib::Request& req, httplib::Response& res) {
+    const json body = json::parse(req.body, nullptr, false);
+    const std::string device = body.is_object() ? body.value("device", "") : "";
+    if (device.empty() || device.size() > 128) {
+      res.status = 400;
+      res.set_content(json{{"error", "device is needed"}}.dump(), "application/json");
+      return;
+    }
+    v1::Command ack;
+    ack.mutable_acknowledge_alert()->set_by(impl_->options.name);
+    impl_->SendCommand(device, ack);
+    res.status = 202;
+    res.set_content(json{{"device", device}}.dump(), "application/json");
+  });
+  // A wearer's way out or way back, asked of its daemon: {"device", "to": "exit" or
+  // "backtrack"}; the reply's path, or why there is none.
+  m.http.Post("/api/route", [this](const httplib::Request& req, httplib::Response& res) {
+    const json body = json::parse(req.body, nullptr, false);
+    const std::string device = body.is_object() ? body.value("device", "") : "";
+    const std::string to = body.is_object() ? body.value("to", "") : "";
+    if (device.empty() || device.size() > 128 || (to != "exit" && to != "backtrack")) {
+      res.status = 400;
+      res.set_content(json{{"error", "device and to (exit or backtrack) are needed"}}.dump(),
+                      "application/json");
+      return;
+    }
+    v1::Command route;
+    route.mutable_route()->set_destination(to == "exit" ? v1::Command::Route::EXIT
+                                                        : v1::Command::Route::BACKTRACK);
+    const std::optional<v1::CommandReply> reply =
+        impl_->Ask(device, route, std::chrono::seconds(5));
+    if (!reply) {
+      res.status = 504;
+      res.set_content(json{{"error", "no answer from the wearer's daemon"}}.dump(),
+                      "application/json");
+      return;
+    }
+    json path = json::array();
+    for (const v1::PlanPoint& p : reply->route().path()) path.push_back({Mm(p.x()), Mm(p.y())});
+    res.status = reply->ok() ? 200 : 409;
+    res.set_content(json{{"device", device},
+                         {"to", to},
+                         {"ok", reply->ok()},
+                         {"message", reply->message()},
+                         {"length_m", Mm(reply->route().length_m())},
+                         {"path", std::move(path)}}
+                        .dump(-1, ' ', false, json::error_handler_t::replace),
+                    "application/json");
+  });
   m.http.set_logger([](const httplib::Request& req, const httplib::Response& res) {
     if (res.status >= 400) spdlog::info("{} {} -> {}", req.method, req.path, res.status);
   });
 
+  // Address reuse only (a restart binds at once), never port sharing: a second dashboard
+  // on a port in use is an error, not a silent half of the requests.
+  m.http.set_socket_options([](socket_t sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+  });
   port_ = m.options.port == 0
               ? m.http.bind_to_any_port(m.options.host)
               : (m.http.bind_to_port(m.options.host, m.options.port) ? m.options.port : -1);
@@ -504,6 +782,7 @@ void Dashboard::Serve() { impl_->http.listen_after_bind(); }
 
 void Dashboard::Stop() {
   impl_->stop = true;
+  impl_->reply_cv.notify_all();
   state_->Stop();
   impl_->waiter->Wake();
   impl_->http.stop();

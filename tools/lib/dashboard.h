@@ -20,6 +20,7 @@
 #include "core/floor_plan.h"
 #include "floorpose/v1/floorpose.pb.h"
 #include "platform/dds.h"
+#include "platform/team.h"
 
 namespace floorpose::tools {
 
@@ -45,6 +46,14 @@ class DashboardState {
   void OnAlignment(const std::string& device, const v1::Alignment& alignment,
                    Clock::time_point now);
   void OnStatus(const std::string& device, const v1::DaemonStatus& status, Clock::time_point now);
+  void OnAlert(const std::string& device, const v1::Alert& alert, Clock::time_point now);
+  // A marker heard or placed here: true when it is new or newer than the one shown (the
+  // caller then publishes it, so that it outlives its author); *why when refused.
+  bool OnMarker(const v1::Marker& marker, std::string* why);
+  // The marker of that id, if any.
+  std::optional<v1::Marker> MarkerById(const std::string& id) const;
+  // Saves the markers to `path` when they changed since the last save.
+  void SaveMarkers(const std::string& path);
   // A device's explored map; false (and kept out) when its cells do not unpack.
   bool OnExplored(const std::string& device, const v1::ExploredMap& map, Clock::time_point now,
                   std::string* error);
@@ -59,6 +68,7 @@ class DashboardState {
     uint64_t version = 0;
     std::map<std::string, std::pair<uint64_t, uint64_t>> trails;  // device -> (epoch, next seq)
     uint64_t explored_version = 0;
+    uint64_t markers_revision = 0;
   };
   // JSON of the devices changed since *cursor (all of them for a fresh cursor), with every
   // device's age and the stale ones; advances *cursor. Format in docs/dashboard.md.
@@ -79,6 +89,7 @@ class DashboardState {
     std::optional<v1::PlanPose> pose;
     std::optional<v1::DaemonStatus> status;
     std::optional<v1::Alignment> alignment;
+    std::optional<v1::Alert> alert;           // the latest, from the alert topic or a status
     std::optional<v1::ExploredMap> explored;  // without its packed cells
     std::vector<int8_t> explored_cells;
     std::deque<TrailPoint> trail;
@@ -104,11 +115,19 @@ class DashboardState {
   mutable std::map<std::string, std::pair<uint64_t, std::string>>
       png_cache_;  // plan -> (version, png)
   size_t refused_devices_ = 0;
+  platform::MarkerBoard markers_;
+  uint64_t saved_markers_ = 0;
   std::atomic<bool> stopped_{false};
 };
 
-// The plans a dashboard draws, as JSON: {"plans": [{"id", "min", "max", "walls"}]}.
-std::string PlansJson(const std::vector<FloorPlan>& plans);
+// A plan the dashboard draws: a plan file, or one floor of a .floors set.
+struct DashboardPlan {
+  FloorPlan plan;
+  std::string set;    // the .floors set's name (its file name without extension), or empty
+  std::string floor;  // the floor's id in its set, or empty
+};
+// The plans a dashboard draws, as JSON (docs/dashboard.md, GET /api/plans).
+std::string PlansJson(const std::vector<DashboardPlan>& plans);
 
 struct DashboardServerOptions {
   uint32_t domain_id = 0;
@@ -117,12 +136,14 @@ struct DashboardServerOptions {
   int port = 8080;                                // 0: any free port
   std::optional<platform::DdsSecurity> security;  // join a secured domain with this identity
   DashboardOptions dashboard;
+  std::string markers_path;   // where markers are kept across restarts; empty: not kept
+  std::string name = "lead";  // who places markers and acknowledges alerts here
 };
 
 class Dashboard {
  public:
   // Joins DDS and binds the port; throws std::runtime_error when either fails.
-  Dashboard(DashboardServerOptions options, std::vector<FloorPlan> plans);
+  Dashboard(DashboardServerOptions options, std::vector<DashboardPlan> plans);
   ~Dashboard();
   Dashboard(const Dashboard&) = delete;
   Dashboard& operator=(const Dashboard&) = delete;
