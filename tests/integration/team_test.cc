@@ -4,10 +4,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <nlohmann/json.hpp>
 
 #include "platform/floor_plan_io.h"
 #include "tests/integration/daemon_fixture.h"
 #include "tests/route_test_util.h"
+// After Eigen: httplib.h includes glibc's <resolv.h>, which defines _res, a name in Eigen.
+#include <httplib.h>
+
+#include "tools/lib/dashboard.h"
 
 namespace floorpose {
 namespace {
@@ -277,6 +282,66 @@ TEST_F(TeamTest, AWearerWhoStopsMovingIsInAlertUntilAcknowledgedAndMovesOn) {
   ASSERT_TRUE(again.has_value());
   EXPECT_FALSE(again->ok());
   EXPECT_EQ(again->message(), "no alert to acknowledge");
+}
+
+TEST_F(TeamTest, ARestartedDeviceReappearsOnTheDashboard) {
+  StartDaemon();
+  const fs::path log = dir_ / "dashboard.log";
+  tools::ChildProcess dashboard({FLOORPOSE_PATH, "dashboard", "--plan", plan_path_, "--host",
+                                 "127.0.0.1", "--port", "0", "--domain", std::to_string(domain_),
+                                 "--loopback", "--stale-after", "2"},
+                                log.string());
+  const int port = tools::DashboardPortFromLog(log.string(), seconds(15));
+  ASSERT_GT(port, 0) << "see " << log;
+  httplib::Client http("127.0.0.1", port);
+  // The device as the dashboard serves it (GET /api/devices), when pred holds.
+  auto device = [&](auto pred) {
+    nlohmann::json found;
+    link_->WaitUntil(
+        [&] {
+          const auto r = http.Get("/api/devices");
+          if (!r || r->status != 200) return false;
+          const nlohmann::json frame = nlohmann::json::parse(r->body);
+          for (const auto& d : frame["devices"])
+            if (d["id"] == "hl-test") {
+              found = d;
+              found["age"] = frame["ages"]["hl-test"];
+            }
+          return !found.is_null() && pred(found);
+        },
+        seconds(10));
+    return found;
+  };
+  auto near = [](const nlohmann::json& d, const v1::PlanPose& p) {
+    return d.contains("pose") && std::abs(d["pose"]["x"].get<double>() - p.x()) < 0.002 &&
+           std::abs(d["pose"]["y"].get<double>() - p.y()) < 0.002;
+  };
+  ASSERT_NO_FATAL_FAILURE(PickAndWalk(Walk(0.0, 5)));
+  const v1::PlanPose before = link_->plan_poses.back();
+  nlohmann::json d = device([&](const nlohmann::json& shown) { return near(shown, before); });
+  ASSERT_TRUE(near(d, before)) << d.dump();
+
+  // The daemon dies and comes back; the headset's app restarts too, its stamps from the
+  // start again, the wearer elsewhere.
+  ASSERT_EQ(daemon_->Terminate(seconds(5)), 0);
+  d = device([](const nlohmann::json& shown) { return shown["age"].get<double>() > 2.0; });
+  EXPECT_GT(d["age"].get<double>(), 2.0) << "stale while the daemon is gone";
+  LaunchDaemon();
+  ASSERT_TRUE(link_->WaitForDaemon(seconds(15))) << "floorposed did not come back";
+  link_->plan_poses.clear();
+  link_->alignments.clear();
+  ASSERT_NO_FATAL_FAILURE(PickAndWalk(Walk(0.0, 6, {{8.8, 2.0}, {6.0, 4.8}, {2.5, 4.8}})));
+  const v1::PlanPose after = link_->plan_poses.back();
+  ASSERT_LT(after.source_stamp_ns(), before.source_stamp_ns()) << "the stamps started again";
+  // ...where the restarted daemon put it, fresh, in the state that daemon reports.
+  d = device([&](const nlohmann::json& shown) {
+    return near(shown, after) && link_->status &&
+           shown["state"] == v1::DaemonStatus::State_Name(link_->status->state());
+  });
+  EXPECT_TRUE(near(d, after)) << d.dump();
+  EXPECT_LT(d["age"].get<double>(), 2.0);
+  EXPECT_EQ(d["state"], v1::DaemonStatus::State_Name(link_->status->state()));
+  EXPECT_EQ(dashboard.Terminate(seconds(5)), 0);
 }
 
 }  // namespace
