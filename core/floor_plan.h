@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -66,6 +67,14 @@ struct FloorPlan {
   }
 };
 
+// Where a plan lies on the Earth: plan (x, y) turned by rotation_rad (counter-clockwise,
+// from the plan's +x to east) are metres east and north of origin (WGS84 longitude,
+// latitude, degrees), on the azimuthal equidistant plane about it.
+struct Georeference {
+  Eigen::Vector2d origin_lon_lat = Eigen::Vector2d::Zero();
+  double rotation_rad = 0.0;
+};
+
 // Result of parsing: either a plan or a message saying what is wrong and where.
 struct FloorPlanParse {
   FloorPlan plan;
@@ -74,6 +83,8 @@ struct FloorPlanParse {
   // How the file's coordinates became plan metres when not as written (a WGS84 plan's
   // projection and origin), for the load log line; empty for a plan in metres.
   std::string frame;
+  // A WGS84 plan's projection, or a local plan's properties.georeference; none else.
+  std::optional<Georeference> georeference;
   bool ok() const { return error.empty(); }
 };
 

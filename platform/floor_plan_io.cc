@@ -114,7 +114,8 @@ bool IsLonLat(const Json& doc, const std::vector<Segment>& raw) {
 // Projects `raw` from longitude/latitude to metres about `properties.origin` ([lon, lat])
 // or else the south-west corner of the bounding box. Returns an error or empty; `frame`
 // says the projection and origin.
-std::string ProjectLonLat(const Json& doc, std::vector<Segment>* raw, std::string* frame) {
+std::string ProjectLonLat(const Json& doc, std::vector<Segment>* raw, std::string* frame,
+                          Georeference* georeference) {
   Eigen::Vector2d origin = FiniteBounds(*raw).first;
   const char* which = "the south-west corner of its bounding box";
   if (doc.contains("properties") && doc["properties"].is_object() &&
@@ -141,6 +142,29 @@ std::string ProjectLonLat(const Json& doc, std::vector<Segment>* raw, std::strin
                 "origin %.7f, %.7f: %s)",
                 origin.x(), origin.y(), which);
   *frame = text;
+  georeference->origin_lon_lat = origin;
+  georeference->rotation_rad = 0.0;
+  return {};
+}
+
+// A local plan's `properties.georeference`: {"origin": [lon, lat], "rotation_deg": a}, the
+// plan's +x axis a degrees counter-clockwise from east (0 when missing). Returns an error
+// or empty; nothing when the plan has none.
+std::string ReadGeoreference(const Json& doc, std::optional<Georeference>* out) {
+  if (!doc.contains("properties") || !doc["properties"].is_object() ||
+      !doc["properties"].contains("georeference"))
+    return {};
+  const Json& g = doc["properties"]["georeference"];
+  Georeference r;
+  if (!g.is_object() || !g.contains("origin") || !ToPoint(g["origin"], &r.origin_lon_lat) ||
+      std::abs(r.origin_lon_lat.x()) > 180 || std::abs(r.origin_lon_lat.y()) > 90)
+    return "properties.georeference.origin is not [longitude, latitude]";
+  if (g.contains("rotation_deg")) {
+    if (!g["rotation_deg"].is_number() || !std::isfinite(g["rotation_deg"].get<double>()))
+      return "properties.georeference.rotation_deg is not a number";
+    r.rotation_rad = g["rotation_deg"].get<double>() * M_PI / 180.0;
+  }
+  *out = r;
   return {};
 }
 
@@ -234,7 +258,13 @@ FloorPlanParse ParseGeoJsonFloorPlan(std::string_view text, std::string id) {
     tags.resize(raw.size(), static_cast<int>(LineKind::kWall));
   }
   std::string frame;
-  if (error.empty() && IsLonLat(doc, raw)) error = ProjectLonLat(doc, &raw, &frame);
+  std::optional<Georeference> georeference;
+  if (error.empty() && IsLonLat(doc, raw)) {
+    georeference.emplace();
+    error = ProjectLonLat(doc, &raw, &frame, &*georeference);
+  } else if (error.empty()) {
+    error = ReadGeoreference(doc, &georeference);
+  }
   if (!error.empty()) {
     out.error = "GeoJSON: " + error;
     return out;
@@ -253,6 +283,7 @@ FloorPlanParse ParseGeoJsonFloorPlan(std::string_view text, std::string id) {
   for (size_t i = 0; i < rooms.size(); ++i) rooms[i].name = std::move(room_names[i]);
   out = MakeFloorPlan(std::move(id), lines, std::move(rooms));
   out.frame = std::move(frame);
+  if (out.ok()) out.georeference = georeference;
   return out;
 }
 

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "core/floor_plan.h"
+
 namespace floorpose::platform {
 
 // Longitude and latitude (degrees) of `lon_lat` (in place) become x east, y north in
@@ -15,6 +17,12 @@ namespace floorpose::platform {
 // build the transformation or a point does not project.
 bool ProjectToLocalMetres(const Eigen::Vector2d& origin, std::vector<Eigen::Vector2d>* lon_lat,
                           std::string* error);
+
+// The inverse for a georeferenced plan: plan metres (in place) become longitude, latitude
+// (degrees) through the plan's rotation and the projection about its origin. False with a
+// message when PROJ cannot.
+bool PlanToLonLat(const Georeference& georeference, std::vector<Eigen::Vector2d>* points,
+                  std::string* error);
 
 // Whether coordinates with this bounding box can be longitude/latitude of one building:
 // longitudes within +-180, latitudes within +-90 and the whole box under 0.1 degrees

@@ -19,10 +19,12 @@ packages=(build-essential cmake pkg-config clang-format
 # and its libFuzzer and sanitizer runtimes; the security tests make their CA and
 # identities with openssl (tools/make-dds-security.sh); the dashboard test (label browser)
 # drives Debian's headless Chromium through chromedriver; the package test (label package,
-# tools/check-package.sh) runs lintian and man on the .deb.
+# tools/check-package.sh) runs lintian and man on the .deb; the CoT test receives as a TAK
+# client would, with Node.js and @tak-ps/node-cot from the npm registry.
 if [ "${1:-build}" = test ]; then
   packages+=(libfastrtps-dev fastddsgen python3-protobuf clang libclang-rt-14-dev openssl
     chromium chromium-driver lintian man-db)
+  command -v npm >/dev/null || packages+=(nodejs npm)
 fi
 
 missing=()
@@ -43,6 +45,13 @@ cmake --build "$build_dir" -j"$(nproc)"
 
 cmd=${1:-build}
 shift || true
+# The TAK client library of the CoT test, into the build directory (never the repository),
+# at the version that runs on Debian's and NodeSource's Node.js 20.
+if [ "$cmd" = test ] && [ ! -f "$build_dir/npm/node_modules/@tak-ps/node-cot/package.json" ]; then
+  mkdir -p "$build_dir/npm"
+  (cd "$build_dir/npm" && npm install --no-audit --no-fund --no-save --loglevel=error \
+    @tak-ps/node-cot@13.1.0)
+fi
 case "$cmd" in
   demo) exec "$build_dir/tools/floorpose" demo "$@" ;;
   test) exec ctest --test-dir "$build_dir" --output-on-failure -j"$(nproc)" "$@" ;;

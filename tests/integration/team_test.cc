@@ -287,10 +287,10 @@ TEST_F(TeamTest, AWearerWhoStopsMovingIsInAlertUntilAcknowledgedAndMovesOn) {
 TEST_F(TeamTest, ARestartedDeviceReappearsOnTheDashboard) {
   StartDaemon();
   const fs::path log = dir_ / "dashboard.log";
-  tools::ChildProcess dashboard({FLOORPOSE_PATH, "dashboard", "--plan", plan_path_, "--host",
-                                 "127.0.0.1", "--port", "0", "--domain", std::to_string(domain_),
-                                 "--loopback", "--stale-after", "2"},
-                                log.string());
+  tools::ChildProcess dashboard(
+      {FLOORPOSE_PATH, "dashboard", "--plan", plan_path_, "--host", "127.0.0.1", "--port", "0",
+       "--domain", std::to_string(domain_), "--loopback", "--stale-after", "2"},
+      log.string());
   const int port = tools::DashboardPortFromLog(log.string(), seconds(15));
   ASSERT_GT(port, 0) << "see " << log;
   httplib::Client http("127.0.0.1", port);

@@ -278,7 +278,7 @@ TEST(DashboardPlansTest, ListsEveryPlanWithItsBoundsAndWalls) {
           "geometry": {"type": "LineString", "coordinates": [[0, 3], [4, 3]]}}]})",
       "lab");
   ASSERT_TRUE(plan.ok()) << plan.error;
-  const json plans = json::parse(PlansJson({{plan.plan, "", ""}}));
+  const json plans = json::parse(PlansJson({{plan.plan, "", "", 0.0, std::nullopt}}));
   ASSERT_EQ(plans["plans"].size(), 1u);
   EXPECT_EQ(plans["plans"][0]["id"], "lab");
   EXPECT_EQ(plans["plans"][0]["max"], json::parse("[4.0, 3.0]"));
@@ -299,7 +299,7 @@ TEST(DashboardServerTest, ServesThePageThePlansAndTheEventStreamOfWhatDdsCarries
       R"({"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {},
           "geometry": {"type": "LineString", "coordinates": [[0, 0], [4, 0]]}}]})",
       "lab");
-  Dashboard dashboard(o, {{plan.plan, "", ""}});
+  Dashboard dashboard(o, {{plan.plan, "", "", 0.0, std::nullopt}});
   std::thread server([&] { dashboard.Serve(); });
 
   platform::Participant daemon(o.domain_id, o.cyclone_config);

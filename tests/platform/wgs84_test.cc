@@ -130,6 +130,49 @@ bool InsideRings(const std::vector<std::vector<Eigen::Vector2d>>& rings, const E
   return inside;
 }
 
+TEST(Wgs84PlanTest, AWgs84PlanIsGeoreferencedAndGoesBackToLonLat) {
+  const FloorPlanParse parse = ParseGeoJsonFloorPlan(SquareGeoJson(8.67, 49.41, 100), "sq");
+  ASSERT_TRUE(parse.ok()) << parse.error;
+  ASSERT_TRUE(parse.georeference.has_value());
+  EXPECT_EQ(parse.georeference->origin_lon_lat, Eigen::Vector2d(8.67, 49.41));
+  std::vector<Eigen::Vector2d> corner = {{100, 100}};
+  std::string error;
+  ASSERT_TRUE(PlanToLonLat(*parse.georeference, &corner, &error)) << error;
+  const double phi = 49.41 * M_PI / 180;
+  EXPECT_NEAR((corner[0].y() - 49.41) * M_PI / 180 * MeridianRadius(phi), 100.0, 0.01);
+  EXPECT_NEAR((corner[0].x() - 8.67) * M_PI / 180 * PrimeVerticalRadius(phi) * std::cos(phi), 100.0,
+              0.01);
+}
+
+TEST(Wgs84PlanTest, ALocalPlanIsGeoreferencedByItsProperties) {
+  // The plan's +x points north (90 degrees counter-clockwise from east).
+  const FloorPlanParse parse = ParseGeoJsonFloorPlan(
+      R"({"type": "FeatureCollection", "properties": {"georeference":
+          {"origin": [-122.3, 47.6], "rotation_deg": 90}}, "features": [
+        {"type": "Feature", "properties": {}, "geometry": {"type": "LineString",
+         "coordinates": [[0, 0], [20, 0]]}}]})",
+      "local");
+  ASSERT_TRUE(parse.ok()) << parse.error;
+  EXPECT_TRUE(parse.frame.empty()) << "coordinates read as written";
+  ASSERT_TRUE(parse.georeference.has_value());
+  std::vector<Eigen::Vector2d> points = {{0, 0}, {20, 0}};
+  std::string error;
+  ASSERT_TRUE(PlanToLonLat(*parse.georeference, &points, &error)) << error;
+  EXPECT_NEAR(points[0].x(), -122.3, 1e-12);
+  EXPECT_NEAR(points[0].y(), 47.6, 1e-12);
+  EXPECT_NEAR(points[1].x(), -122.3, 1e-9) << "due north";
+  EXPECT_NEAR((points[1].y() - 47.6) * M_PI / 180 * MeridianRadius(47.6 * M_PI / 180), 20.0, 0.001);
+  // Without one: none; a bad one: refused.
+  EXPECT_FALSE(
+      ParseGeoJsonFloorPlan(R"({"type": "LineString", "coordinates": [[0, 0], [20, 0]]})", "bare")
+          .georeference.has_value());
+  EXPECT_THAT(ParseGeoJsonFloorPlan(R"({"type": "FeatureCollection", "properties":
+                  {"georeference": {"origin": [500, 0]}}, "features": []})",
+                                    "bad")
+                  .error,
+              HasSubstr("georeference.origin"));
+}
+
 TEST(Wgs84PlanTest, IlcMallFloorF1HasItsPublishedSizeAndItsWalksInside) {
   const auto data = testing::DataDir();
   if (!data) GTEST_SKIP() << testing::kNoDataMessage;

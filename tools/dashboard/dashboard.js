@@ -112,6 +112,11 @@ function drawPlan() {
   }
   ctx.setLineDash([]);
   drawScale(p);
+  // North, when the plan is georeferenced: the screen's up is the plan's +y.
+  const north = $('#north');
+  north.hidden = plan.north_rad === undefined;
+  if (!north.hidden)
+    north.querySelector('path').setAttribute('transform', `rotate(${(90 - plan.north_rad * 180 / Math.PI).toFixed(1)})`);
   if (team) {
     ctx.fillStyle = '#1946a0';
     ctx.font = '12px system-ui, sans-serif';

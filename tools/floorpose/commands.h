@@ -20,6 +20,7 @@ Run AddEvalSuiteCommand(CLI::App& app);
 Run AddBenchCommand(CLI::App& app);
 Run AddRouteCommand(CLI::App& app);
 Run AddDashboardCommand(CLI::App& app);
+Run AddCotCommand(CLI::App& app);
 // `floorpose bench daemon` (bench_daemon.cc), a subcommand of `bench`.
 Run AddBenchDaemonCommand(CLI::App& bench);
 // `floorpose bench route` (route.cc).

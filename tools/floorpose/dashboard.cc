@@ -23,66 +23,11 @@ struct DashboardCommandOptions {
   std::string security_dir;
   std::string identity = "dashboard";
   std::string state_dir;
+  std::string cot_to;  // empty: no CoT
+  CotOptions cot;
   DashboardServerOptions server;
   DdsOptions dds;
 };
-
-// A plan file, or every floor of a .floors set; false (logged) when it does not load.
-bool LoadDrawn(const std::string& path, std::vector<DashboardPlan>* plans) {
-  if (!platform::IsFloorSet(path)) {
-    FloorPlanParse parse = platform::LoadFloorPlan(path);
-    if (!parse.ok()) {
-      spdlog::error("{}: {}", path, parse.error);
-      return false;
-    }
-    spdlog::info("plan '{}': {} walls from {}", parse.plan.id, parse.plan.segments.size(), path);
-    plans->push_back({std::move(parse.plan), "", ""});
-    return true;
-  }
-  const platform::FloorSet set = platform::LoadFloorSet(path);
-  if (!set.ok()) {
-    spdlog::error("{}", set.error);
-    return false;
-  }
-  const std::string name = std::filesystem::path(path).stem().string();
-  std::vector<DashboardPlan> floors;
-  for (const platform::FloorEntry& f : set.floors) {
-    FloorPlanParse parse = platform::LoadFloorPlan(f.plan_path);
-    if (!parse.ok()) {
-      spdlog::error("{}: floor {}: {}", path, f.id, parse.error);
-      return false;
-    }
-    floors.push_back({std::move(parse.plan), name, f.id});
-  }
-  spdlog::info("plan set '{}': {} floors from {}", name, floors.size(), path);
-  for (DashboardPlan& f : floors) plans->push_back(std::move(f));
-  return true;
-}
-
-// The plans to draw: one file, or every plan of a directory (as the daemon's plan_dir).
-bool LoadPlans(const DashboardCommandOptions& o, std::vector<DashboardPlan>* plans) {
-  std::vector<std::string> paths;
-  if (!o.plan.empty()) paths.push_back(o.plan);
-  if (!o.plans_dir.empty()) {
-    const std::vector<std::string> ids = platform::ListPlanIds(o.plans_dir);
-    if (ids.empty()) {
-      spdlog::error("--plans {}: no floor plans there", o.plans_dir);
-      return false;
-    }
-    for (const std::string& id : ids) {
-      std::string path, error;
-      if (platform::FindPlanFile(o.plans_dir, id, &path, &error)) paths.push_back(path);
-    }
-  }
-  for (const std::string& path : paths)
-    if (!LoadDrawn(path, plans) && !o.plan.empty()) return false;  // the one plan asked for
-  // (one bad file of a directory: the others still show)
-  if (plans->empty())
-    spdlog::warn(
-        "no floor plan to draw: wearers are listed, not shown on a map "
-        "(give --plan or --plans)");
-  return true;
-}
 
 int RunDashboard(DashboardCommandOptions o) {
   for (const std::string& n : o.names) {
@@ -98,7 +43,7 @@ int RunDashboard(DashboardCommandOptions o) {
     return 2;
   }
   std::vector<DashboardPlan> plans;
-  if (!LoadPlans(o, &plans)) return 1;
+  if (!LoadDashboardPlans(o.plan, o.plans_dir, &plans)) return 1;
   if (o.state_dir.empty())
     if (const char* systemd_dir = std::getenv("STATE_DIRECTORY"))
       o.state_dir = std::string(systemd_dir).substr(0, std::string(systemd_dir).find(':'));
@@ -106,6 +51,11 @@ int RunDashboard(DashboardCommandOptions o) {
     std::error_code ec;
     std::filesystem::create_directories(o.state_dir, ec);
     o.server.markers_path = (std::filesystem::path(o.state_dir) / "markers.pb").string();
+  }
+  if (!o.cot_to.empty()) {
+    o.cot.to = o.cot_to;
+    o.cot.names = o.server.dashboard.names;
+    o.server.cot = o.cot;
   }
   o.server.domain_id = o.dds.domain_id;
   o.server.cyclone_config = o.dds.Config();
@@ -162,6 +112,13 @@ Run AddDashboardCommand(CLI::App& app) {
                  "$STATE_DIRECTORY, else not kept)");
   app.add_option("--lead", o->server.name,
                  "who places markers and acknowledges alerts from this dashboard")
+      ->capture_default_str();
+  app.add_option("--cot", o->cot_to,
+                 "also send the wearers and markers of georeferenced plans as Cursor-on-Target "
+                 "to udp://239.2.3.1:6969 (TAK's default) or tcp://HOST:PORT (docs/cot.md)");
+  app.add_option("--cot-interface", o->cot.interface, "send CoT multicast out of this address");
+  app.add_option("--ground-hae", o->cot.ground_hae_m,
+                 "height of the plans' zero above the WGS84 ellipsoid, metres (CoT's hae)")
       ->capture_default_str();
   o->dds.Add(app);
   return [o] { return RunDashboard(*o); };

@@ -34,6 +34,8 @@ int main(int argc, char** argv) {
       floorpose::tools::AddRouteCommand);
   add("dashboard", "serve a live map of every wearer to browsers on the local network",
       floorpose::tools::AddDashboardCommand);
+  add("cot", "send every wearer and marker to ATAK / TAK as Cursor-on-Target",
+      floorpose::tools::AddCotCommand);
   add("bench", "time the registration methods and the closest-wall index",
       floorpose::tools::AddBenchCommand);
   CLI11_PARSE(app, argc, argv);

@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
@@ -15,6 +16,7 @@
 #include "platform/clock.h"
 #include "platform/dds.h"
 #include "platform/explored_codec.h"
+#include "platform/floor_plan_io.h"
 
 namespace floorpose::tools {
 
@@ -385,6 +387,78 @@ size_t DashboardState::devices() const {
   return devices_.size();
 }
 
+namespace {
+
+// A plan file, or every floor of a .floors set; false (logged) when it does not load.
+bool LoadDrawn(const std::string& path, std::vector<DashboardPlan>* plans) {
+  if (!platform::IsFloorSet(path)) {
+    FloorPlanParse parse = platform::LoadFloorPlan(path);
+    if (!parse.ok()) {
+      spdlog::error("{}: {}", path, parse.error);
+      return false;
+    }
+    spdlog::info("plan '{}': {} walls from {}{}", parse.plan.id, parse.plan.segments.size(), path,
+                 parse.georeference ? ", georeferenced" : "");
+    plans->push_back({std::move(parse.plan), "", "", 0.0, parse.georeference});
+    return true;
+  }
+  const platform::FloorSet set = platform::LoadFloorSet(path);
+  if (!set.ok()) {
+    spdlog::error("{}", set.error);
+    return false;
+  }
+  const std::string name = std::filesystem::path(path).stem().string();
+  std::vector<DashboardPlan> floors;
+  std::optional<Georeference> shared;
+  for (const platform::FloorEntry& f : set.floors) {
+    FloorPlanParse parse = platform::LoadFloorPlan(f.plan_path);
+    if (!parse.ok()) {
+      spdlog::error("{}: floor {}: {}", path, f.id, parse.error);
+      return false;
+    }
+    if (!shared) shared = parse.georeference;
+    floors.push_back({std::move(parse.plan), name, f.id, f.height_m, parse.georeference});
+  }
+  for (DashboardPlan& f : floors)
+    if (!f.georeference) f.georeference = shared;  // one building, one frame
+  spdlog::info("plan set '{}': {} floors from {}{}", name, floors.size(), path,
+               shared ? ", georeferenced" : "");
+  for (DashboardPlan& f : floors) plans->push_back(std::move(f));
+  return true;
+}
+
+}  // namespace
+
+bool LoadDashboardPlans(const std::string& plan, const std::string& plans_dir,
+                        std::vector<DashboardPlan>* plans) {
+  std::vector<std::string> paths;
+  if (!plan.empty()) paths.push_back(plan);
+  if (!plans_dir.empty()) {
+    const std::vector<std::string> ids = platform::ListPlanIds(plans_dir);
+    if (ids.empty()) {
+      spdlog::error("--plans {}: no floor plans there", plans_dir);
+      return false;
+    }
+    for (const std::string& id : ids) {
+      std::string path, error;
+      if (platform::FindPlanFile(plans_dir, id, &path, &error)) paths.push_back(path);
+    }
+  }
+  for (const std::string& path : paths)
+    if (!LoadDrawn(path, plans) && path == plan) return false;  // the one plan asked for
+  // (one bad file of a directory: the others still show)
+  if (plans->empty())
+    spdlog::warn("no floor plan: wearers are listed, not placed (give --plan or --plans)");
+  return true;
+}
+
+std::vector<CotPlan> CotPlansOf(const std::vector<DashboardPlan>& plans) {
+  std::vector<CotPlan> out;
+  for (const DashboardPlan& p : plans)
+    if (p.georeference) out.push_back({p.plan.id, *p.georeference, p.height_m});
+  return out;
+}
+
 std::string PlansJson(const std::vector<DashboardPlan>& plans) {
   json out = {{"plans", json::array()}};
   for (const DashboardPlan& drawn : plans) {
@@ -411,6 +485,10 @@ std::string PlansJson(const std::vector<DashboardPlan>& plans) {
                             {"lines", std::move(lines)},
                             {"set", drawn.set},
                             {"floor", drawn.floor}});
+    // North on the plan, counter-clockwise from its +x, when the plan says where it lies.
+    if (drawn.georeference)
+      out["plans"].back()["north_rad"] =
+          std::round((M_PI / 2 - drawn.georeference->rotation_rad) * 1e4) / 1e4;
   }
   return out.dump(-1, ' ', false, json::error_handler_t::replace);
 }
@@ -434,6 +512,7 @@ struct Dashboard::Impl {
   std::mutex reply_mu;
   std::condition_variable reply_cv;
   std::map<std::pair<std::string, uint64_t>, std::optional<v1::CommandReply>> replies;
+  std::unique_ptr<CotBridge> cot;  // DDS thread only
 
   void ReadDds(DashboardState& state);
   void PublishMarker(const v1::Marker& marker);
@@ -513,6 +592,7 @@ void Dashboard::Impl::ReadDds(DashboardState& state) {
           case Topic::kPlanPose: {
             v1::PlanPose m;
             if ((ok = m.ParseFromString(e.payload))) state.OnPlanPose(e.device_id, m, now);
+            if (ok && cot) cot->OnPlanPose(e.device_id, m);
             break;
           }
           case Topic::kPlanTrack: {
@@ -528,6 +608,7 @@ void Dashboard::Impl::ReadDds(DashboardState& state) {
           case Topic::kStatus: {
             v1::DaemonStatus m;
             if ((ok = m.ParseFromString(e.payload))) state.OnStatus(e.device_id, m, now);
+            if (ok && cot) cot->OnStatus(e.device_id, m);
             break;
           }
           case Topic::kExplored: {
@@ -549,7 +630,10 @@ void Dashboard::Impl::ReadDds(DashboardState& state) {
             v1::Marker m;
             ok = m.ParseFromString(e.payload);
             why.clear();
-            if (ok && state.OnMarker(m, &why)) PublishMarker(m);  // held for later joiners
+            if (ok && state.OnMarker(m, &why)) {
+              PublishMarker(m);  // held for later joiners
+              if (cot) cot->OnMarker(m);
+            }
             ok = ok && why.empty();
             break;
           }
@@ -575,6 +659,15 @@ Dashboard::Dashboard(DashboardServerOptions options, std::vector<DashboardPlan> 
   Impl& m = *impl_;
   m.options = std::move(options);
   m.plans_json = PlansJson(plans);
+  if (m.options.cot) {
+    const std::vector<CotPlan> placed = CotPlansOf(plans);
+    if (placed.empty())
+      spdlog::warn("CoT: no plan is georeferenced, so no wearer can be sent (docs/cot.md)");
+    m.cot = std::make_unique<CotBridge>(placed, *m.options.cot);
+    std::string error;
+    if (!m.cot->Open(&error)) throw std::runtime_error(error);
+    spdlog::info("CoT to {} for {} georeferenced plans", m.options.cot->to, placed.size());
+  }
   m.participant =
       std::make_unique<platform::Participant>(m.options.domain_id, m.options.cyclone_config,
                                               m.options.security ? &*m.options.security : nullptr);

@@ -21,6 +21,7 @@
 #include "floorpose/v1/floorpose.pb.h"
 #include "platform/dds.h"
 #include "platform/team.h"
+#include "tools/lib/cot.h"
 
 namespace floorpose::tools {
 
@@ -123,9 +124,19 @@ class DashboardState {
 // A plan the dashboard draws: a plan file, or one floor of a .floors set.
 struct DashboardPlan {
   FloorPlan plan;
-  std::string set;    // the .floors set's name (its file name without extension), or empty
-  std::string floor;  // the floor's id in its set, or empty
+  std::string set;      // the .floors set's name (its file name without extension), or empty
+  std::string floor;    // the floor's id in its set, or empty
+  double height_m = 0;  // of that floor, above the set's zero
+  std::optional<Georeference> georeference;  // where it lies on the Earth, when it says
 };
+// The plans of `plan` (a plan file or a .floors set: every floor) and of every plan of
+// `plans_dir`, as the daemon's plan_dir. A file that does not load is logged; false when
+// it was `plan` (the one asked for) or `plans_dir` has none. The floors of a set share the
+// georeference of the first floor that has one.
+bool LoadDashboardPlans(const std::string& plan, const std::string& plans_dir,
+                        std::vector<DashboardPlan>* plans);
+// The georeferenced ones, for Cursor-on-Target.
+std::vector<CotPlan> CotPlansOf(const std::vector<DashboardPlan>& plans);
 // The plans a dashboard draws, as JSON (docs/dashboard.md, GET /api/plans).
 std::string PlansJson(const std::vector<DashboardPlan>& plans);
 
@@ -136,8 +147,9 @@ struct DashboardServerOptions {
   int port = 8080;                                // 0: any free port
   std::optional<platform::DdsSecurity> security;  // join a secured domain with this identity
   DashboardOptions dashboard;
-  std::string markers_path;   // where markers are kept across restarts; empty: not kept
-  std::string name = "lead";  // who places markers and acknowledges alerts here
+  std::string markers_path;       // where markers are kept across restarts; empty: not kept
+  std::string name = "lead";      // who places markers and acknowledges alerts here
+  std::optional<CotOptions> cot;  // also send every wearer and marker as Cursor-on-Target
 };
 
 class Dashboard {
