@@ -356,5 +356,117 @@ TEST(DashboardServerTest, ServesThePageThePlansAndTheEventStreamOfWhatDdsCarries
   server.join();
 }
 
+// What a lead does over HTTP goes out on DDS: markers (keyed by their id), their removal,
+// and acknowledgements as commands to the wearer's daemon; a room searched is drawn.
+TEST(DashboardServerTest, TheLeadsMarkersAndAcknowledgementsGoOutOnDds) {
+  DashboardServerOptions o;
+  o.domain_id = testing::UniqueDomain();
+  o.cyclone_config = platform::LoopbackCycloneConfig();
+  o.host = "127.0.0.1";
+  o.port = 0;
+  o.name = "chief";
+  // Two rooms of 3 m x 4 m with a 0.9 m door between them.
+  const FloorPlanParse plan = platform::ParseGeoJsonFloorPlan(
+      R"({"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {}, "geometry": {"type": "Polygon",
+         "coordinates": [[[0, 0], [6, 0], [6, 4], [0, 4], [0, 0]]]}},
+        {"type": "Feature", "properties": {}, "geometry": {"type": "MultiLineString",
+         "coordinates": [[[3, 0], [3, 1.5]], [[3, 2.4], [3, 4]]]}}]})",
+      "two");
+  ASSERT_TRUE(plan.ok()) << plan.error;
+  Dashboard dashboard(o, {{plan.plan, "", "", 0.0, std::nullopt}});
+  std::thread server([&] { dashboard.Serve(); });
+  platform::Participant peer(o.domain_id, o.cyclone_config);
+  platform::Reader markers(peer, platform::Topic::kMarker);
+  platform::Reader commands(peer, platform::Topic::kCommand);
+  const auto deadline = Clock::now() + seconds(10);
+  while ((markers.MatchedWriters() == 0 || commands.MatchedWriters() == 0) &&
+         Clock::now() < deadline)
+    std::this_thread::sleep_for(milliseconds(20));
+  ASSERT_GT(markers.MatchedWriters(), 0);
+  // Takes what the peer heard on one topic, waiting for at least n samples.
+  auto take = [&](platform::Reader& reader, size_t n) {
+    std::vector<platform::Envelope> got;
+    for (int i = 0; i < 200 && got.size() < n; ++i) {
+      for (auto& e : reader.Take()) got.push_back(std::move(e));
+      std::this_thread::sleep_for(milliseconds(20));
+    }
+    return got;
+  };
+
+  httplib::Client http("127.0.0.1", dashboard.port());
+  EXPECT_EQ(http.Get("/api/searched/two.png")->status, 404) << "nothing searched yet";
+  for (const char* bad :
+       {"not json", R"({"kind": "dragon", "x": 1, "y": 1})",
+        R"({"kind": "hazard", "x": "one", "y": 1})", R"({"id": "nobody", "removed": true})"}) {
+    auto r = http.Post("/api/markers", bad, "application/json");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 400) << bad;
+    EXPECT_TRUE(json::parse(r->body).contains("error")) << r->body;
+  }
+  auto placed = http.Post("/api/markers",
+                          R"({"kind": "searched", "plan": "two", "floor": "0", "x": 1, "y": 1})",
+                          "application/json");
+  ASSERT_TRUE(placed);
+  ASSERT_EQ(placed->status, 200) << placed->body;
+  const std::string id = json::parse(placed->body)["id"];
+  EXPECT_EQ(id.rfind("chief-", 0), 0u) << id;
+  std::vector<platform::Envelope> heard = take(markers, 1);
+  ASSERT_GE(heard.size(), 1u);
+  EXPECT_EQ(heard[0].device_id, id) << "keyed by the marker's id";
+  v1::Marker m;
+  ASSERT_TRUE(m.ParseFromString(heard[0].payload));
+  EXPECT_EQ(m.kind(), v1::Marker::SEARCHED);
+  EXPECT_EQ(m.author(), "chief");
+  EXPECT_EQ(m.revision(), 1u);
+
+  // The west room is drawn searched: its cells green, the east room's not.
+  auto png = http.Get("/api/searched/two.png");
+  ASSERT_TRUE(png);
+  ASSERT_EQ(png->status, 200);
+  EXPECT_EQ(png->body.substr(1, 3), "PNG");
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  ASSERT_TRUE(png_image_begin_read_from_memory(&image, png->body.data(), png->body.size()));
+  image.format = PNG_FORMAT_RGBA;
+  std::vector<unsigned char> rgba(PNG_IMAGE_SIZE(image));
+  ASSERT_TRUE(png_image_finish_read(&image, nullptr, rgba.data(), 0, nullptr));
+  const json grid = json::parse(http.Get("/api/plans")->body)["plans"][0]["rooms_grid"];
+  auto alpha = [&](double x, double y) {  // the PNG is north up
+    const int cx =
+        static_cast<int>((x - grid["origin"][0].get<double>()) / grid["cell_m"].get<double>());
+    const int cy =
+        static_cast<int>((y - grid["origin"][1].get<double>()) / grid["cell_m"].get<double>());
+    return rgba[(static_cast<size_t>(image.height - 1 - cy) * image.width + cx) * 4 + 3];
+  };
+  EXPECT_GT(alpha(1.5, 2.0), 0) << "the west room";
+  EXPECT_EQ(alpha(4.5, 2.0), 0) << "the east room";
+
+  auto removed =
+      http.Post("/api/markers", json{{"id", id}, {"removed", true}}.dump(), "application/json");
+  ASSERT_TRUE(removed);
+  EXPECT_EQ(removed->status, 200) << removed->body;
+  heard = take(markers, 1);
+  ASSERT_GE(heard.size(), 1u);
+  ASSERT_TRUE(m.ParseFromString(heard.back().payload));
+  EXPECT_TRUE(m.removed());
+  EXPECT_EQ(m.revision(), 2u);
+  EXPECT_EQ(http.Get("/api/searched/two.png")->status, 404);
+
+  auto ack = http.Post("/api/alerts/ack", R"({"device": "hl-07"})", "application/json");
+  ASSERT_TRUE(ack);
+  EXPECT_EQ(ack->status, 202);
+  heard = take(commands, 1);
+  ASSERT_EQ(heard.size(), 1u);
+  EXPECT_EQ(heard[0].device_id, "hl-07") << "to the wearer's daemon";
+  v1::Command cmd;
+  ASSERT_TRUE(cmd.ParseFromString(heard[0].payload));
+  EXPECT_EQ(cmd.acknowledge_alert().by(), "chief");
+  EXPECT_EQ(http.Post("/api/alerts/ack", "{}", "application/json")->status, 400);
+
+  dashboard.Stop();
+  server.join();
+}
+
 }  // namespace
 }  // namespace floorpose::tools

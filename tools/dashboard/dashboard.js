@@ -8,6 +8,8 @@ const SVG = 'http://www.w3.org/2000/svg';
 
 const plans = new Map();   // id -> {id, min, max, walls, lines, set, floor}
 const markers = new Map(); // id -> {id, kind, plan, floor, x, y, radius_m, text, author}
+const searched = new Map(); // plan id -> Image of its rooms searched
+let markersVersion = 0;
 // The lead's zoom and pan over the fitted plan: screen = centre + zoom * (fitted - centre)
 // + pan, per plan on screen; reset by "fit".
 const view = {zoom: 1, panX: 0, panY: 0};
@@ -83,6 +85,14 @@ function drawPlan() {
     ctx.imageSmoothingEnabled = false;
     ctx.drawImage(team.image, p.px(e.origin[0]), p.py(e.origin[1] + e.height * e.cell_m),
                   e.width * size, e.height * size);
+  }
+  // The rooms marked searched, green, on the plan's room grid.
+  const done = searched.get(planId);
+  if (done && done.complete && done.naturalWidth && plan.rooms_grid) {
+    const g = plan.rooms_grid, size = p.s * g.cell_m;
+    ctx.imageSmoothingEnabled = false;
+    ctx.drawImage(done, p.px(g.origin[0]), p.py(g.origin[1] + g.height * g.cell_m),
+                  g.width * size, g.height * size);
   }
   ctx.strokeStyle = getComputedStyle(document.documentElement).getPropertyValue('--wall');
   ctx.lineWidth = Math.max(1.5, Math.min(4, p.s * 0.08));
@@ -424,6 +434,17 @@ function apply(frame) {
   if (frame.markers) {
     markers.clear();
     for (const m of frame.markers) markers.set(m.id, m);
+    // The searched rooms of every plan with a searched marker, again.
+    ++markersVersion;
+    searched.clear();
+    for (const id of new Set(frame.markers.filter((m) => m.kind === 'searched' && !m.removed)
+                                       .map((m) => m.plan))) {
+      const image = new Image();
+      image.onload = () => { if (id === planId) drawPlan(); };
+      image.src = `/api/searched/${encodeURIComponent(id)}.png?v=${markersVersion}`;
+      searched.set(id, image);
+    }
+    drawPlan();
   }
   const stale = new Set(frame.stale);
   for (const [id, d] of devices) {

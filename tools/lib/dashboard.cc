@@ -13,6 +13,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "core/rooms.h"
 #include "platform/clock.h"
 #include "platform/dds.h"
 #include "platform/explored_codec.h"
@@ -256,12 +257,20 @@ std::string DashboardState::ExploredPng(const std::string& plan_id) const {
       px[3] = static_cast<unsigned char>(60 + 120 * strength);
     }
   }
+  const std::string png = EncodePngBottomUp(g.width(), g.height(), rgba);
+  if (png.empty()) spdlog::warn("explored map of plan '{}' not encoded", plan_id);
+  png_cache_[plan_id] = {explored_version_, png};
+  return png;
+}
+
+std::string EncodePngBottomUp(uint32_t width, uint32_t height,
+                              const std::vector<unsigned char>& rgba) {
   png_image image{};
   image.version = PNG_IMAGE_VERSION;
-  image.width = g.width();
-  image.height = g.height();
+  image.width = width;
+  image.height = height;
   image.format = PNG_FORMAT_RGBA;
-  const auto stride = -static_cast<png_int_32>(g.width() * 4);  // bottom-up: north up
+  const auto stride = -static_cast<png_int_32>(width * 4);  // bottom-up: north up
   png_alloc_size_t size = 0;
   std::string png;
   if (png_image_write_to_memory(&image, nullptr, &size, 0, rgba.data(), stride, nullptr)) {
@@ -270,9 +279,16 @@ std::string DashboardState::ExploredPng(const std::string& plan_id) const {
       png.clear();
     png.resize(size);
   }
-  if (png.empty()) spdlog::warn("explored map of plan '{}': {}", plan_id, image.message);
-  png_cache_[plan_id] = {explored_version_, png};
   return png;
+}
+
+std::vector<Eigen::Vector2d> DashboardState::SearchedOn(const std::string& plan_id) const {
+  std::lock_guard lock(mu_);
+  std::vector<Eigen::Vector2d> out;
+  for (const auto& [id, m] : markers_.markers())
+    if (!m.removed() && m.kind() == v1::Marker::SEARCHED && m.plan_id() == plan_id)
+      out.emplace_back(m.x(), m.y());
+  return out;
 }
 
 std::string DashboardState::Frame(Cursor* cursor, Clock::time_point now) const {
@@ -459,7 +475,8 @@ std::vector<CotPlan> CotPlansOf(const std::vector<DashboardPlan>& plans) {
   return out;
 }
 
-std::string PlansJson(const std::vector<DashboardPlan>& plans) {
+std::string PlansJson(const std::vector<DashboardPlan>& plans,
+                      const std::map<std::string, std::unique_ptr<RoomMap>>& rooms) {
   json out = {{"plans", json::array()}};
   for (const DashboardPlan& drawn : plans) {
     const FloorPlan& plan = drawn.plan;
@@ -485,6 +502,13 @@ std::string PlansJson(const std::vector<DashboardPlan>& plans) {
                             {"lines", std::move(lines)},
                             {"set", drawn.set},
                             {"floor", drawn.floor}});
+    if (auto r = rooms.find(plan.id); r != rooms.end()) {
+      const GridGeometry& g = r->second->grid();
+      out["plans"].back()["rooms_grid"] = {{"origin", {Mm(g.origin.x()), Mm(g.origin.y())}},
+                                           {"cell_m", g.cell_m},
+                                           {"width", g.nx},
+                                           {"height", g.ny}};
+    }
     // North on the plan, counter-clockwise from its +x, when the plan says where it lies.
     if (drawn.georeference)
       out["plans"].back()["north_rad"] =
@@ -513,6 +537,8 @@ struct Dashboard::Impl {
   std::condition_variable reply_cv;
   std::map<std::pair<std::string, uint64_t>, std::optional<v1::CommandReply>> replies;
   std::unique_ptr<CotBridge> cot;  // DDS thread only
+  // Each plan's rooms, to draw a room searched as searched (GET /api/searched/PLAN.png).
+  std::map<std::string, std::unique_ptr<RoomMap>> rooms;
 
   void ReadDds(DashboardState& state);
   void PublishMarker(const v1::Marker& marker);
@@ -658,7 +684,8 @@ Dashboard::Dashboard(DashboardServerOptions options, std::vector<DashboardPlan> 
     : impl_(std::make_unique<Impl>()), state_(std::make_unique<DashboardState>(options.dashboard)) {
   Impl& m = *impl_;
   m.options = std::move(options);
-  m.plans_json = PlansJson(plans);
+  for (const DashboardPlan& p : plans) m.rooms[p.plan.id] = std::make_unique<RoomMap>(p.plan);
+  m.plans_json = PlansJson(plans, m.rooms);
   if (m.options.cot) {
     const std::vector<CotPlan> placed = CotPlansOf(plans);
     if (placed.empty())
@@ -715,6 +742,34 @@ Dashboard::Dashboard(DashboardServerOptions options, std::vector<DashboardPlan> 
                res.set_header("Cache-Control", "no-cache");
                res.set_content(png, "image/png");
              });
+  // The rooms that hold a SEARCHED marker, green, one pixel a cell of the plan's room grid.
+  m.http.Get(
+      R"(/api/searched/([^/]+)\.png)", [this](const httplib::Request& req, httplib::Response& res) {
+        auto rooms = impl_->rooms.find(req.matches[1]);
+        std::vector<int> searched;
+        if (rooms != impl_->rooms.end())
+          for (const Eigen::Vector2d& p : state_->SearchedOn(req.matches[1]))
+            if (const int room = rooms->second->RoomAt(p); room >= 0) searched.push_back(room);
+        if (searched.empty()) {
+          res.status = 404;
+          res.set_content("no room of that plan searched yet\n", "text/plain");
+          return;
+        }
+        const RoomMap& map = *rooms->second;
+        const GridGeometry& g = map.grid();
+        std::vector<unsigned char> rgba(g.size() * 4, 0);
+        for (int cell = 0; cell < static_cast<int>(g.size()); ++cell) {
+          const int room = map.RoomAt(g.CellCentre(cell));
+          if (room < 0 || std::find(searched.begin(), searched.end(), room) == searched.end())
+            continue;
+          unsigned char* px = &rgba[static_cast<size_t>(cell) * 4];
+          px[0] = 0, px[1] = 158, px[2] = 115, px[3] = 70;  // Okabe-Ito green
+        }
+        res.set_header("Cache-Control", "no-cache");
+        res.set_content(
+            EncodePngBottomUp(static_cast<uint32_t>(g.nx), static_cast<uint32_t>(g.ny), rgba),
+            "image/png");
+      });
   m.http.Get("/api/devices", [this](const httplib::Request&, httplib::Response& res) {
     DashboardState::Cursor fresh;
     res.set_content(state_->Frame(&fresh, Clock::now()), "application/json");

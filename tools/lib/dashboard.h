@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/floor_plan.h"
+#include "core/rooms.h"
 #include "floorpose/v1/floorpose.pb.h"
 #include "platform/dds.h"
 #include "platform/team.h"
@@ -53,6 +54,8 @@ class DashboardState {
   bool OnMarker(const v1::Marker& marker, std::string* why);
   // The marker of that id, if any.
   std::optional<v1::Marker> MarkerById(const std::string& id) const;
+  // Where the SEARCHED markers of a plan are (not removed), plan metres.
+  std::vector<Eigen::Vector2d> SearchedOn(const std::string& plan_id) const;
   // Saves the markers to `path` when they changed since the last save.
   void SaveMarkers(const std::string& path);
   // A device's explored map; false (and kept out) when its cells do not unpack.
@@ -137,8 +140,15 @@ bool LoadDashboardPlans(const std::string& plan, const std::string& plans_dir,
                         std::vector<DashboardPlan>* plans);
 // The georeferenced ones, for Cursor-on-Target.
 std::vector<CotPlan> CotPlansOf(const std::vector<DashboardPlan>& plans);
+// An RGBA image (rows from the bottom up, as plan grids run) as PNG, north up; empty when
+// libpng fails.
+std::string EncodePngBottomUp(uint32_t width, uint32_t height,
+                              const std::vector<unsigned char>& rgba);
+
 // The plans a dashboard draws, as JSON (docs/dashboard.md, GET /api/plans).
-std::string PlansJson(const std::vector<DashboardPlan>& plans);
+// With `rooms`, each plan's room grid (where GET /api/searched/PLAN.png lies).
+std::string PlansJson(const std::vector<DashboardPlan>& plans,
+                      const std::map<std::string, std::unique_ptr<RoomMap>>& rooms = {});
 
 struct DashboardServerOptions {
   uint32_t domain_id = 0;
