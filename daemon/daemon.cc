@@ -96,13 +96,13 @@ bool Daemon::Start(std::string* error) {
     snapshot_thread_ = std::thread([this] { SnapshotLoop(); });
     markers_path_ = (std::filesystem::path(state_dir) / "markers.pb").string();
     std::string markers_error;
-    if (!engine_->markers().Load(markers_path_, &markers_error))
+    if (!engine_->crew().markers().Load(markers_path_, &markers_error))
       spdlog::warn("markers {} not read: {}", markers_path_, markers_error);
-    saved_markers_ = engine_->markers().revision();
-    if (!engine_->markers().markers().empty())
-      spdlog::info("{} markers from {}", engine_->markers().markers().size(), markers_path_);
+    saved_markers_ = engine_->crew().markers().revision();
+    if (!engine_->crew().markers().markers().empty())
+      spdlog::info("{} markers from {}", engine_->crew().markers().markers().size(), markers_path_);
   }
-  engine_->PublishMarkers();
+  engine_->crew().PublishMarkers();
   engine_->PublishStatus(plan_error.empty() ? "started" : plan_error);
   running_ = true;
   io_heartbeat_ns_ = platform::MonotonicNs();
@@ -306,10 +306,10 @@ void Daemon::Publish(Topic topic, const google::protobuf::Message& msg) {
 }
 
 void Daemon::SaveMarkers() {
-  const uint64_t revision = engine_->markers().revision();
+  const uint64_t revision = engine_->crew().markers().revision();
   if (markers_path_.empty() || revision == saved_markers_) return;
   std::string error;
-  if (!engine_->markers().Save(markers_path_, &error))
+  if (!engine_->crew().markers().Save(markers_path_, &error))
     spdlog::warn("markers not saved to {}: {}", markers_path_, error);
   saved_markers_ = revision;
 }

@@ -27,8 +27,10 @@ Engine::Engine(v1::FloorposedConfig config, Publish publish, std::function<int64
       floor_(config_.floor()),
       clock_({static_cast<int64_t>(config_.limits().max_future_s() * 1e9),
               static_cast<int64_t>(config_.limits().restart_gap_s() * 1e9)}),
-      alarm_({config_.alerts().motion_m(), config_.alerts().pre_alert_s(),
-              config_.alerts().no_motion_s()}) {}
+      crew_(config_.dds().device_id(),
+            {config_.alerts().motion_m(), config_.alerts().pre_alert_s(),
+             config_.alerts().no_motion_s()},
+            publish_) {}
 
 std::string Engine::Start() {
   if (config_.plan_path().empty()) return {};
@@ -452,7 +454,7 @@ void Engine::OnHeadsetPose(const Envelope& e) {
   counters_.set_plan_poses_out(counters_.plan_poses_out() + 1);
   if (pose.stamp_ns != *last_pose_stamp_ns_) return;  // a late pose: not where the wearer is
   last_plan_pose_ = out;
-  WatchWearer(pose);
+  crew_.Watch(pose.stamp_ns, pose.pose_slam, floor_, out);
   if (plan_.explored) {
     if (out.reliability().flag() == v1::Reliability::RELIABLE && out.alignment_version() > 0)
       plan_.explored->AddVisit({out.x(), out.y()});
@@ -591,8 +593,7 @@ void Engine::OnCommand(const Envelope& e) {
         tracker_.Reset();
         store_.Clear();
         clock_.Reset();
-        crumbs_.Clear();
-        alarm_.Reset();
+        crew_.Reset();
         done = "reset: alignment, wall store, way back and the headset's clock cleared";
         break;
       case v1::Command::kGetState:
@@ -616,19 +617,16 @@ void Engine::OnCommand(const Envelope& e) {
         if (error.empty()) {
           done = fmt::format("marker {} placed at ({:.2f}, {:.2f})", reply.marker().id(),
                              reply.marker().x(), reply.marker().y());
-          publish_(Topic::kMarker, reply.marker());
         }
         break;
       case v1::Command::kAcknowledgeAlert:
-        if (!alarm_.Acknowledge(cmd.acknowledge_alert().by().substr(0, 64))) {
+        if (!crew_.Acknowledge(cmd.acknowledge_alert().by(), last_plan_pose_))
           error = "no alert to acknowledge";
-          break;
-        }
-        done = "alert acknowledged";
-        publish_(Topic::kAlert, AlertMessage());
+        else
+          done = "alert acknowledged";
         break;
       case v1::Command::kGetTeammates:
-        for (v1::Teammate& t : roster_.Teammates(now_ns_())) *reply.add_teammates() = std::move(t);
+        for (v1::Teammate& t : crew_.Teammates(now_ns_())) *reply.add_teammates() = std::move(t);
         done = fmt::format("{} teammates", reply.teammates_size());
         break;
       case v1::Command::COMMAND_NOT_SET: break;
@@ -684,7 +682,7 @@ v1::DaemonStatus Engine::Status(const std::string& message) const {
   s.set_stamp_ns(now_ns_());
   s.set_message(message);
   *s.mutable_reliability() = ToProto(reliability());
-  *s.mutable_alert() = AlertMessage();
+  *s.mutable_alert() = crew_.AlertMessage(last_plan_pose_);
   return s;
 }
 

@@ -15,11 +15,9 @@
 #include <unordered_map>
 #include <vector>
 
-#include "core/breadcrumbs.h"
 #include "core/explored_map.h"
 #include "core/frames.h"
 #include "core/global_search.h"
-#include "core/no_motion.h"
 #include "core/registration.h"
 #include "core/rooms.h"
 #include "core/route_planner.h"
@@ -29,12 +27,12 @@
 #include "floorpose/v1/config.pb.h"
 #include "floorpose/v1/floorpose.pb.h"
 #include "platform/codec.h"
+#include "platform/crew.h"
 #include "platform/dds.h"
 #include "platform/device_clock.h"
 #include "platform/floor_follower.h"
 #include "platform/floor_plan_io.h"
 #include "platform/search_memory.h"
-#include "platform/team.h"
 
 namespace floorpose::platform {
 
@@ -117,7 +115,9 @@ class Engine {
   // What the rest of the team publishes, of every device: markers (kept, re-published
   // when new, so that they outlive their author's writer), plan poses and statuses (the
   // teammates).
-  void OnTeam(Topic topic, const Envelope& e);
+  void OnTeam(Topic topic, const Envelope& e) {
+    if (std::string why = crew_.OnTeam(topic, e, now_ns_()); !why.empty()) Warn("marker", why);
+  }
   // Samples of `topic` DDS lost or rejected before they reached us: counted and logged.
   void OnDdsLosses(Topic topic, uint64_t lost, uint64_t rejected);
 
@@ -152,12 +152,9 @@ class Engine {
   const ExploredMap* explored() const { return plan_.explored.get(); }
   // Publishes the explored map now if it changed since the last one.
   void PublishExplored();
-  // The markers this daemon holds (the daemon saves and restores them: markers.pb), and
-  // publishing every one of them (at start, for those who join later).
-  MarkerBoard& markers() { return markers_; }
-  void PublishMarkers();
-  // The wearer's no-motion alert, as published.
-  v1::Alert AlertMessage() const;
+  // The alert, the way back, the markers and the teammates. The daemon saves and restores
+  // the markers (markers.pb) and publishes them all at start, for those who join later.
+  Crew& crew() { return crew_; }
 
  private:
   // A plan file, or floor `floor` of a .floors set.
@@ -202,15 +199,12 @@ class Engine {
   bool Mine(const Envelope& e) const { return e.device_id == config_.dds().device_id(); }
   // Tracks the device with the options for its odometry from now on (ForOdometry).
   void UseOdometry(v1::HeadsetPose::Odometry odometry);
-  // Command.route: the route from the latest plan pose, or why there is none
-  // (platform/engine_team.cc, with the other commands for the team).
+  // The plan and alignment in use and the wearer's latest plan position, for the crew's
+  // routes and markers; why there are none (no plan, no position yet) in *error.
+  std::optional<Crew::OnPlan> WhereOnPlan(std::string* error) const;
+  // Command.route and Command.place_marker: the reply's part, or why not.
   std::string PlanRoute(const v1::Command::Route& request, v1::RouteReply* reply);
-  // Where the wearer entered the floor in use, on the plan; none before a crumb is kept.
-  std::optional<Eigen::Vector2d> EntryOnPlan() const;
-  // Command.place_marker: the marker at the gaze point, or why there is none.
   std::string PlaceMarker(const v1::Command::PlaceMarker& request, v1::Marker* marker);
-  // The alarm and the crumbs after a pose taken in order.
-  void WatchWearer(const DecodedPose& pose);
   // The walls of a mesh just stored, traced from the wearer into the explored map while
   // the position is RELIABLE.
   void ExploreWalls(const std::vector<WallPoint>& points);
@@ -274,10 +268,7 @@ class Engine {
   // Recent poses: slam, and as published (for PlanTrack).
   std::deque<std::pair<Pose2, v1::PlanPose>> recent_;
   SearchMemory searches_;  // the path and walls of the plan's searches
-  NoMotionAlarm alarm_;    // of the wearer's head, headset time
-  Breadcrumbs crumbs_;     // the way back, slam frame
-  MarkerBoard markers_;    // the team's markers, every plan
-  Roster roster_;          // the team's latest poses and states
+  Crew crew_;              // the alert, the way back, markers, teammates
   bool running_ = false;
 };
 

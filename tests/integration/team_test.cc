@@ -82,7 +82,9 @@ std::vector<Eigen::Vector2d> Path(const v1::RouteReply& r) {
 
 TEST_F(TeamTest, TheWayOutAndTheWayBackKeepClearOfWallsAndOfABlockedMarker) {
   UseOffice();
-  StartDaemon();
+  // Deterministic: the walk ends RELIABLE however loaded the machine is (the belief's
+  // updates are applied before the next pose, as `floorpose eval` does).
+  StartDaemon("deterministic: true\n");
   const FloorPlanParse plan = platform::LoadFloorPlan(plan_path_);
   ASSERT_TRUE(plan.ok()) << plan.error;
   const sim::DemoWalk walk = OfficeWalk(plan.plan);
@@ -174,9 +176,10 @@ TEST_F(TeamTest, TheWayOutAndTheWayBackKeepClearOfWallsAndOfABlockedMarker) {
 }
 
 TEST_F(TeamTest, TheTeammatesQueryReturnsBothWearers) {
-  StartDaemon();
+  StartDaemon("deterministic: true\n");
   // A second wearer with a daemon of its own on the same domain.
-  const std::string second_config = WriteConfig("hl-second", "", "second.conf");
+  const std::string second_config =
+      WriteConfig("hl-second", "deterministic: true\n", "second.conf");
   tools::ChildProcess second({FLOORPOSED_PATH, "--config", second_config},
                              (dir_ / "second.log").string());
   ASSERT_TRUE(second.started());
@@ -282,6 +285,54 @@ TEST_F(TeamTest, AWearerWhoStopsMovingIsInAlertUntilAcknowledgedAndMovesOn) {
   ASSERT_TRUE(again.has_value());
   EXPECT_FALSE(again->ok());
   EXPECT_EQ(again->message(), "no alert to acknowledge");
+}
+
+TEST_F(TeamTest, AMarkerOutlivesItsAuthorAndADaemonRestart) {
+  StartDaemon("state_dir: \"" + (dir_ / "state").string() + "\"\n");
+  v1::Marker m;
+  m.set_id("lead-blocked-7");
+  m.set_kind(v1::Marker::BLOCKED);
+  m.set_plan_id("room");
+  m.set_floor("0");
+  m.set_x(9.0);
+  m.set_y(1.0);
+  m.set_revision(1);
+  m.set_author("lead");
+  ASSERT_NO_FATAL_FAILURE(PlaceAsLead(m));
+  // The daemon heard it and keeps it: a copy of its own is on the topic.
+  {
+    platform::Reader markers(*lead_, Topic::kMarker);
+    size_t copies = 0;
+    ASSERT_TRUE(link_->WaitUntil(
+        [&] {
+          copies += markers.Take().size();
+          return copies >= 2;
+        },
+        seconds(10)));
+  }
+  // The lead's dashboard goes away, then the daemon restarts.
+  lead_writer_.reset();
+  lead_.reset();
+  ASSERT_EQ(daemon_->Terminate(seconds(5)), 0);
+  LaunchDaemon();
+  ASSERT_TRUE(link_->WaitForDaemon(seconds(15)));
+  // A newcomer gets the marker from the restarted daemon, the only one left holding it.
+  platform::Participant newcomer(domain_, platform::LoopbackCycloneConfig());
+  platform::Reader markers(newcomer, Topic::kMarker);
+  std::vector<platform::Envelope> heard;
+  ASSERT_TRUE(link_->WaitUntil(
+      [&] {
+        for (auto& e : markers.Take()) heard.push_back(std::move(e));
+        return !heard.empty();
+      },
+      seconds(10)))
+      << "the restarted daemon did not publish the marker; log " << log_path_;
+  EXPECT_EQ(heard[0].device_id, "lead-blocked-7");
+  v1::Marker got;
+  ASSERT_TRUE(got.ParseFromString(heard[0].payload));
+  EXPECT_EQ(got.kind(), v1::Marker::BLOCKED);
+  EXPECT_EQ(got.author(), "lead");
+  EXPECT_NE(Log().find("1 markers from"), std::string::npos) << Log();
 }
 
 TEST_F(TeamTest, ARestartedDeviceReappearsOnTheDashboard) {
