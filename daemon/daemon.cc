@@ -54,19 +54,33 @@ bool Daemon::Start(std::string* error) {
     track_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kPlanTrack);
     reply_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kCommandReply);
     explored_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kExplored);
+    waiter_ = std::make_unique<platform::Waiter>(*participant_);
+    waiter_->Attach(*mesh_reader_);
+    waiter_->Attach(*pose_reader_);
+    waiter_->Attach(*command_reader_);
+  } catch (const std::exception& e) {
+    *error = std::string("DDS: ") + e.what();
+    return false;
+  }
+  try {
+    // The team's topics. On a secured domain whose permissions predate them, the daemon
+    // still positions its wearer, without alerts, markers and teammates.
     alert_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kAlert);
     marker_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kMarker);
     marker_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kMarker);
     team_pose_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kPlanPose);
     team_status_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kStatus);
-    waiter_ = std::make_unique<platform::Waiter>(*participant_);
-    waiter_->Attach(*mesh_reader_);
-    waiter_->Attach(*pose_reader_);
-    waiter_->Attach(*command_reader_);
     waiter_->Attach(*marker_reader_);
   } catch (const std::exception& e) {
-    *error = std::string("DDS: ") + e.what();
-    return false;
+    spdlog::warn(
+        "DDS: {}: the team's topics are not granted, so no alerts, markers or teammates "
+        "(tools/make-dds-security.sh grants them)",
+        e.what());
+    alert_writer_.reset();
+    marker_writer_.reset();
+    marker_reader_.reset();
+    team_pose_reader_.reset();
+    team_status_reader_.reset();
   }
   spdlog::info("joined DDS domain {} as device '{}'{}{}", config_.dds().domain_id(),
                config_.dds().device_id(), deterministic_ ? " (deterministic)" : "",
@@ -215,7 +229,8 @@ void Daemon::IoLoop() {
     ApplyFinished(false);
     // The team: at a person's pace, a bounded take a turn is plenty.
     for (auto* reader : {marker_reader_.get(), team_pose_reader_.get(), team_status_reader_.get()})
-      for (const platform::Envelope& e : reader->Take(256)) engine_->OnTeam(reader->topic(), e);
+      if (reader)
+        for (const platform::Envelope& e : reader->Take(256)) engine_->OnTeam(reader->topic(), e);
     SaveMarkers();
     const int64_t now = platform::MonotonicNs();
     MaybeSnapshot(now, false);

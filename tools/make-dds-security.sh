@@ -6,10 +6,12 @@
 # topic, and a permissions document that grants each identity the topics of its role, in
 # the domains given:
 #
-#   daemon     subscribes mesh_delta, headset_pose, command; publishes every output
+#   daemon     subscribes mesh_delta, headset_pose, command, and the team's marker,
+#              plan_pose and status; publishes every output (marker and alert included)
 #   headset    the AR app of one device: publishes mesh_delta, headset_pose, command in
 #              that device's partition ("device/DEVICE") only; subscribes outputs
-#   dashboard  subscribes outputs only
+#   dashboard  subscribes outputs; publishes markers, and commands in the default
+#              partition (a lead's acknowledgements and route requests)
 #
 # so that only a daemon can publish plan poses, and a headset feeds only its own device's
 # daemon. For tests and trials: in the field the CA key lives offline and each device gets
@@ -65,7 +67,9 @@ fi
 not_before="$(date -u +%Y-%m-%dT%H:%M:%S)"
 not_after="$(date -u -d "+$days days" +%Y-%m-%dT%H:%M:%S)"
 inputs="<topic>floorpose/v1/mesh_delta</topic><topic>floorpose/v1/headset_pose</topic><topic>floorpose/v1/command</topic>"
-outputs="<topic>floorpose/v1/plan_pose</topic><topic>floorpose/v1/alignment</topic><topic>floorpose/v1/status</topic><topic>floorpose/v1/plan_track</topic><topic>floorpose/v1/command_reply</topic><topic>floorpose/v1/explored</topic>"
+outputs="<topic>floorpose/v1/plan_pose</topic><topic>floorpose/v1/alignment</topic><topic>floorpose/v1/status</topic><topic>floorpose/v1/plan_track</topic><topic>floorpose/v1/command_reply</topic><topic>floorpose/v1/explored</topic><topic>floorpose/v1/alert</topic><topic>floorpose/v1/marker</topic>"
+# What a daemon reads of the rest of the team (markers, teammates' poses and statuses).
+team="<topic>floorpose/v1/marker</topic><topic>floorpose/v1/plan_pose</topic><topic>floorpose/v1/status</topic>"
 grants=""
 made=()
 for spec in "${names[@]}"; do
@@ -76,10 +80,12 @@ for spec in "${names[@]}"; do
   [[ "$device" =~ ^[A-Za-z0-9._-]+$ ]] || { echo "make-dds-security: bad device '$device'" >&2; exit 2; }
   case "$role" in
     daemon) rules="<publish><topics>$outputs</topics></publish>
-        <subscribe><topics>$inputs</topics><partitions><partition>*</partition></partitions></subscribe>" ;;
+        <subscribe><topics>$inputs</topics><partitions><partition>*</partition></partitions></subscribe>
+        <subscribe><topics>$team</topics></subscribe>" ;;
     headset) rules="<publish><topics>$inputs</topics><partitions><partition>device/$device</partition></partitions></publish>
         <subscribe><topics>$outputs</topics></subscribe>" ;;
-    dashboard) rules="<subscribe><topics>$outputs</topics></subscribe>" ;;
+    dashboard) rules="<subscribe><topics>$outputs</topics></subscribe>
+        <publish><topics><topic>floorpose/v1/marker</topic><topic>floorpose/v1/command</topic></topics></publish>" ;;
   esac
   if [[ "$role" == headset ]]; then made+=("$name (headset of $device)"); else made+=("$name ($role)"); fi
   openssl ecparam -name prime256v1 -genkey -noout -out "$name.key"

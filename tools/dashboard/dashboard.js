@@ -311,31 +311,45 @@ function drawList() {
 // The banner: every wearer in alert whom no lead has acknowledged, with a button; a tone
 // while one is there.
 let audio = null;
+// Wearers whose data stopped, acknowledged on this page (the daemon may be gone, so the
+// acknowledgement is the page's own); cleared when their data comes back.
+const noDataSeen = new Set();
+
 function drawAlerts() {
   const banner = $('#alerts');
-  const signature = JSON.stringify([...devices].map(([id, d]) => [id, d.info.alert, d.info.name]));
+  for (const [id, d] of devices) if (!d.stale) noDataSeen.delete(id);
+  const signature = JSON.stringify([[...devices].map(([id, d]) => [id, d.info.alert, d.info.name,
+                                                                  d.stale && Math.round(d.age)]),
+                                    [...noDataSeen]]);
   tone(!banner.hidden);
   if (signature === alertsShown) return;
   alertsShown = signature;
   banner.replaceChildren();
-  let sounding = false;
-  for (const [id, d] of devices) {
-    const a = d.info.alert;
-    if (!a || a.kind !== 'no_motion' || a.acknowledged) continue;
-    sounding = true;
+  const add = (id, kind, text, acknowledge) => {
     const row = document.createElement('div');
-    row.className = 'alert';
+    row.className = 'alert ' + kind;
     row.dataset.device = id;
-    const text = document.createElement('span');
-    text.textContent = `${d.info.name}: ${alertText(d)}`;
+    const span = document.createElement('span');
+    span.textContent = text;
     const ack = document.createElement('button');
     ack.textContent = 'Acknowledge';
-    ack.onclick = () => post('/api/alerts/ack', {device: id});
-    row.append(text, ack);
+    ack.onclick = acknowledge;
+    row.append(span, ack);
     banner.appendChild(row);
+  };
+  for (const [id, d] of devices) {
+    const a = d.info.alert;
+    if (a && a.kind === 'no_motion' && !a.acknowledged)
+      add(id, 'no-motion', `${d.info.name}: ${alertText(d)}`,
+          () => post('/api/alerts/ack', {device: id}));
+    if (d.stale && !noDataSeen.has(id))
+      add(id, 'no-data', `${d.info.name}: NO DATA for ${d.age.toFixed(0)} s`, () => {
+        noDataSeen.add(id);
+        queueDraw();
+      });
   }
-  banner.hidden = !sounding;
-  tone(sounding);
+  banner.hidden = !banner.childElementCount;
+  tone(!banner.hidden);
 }
 
 function tone(on) {
