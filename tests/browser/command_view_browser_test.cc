@@ -35,6 +35,7 @@ const char* kLook = R"(
   out.floor = document.querySelector('#plan-select').value;
   out.scale_m = Number(document.querySelector('#scale').dataset.metres);
   out.scale_px = document.querySelector('#scale-bar').getBoundingClientRect().width;
+  out.north_shown = getComputedStyle(document.querySelector('#north')).display !== 'none';
   for (const row of document.querySelectorAll('#devices tr[data-device]')) {
     const id = row.dataset.device;
     const g = document.querySelector(`g.wearer[data-device="${id}"]`);
@@ -162,6 +163,7 @@ TEST_F(CommandViewTest, AlertsMarkersZoomAndFloorsAsALeadUsesThem) {
   const double s = std::min((page["map"]["width"].get<double>() - 48) / 10.0,
                             (page["map"]["height"].get<double>() - 48) / 6.0);
   EXPECT_NEAR(page["scale_px"].get<double>(), page["scale_m"].get<double>() * s, 1.0);
+  EXPECT_FALSE(page["north_shown"].get<bool>()) << "the room is not georeferenced";
 
   // Zoom in by the wheel about a point: the dot moves away from it by the zoom factor
   // (the page zooms by exp(0.002 per pixel of wheel)).

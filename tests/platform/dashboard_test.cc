@@ -288,6 +288,17 @@ TEST(DashboardPlansTest, ListsEveryPlanWithItsBoundsAndWalls) {
   EXPECT_EQ(plans["plans"][0]["lines"]["window"].size(), 1u);
 }
 
+// North on a georeferenced plan: counter-clockwise from the plan's +x.
+TEST(DashboardPlansTest, AGeoreferencedPlanSaysWhereNorthIs) {
+  const FloorPlan plan = MakeFloorPlan("p", {{{0, 0}, {1, 0}}}).plan;
+  Georeference turned;
+  turned.rotation_rad = M_PI / 6;  // +x 30 degrees north of east: north 60 degrees from +x
+  const json plans = json::parse(
+      PlansJson({{plan, "", "", 0.0, turned}, {plan, "", "", 0.0, std::nullopt}}));
+  EXPECT_NEAR(plans["plans"][0]["north_rad"].get<double>(), M_PI / 3, 1e-4);
+  EXPECT_FALSE(plans["plans"][1].contains("north_rad"));
+}
+
 // The server: DDS in, HTTP out, on loopback.
 TEST(DashboardServerTest, ServesThePageThePlansAndTheEventStreamOfWhatDdsCarries) {
   DashboardServerOptions o;
