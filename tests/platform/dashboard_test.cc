@@ -293,8 +293,8 @@ TEST(DashboardPlansTest, AGeoreferencedPlanSaysWhereNorthIs) {
   const FloorPlan plan = MakeFloorPlan("p", {{{0, 0}, {1, 0}}}).plan;
   Georeference turned;
   turned.rotation_rad = M_PI / 6;  // +x 30 degrees north of east: north 60 degrees from +x
-  const json plans = json::parse(
-      PlansJson({{plan, "", "", 0.0, turned}, {plan, "", "", 0.0, std::nullopt}}));
+  const json plans =
+      json::parse(PlansJson({{plan, "", "", 0.0, turned}, {plan, "", "", 0.0, std::nullopt}}));
   EXPECT_NEAR(plans["plans"][0]["north_rad"].get<double>(), M_PI / 3, 1e-4);
   EXPECT_FALSE(plans["plans"][1].contains("north_rad"));
 }
