@@ -87,7 +87,11 @@ Route Crew::PlanRoute(const v1::Command::Route& request, const OnPlan& at) const
       if (!via.empty() && (via.back() - *entry).norm() < kBacktrackWaypointM) via.pop_back();
       return at.routes->Through(at.wearer, via, *entry, keep_out);
     }
-    default: return at.routes->Plan(at.wearer, {request.to_x(), request.to_y()}, keep_out);
+    case v1::Command::Route::POINT:
+      return at.routes->Plan(at.wearer, {request.to_x(), request.to_y()}, keep_out);
+    default:
+      route.error = "unknown route destination " + std::to_string(request.destination());
+      return route;
   }
 }
 
@@ -97,7 +101,9 @@ std::string Crew::PlaceMarker(const v1::Command::PlaceMarker& request, const OnP
   if (request.kind() == v1::Marker::KIND_UNSPECIFIED || !v1::Marker::Kind_IsValid(request.kind()))
     return "marker kind missing or unknown";
   const int64_t now = WallClockNs();
-  marker->set_id(device_id_ + "-" + std::to_string(now / 1'000'000));
+  // Unique across restarts (the clock) and within a millisecond (the count).
+  marker->set_id(device_id_ + "-" + std::to_string(now / 1'000'000) + "-" +
+                 std::to_string(++placed_));
   marker->set_kind(request.kind());
   marker->set_plan_id(at.plan_id);
   marker->set_floor(at.floor);

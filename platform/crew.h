@@ -62,6 +62,7 @@ class Crew {
   Breadcrumbs crumbs_;   // the way back, slam frame
   MarkerBoard markers_;  // the team's markers, every plan
   Roster roster_;        // the team's latest poses and states
+  uint64_t placed_ = 0;  // markers placed, for their ids
 };
 
 }  // namespace floorpose::platform

@@ -130,6 +130,11 @@ TEST_F(TeamTest, TheWayOutAndTheWayBackKeepClearOfWallsAndOfABlockedMarker) {
       << back.route().ShortDebugString();
   EXPECT_GE(testing::PathClearance(Path(back.route()), plan.plan.segments), body - 1e-9);
 
+  // A destination this daemon does not know (a newer app): refused, not routed to (0, 0).
+  const v1::CommandReply unknown = request(static_cast<v1::Command::Route::Destination>(7));
+  EXPECT_FALSE(unknown.ok());
+  EXPECT_EQ(unknown.message(), "unknown route destination 7");
+
   // The lead marks a hazard in the corridor: both go round it, clear of it by the body.
   const Eigen::Vector2d hazard(12.0, 6.5);
   v1::Marker m;

@@ -532,6 +532,7 @@ struct Dashboard::Impl {
   std::mutex write_mu;
   std::unique_ptr<platform::Writer> marker_writer, command_writer;
   uint64_t next_request_id = 1;
+  std::atomic<uint64_t> placed{0};  // markers placed here, for their ids
   // Replies to this dashboard's commands, by device and request id, until taken.
   std::mutex reply_mu;
   std::condition_variable reply_cv;
@@ -850,7 +851,8 @@ Dashboard::Dashboard(DashboardServerOptions options, std::vector<DashboardPlan> 
       if (!body.contains("x") || !body.contains("y") || !body["x"].is_number() ||
           !body["y"].is_number())
         return refuse("x and y (plan metres) are needed");
-      marker.set_id(impl_->options.name + "-" + std::to_string(now / 1'000'000));
+      marker.set_id(impl_->options.name + "-" + std::to_string(now / 1'000'000) + "-" +
+                    std::to_string(++impl_->placed));
       marker.set_kind(kind);
       marker.set_plan_id(body.value("plan", ""));
       marker.set_floor(body.value("floor", ""));
