@@ -503,6 +503,9 @@ async function start() {
   };
   if (body.plans.length) selectPlan(body.plans[0].id);
   new ResizeObserver(redraw).observe($('#map'));
+  // Browsers keep audio suspended until the page is touched: the first tap lets the alert
+  // tone sound.
+  document.addEventListener('pointerdown', () => audio && audio.ctx.resume());
   listenToTheMap();
   connect();
 }
