@@ -3,7 +3,8 @@
 // receiver parses every event with @tak-ps/node-cot, the library TAK tools are written
 // with. Each wearer event must name the wearer (uid, callsign, type) and put it within
 // 0.5 m of its plan position, by a conversion independent of ours (WGS84 radii of
-// curvature); a marker placed by the wearer arrives as a point.
+// curvature); a marker placed by the wearer arrives as a point. The dashboard's --cot
+// sends the same to a receiver of its own.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -15,6 +16,7 @@
 #include <thread>
 
 #include "tests/integration/daemon_fixture.h"
+#include "tools/lib/dashboard.h"
 
 namespace floorpose {
 namespace {
@@ -76,6 +78,21 @@ TEST_F(CotTest, AtakSeesTheWearerWhereTheDaemonPutsItAndTheMarkersPlaced) {
        std::to_string(domain_), "--loopback", "--name", "hl-test=Alice", "--ground-hae", "110"},
       (dir_ / "cot.log").string());
   ASSERT_TRUE(cot.started());
+  // The dashboard's --cot does the same, to a receiver of its own.
+  const fs::path dashboard_events = dir_ / "dashboard-cot.jsonl";
+  tools::ChildProcess dashboard_receiver(
+      {NODE_PATH, COT_RECEIVER, "239.2.3.1", std::to_string(port + 1), "127.0.0.1", "40",
+       dashboard_events.string()},
+      (dir_ / "dashboard-receiver.log").string());
+  for (int i = 0; i < 200 && !fs::exists(dashboard_events.string() + ".ready"); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  tools::ChildProcess dashboard(
+      {FLOORPOSE_PATH, "dashboard", "--plan", plan_path_, "--host", "127.0.0.1", "--port", "0",
+       "--domain", std::to_string(domain_), "--loopback", "--name", "hl-test=Alice", "--cot",
+       "udp://239.2.3.1:" + std::to_string(port + 1), "--cot-interface", "127.0.0.1"},
+      (dir_ / "dashboard.log").string());
+  ASSERT_GT(tools::DashboardPortFromLog((dir_ / "dashboard.log").string(), seconds(15)), 0)
+      << "see " << dir_;
   std::this_thread::sleep_for(std::chrono::seconds(2));  // cot joins the domain
 
   const sim::DemoWalk walk = Walk(0.0, 5);
@@ -133,8 +150,26 @@ TEST_F(CotTest, AtakSeesTheWearerWhereTheDaemonPutsItAndTheMarkersPlaced) {
       EXPECT_EQ(e["callsign"], "victim: trapped");
       EXPECT_LT(Metres(At(e), LatLon(placed->marker().x(), placed->marker().y())), 0.5);
     }
+  // The dashboard's events: the same wearer, where the daemon put it last.
+  std::vector<json> from_dashboard;
+  bool dashboard_has_last = false;
+  for (int i = 0; i < 50 && !dashboard_has_last; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    from_dashboard.clear();
+    std::ifstream in(dashboard_events);
+    std::string line;
+    while (std::getline(in, line))
+      if (!line.empty()) from_dashboard.push_back(json::parse(line));
+    for (const json& e : from_dashboard)
+      dashboard_has_last |= !e.contains("error") && e["uid"] == "floorpose-hl-test" &&
+                            e["callsign"] == "Alice" &&
+                            Metres(At(e), LatLon(last.x(), last.y())) < 0.5;
+  }
+  EXPECT_TRUE(dashboard_has_last) << from_dashboard.size() << " events from the dashboard";
+  EXPECT_EQ(dashboard.Terminate(seconds(5)), 0) << "see " << dir_;
   EXPECT_EQ(cot.Terminate(seconds(5)), 0) << "see " << dir_;
   receiver.Terminate(seconds(2));
+  dashboard_receiver.Terminate(seconds(2));
 }
 
 }  // namespace
