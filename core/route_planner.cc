@@ -121,8 +121,36 @@ int RoutePlanner::Snap(const std::vector<uint8_t>& passable, const Eigen::Vector
   return best;
 }
 
+std::string RoutePlanner::Refusal(const Eigen::Vector2d& from, const Eigen::Vector2d& to,
+                                  const std::vector<KeepOut>& keep_out) const {
+  char text[256];
+  auto say = [&](const char* format, double a, double b) {
+    std::snprintf(text, sizeof(text), format, a, b);
+    return std::string(text);
+  };
+  if (!from.allFinite() || !to.allFinite())
+    return "the start or the destination is not a position (NaN or infinite)";
+  if (grid_.CellOf(from) < 0)
+    return say("start (%.2f, %.2f) is outside the plan", from.x(), from.y());
+  if (grid_.CellOf(to) < 0)
+    return say("destination (%.2f, %.2f) is outside the plan", to.x(), to.y());
+  for (const KeepOut& k : keep_out)
+    if ((to - k.centre).norm() <= k.radius_m && (from - k.centre).norm() > k.radius_m)
+      return say("destination (%.2f, %.2f) is in a blocked area", to.x(), to.y());
+  return {};
+}
+
 Route RoutePlanner::Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to,
                          const std::vector<KeepOut>& keep_out) const {
+  Route route;
+  route.error = Refusal(from, to, keep_out);
+  if (!route.ok()) return route;
+  return keep_out.empty() ? Search(passable_, from, to)
+                          : Search(WithKeepOuts(from, keep_out), from, to);
+}
+
+Route RoutePlanner::Search(const std::vector<uint8_t>& passable, const Eigen::Vector2d& from,
+                           const Eigen::Vector2d& to) const {
   Route route;
   char text[256];
   auto fail = [&](const char* format, double a, double b) {
@@ -130,20 +158,6 @@ Route RoutePlanner::Plan(const Eigen::Vector2d& from, const Eigen::Vector2d& to,
     route.error = text;
     return route;
   };
-  if (!from.allFinite() || !to.allFinite()) {
-    route.error = "the start or the destination is not a position (NaN or infinite)";
-    return route;
-  }
-  if (grid_.CellOf(from) < 0)
-    return fail("start (%.2f, %.2f) is outside the plan", from.x(), from.y());
-  if (grid_.CellOf(to) < 0)
-    return fail("destination (%.2f, %.2f) is outside the plan", to.x(), to.y());
-  for (const KeepOut& k : keep_out)
-    if ((to - k.centre).norm() <= k.radius_m && (from - k.centre).norm() > k.radius_m)
-      return fail("destination (%.2f, %.2f) is in a blocked area", to.x(), to.y());
-  const std::vector<uint8_t> blocked_copy =
-      keep_out.empty() ? std::vector<uint8_t>{} : WithKeepOuts(from, keep_out);
-  const std::vector<uint8_t>& passable = keep_out.empty() ? passable_ : blocked_copy;
   auto open = [&](int cell) { return cell >= 0 && passable[cell]; };
   const int start = open(grid_.CellOf(from)) ? grid_.CellOf(from) : Snap(passable, from, -1);
   if (start < 0)
@@ -222,10 +236,15 @@ Route RoutePlanner::WayOut(const Eigen::Vector2d& from,
     return (a - from).squaredNorm() < (b - from).squaredNorm();
   });
   if (by_distance.size() > 8) by_distance.resize(8);
+  // One grid with the keep-outs for every exit tried: they all start where the wearer is.
+  const std::vector<uint8_t> blocked =
+      keep_out.empty() ? std::vector<uint8_t>{} : WithKeepOuts(from, keep_out);
   Route best;
   for (const Eigen::Vector2d& exit : by_distance) {
     if (!best.path.empty() && (exit - from).norm() >= best.length_m) break;
-    Route route = Plan(from, exit, keep_out);
+    Route route;
+    route.error = Refusal(from, exit, keep_out);
+    if (route.ok()) route = Search(keep_out.empty() ? passable_ : blocked, from, exit);
     if (route.ok() && (best.path.empty() || route.length_m < best.length_m)) {
       best = std::move(route);
     } else if (!route.ok() && best.path.empty()) {
@@ -237,12 +256,29 @@ Route RoutePlanner::WayOut(const Eigen::Vector2d& from,
 
 Route RoutePlanner::Through(const Eigen::Vector2d& from, const std::vector<Eigen::Vector2d>& via,
                             const Eigen::Vector2d& to, const std::vector<KeepOut>& keep_out) const {
+  // The grid with the keep-outs, made again only when a leg starts inside other ones than
+  // the leg before (each leg leaves out those that hold its start, as Plan does).
+  std::vector<uint8_t> blocked;
+  std::vector<bool> left_out, leg_left_out(keep_out.size());
+  auto grid_for = [&](const Eigen::Vector2d& start) -> const std::vector<uint8_t>& {
+    if (keep_out.empty()) return passable_;
+    for (size_t k = 0; k < keep_out.size(); ++k)
+      leg_left_out[k] = (start - keep_out[k].centre).norm() <= keep_out[k].radius_m;
+    if (blocked.empty() || leg_left_out != left_out) {
+      blocked = WithKeepOuts(start, keep_out);
+      left_out = leg_left_out;
+    }
+    return blocked;
+  };
   Route route;
   route.path = {from};
   Eigen::Vector2d at = from;
   for (size_t i = 0; i <= via.size(); ++i) {
     const bool last = i == via.size();
-    Route leg = Plan(at, last ? to : via[i], keep_out);
+    const Eigen::Vector2d& next = last ? to : via[i];
+    Route leg;
+    leg.error = Refusal(at, next, keep_out);
+    if (leg.ok()) leg = Search(grid_for(at), at, next);
     if (!leg.ok()) {
       if (last) return leg;
       continue;  // passed over; the next waypoint is tried from here
@@ -251,9 +287,8 @@ Route RoutePlanner::Through(const Eigen::Vector2d& from, const std::vector<Eigen
     if (last) route.goal_moved_m = leg.goal_moved_m;
     at = route.path.back();
   }
-  auto open = [&, passable = WithKeepOuts(from, keep_out)](int cell) {
-    return cell >= 0 && passable[cell];
-  };
+  const std::vector<uint8_t>& passable = grid_for(from);
+  auto open = [&](int cell) { return cell >= 0 && passable[cell]; };
   DropCorners(&route.path, [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
     return WalkSegmentCells(grid_, a, b, open);
   });

@@ -76,6 +76,13 @@ class RoutePlanner {
   // The cell nearest p within snap_m that is passable in `passable` (and of the given
   // component when >= 0), or -1.
   int Snap(const std::vector<uint8_t>& passable, const Eigen::Vector2d& p, int component) const;
+  // Why there is no route from `from` to `to` before any search: a position that is not
+  // one or outside the plan, a destination in a keep-out. Empty when there is none.
+  std::string Refusal(const Eigen::Vector2d& from, const Eigen::Vector2d& to,
+                      const std::vector<KeepOut>& keep_out) const;
+  // The route on `passable` (passable_, or it with keep-outs), once Refusal found nothing.
+  Route Search(const std::vector<uint8_t>& passable, const Eigen::Vector2d& from,
+               const Eigen::Vector2d& to) const;
   // passable_ less the cells a body centred in them would reach into a keep-out.
   std::vector<uint8_t> WithKeepOuts(const Eigen::Vector2d& from,
                                     const std::vector<KeepOut>& keep_out) const;
