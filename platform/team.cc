@@ -1,6 +1,7 @@
 #include "platform/team.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 
 #include "platform/state_file.h"
@@ -13,6 +14,18 @@ bool ValidMarkerId(const std::string& id) {
     return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.' ||
            c == ':' || c == '/';
   });
+}
+
+std::string MarkerKindName(v1::Marker::Kind kind) {
+  std::string name = v1::Marker::Kind_Name(kind);
+  for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return name;
+}
+
+bool ParseMarkerKind(const std::string& name, v1::Marker::Kind* kind) {
+  std::string upper = name;
+  for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return v1::Marker::Kind_Parse(upper, kind) && *kind != v1::Marker::KIND_UNSPECIFIED;
 }
 
 MarkerBoard::Take MarkerBoard::Merge(const v1::Marker& m, std::string* why) {

@@ -45,6 +45,11 @@ class MarkerBoard {
 // Letters, digits and - _ . : /, 1 to 128 of them.
 bool ValidMarkerId(const std::string& id);
 
+// A marker's kind as apps and people write it: "hazard", "victim", "searched", "blocked",
+// "note". Parse refuses anything else, KIND_UNSPECIFIED's name included.
+std::string MarkerKindName(v1::Marker::Kind kind);
+bool ParseMarkerKind(const std::string& name, v1::Marker::Kind* kind);
+
 // Every wearer's latest plan pose and daemon status, by device id.
 class Roster {
  public:

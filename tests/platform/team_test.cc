@@ -87,6 +87,18 @@ TEST(MarkerBoardTest, SurvivesARestartThroughItsFile) {
   std::filesystem::remove(path);
 }
 
+TEST(MarkerKindTest, NamesAsPeopleWriteThem) {
+  v1::Marker::Kind kind{};
+  for (const char* name : {"hazard", "victim", "searched", "blocked", "note"}) {
+    ASSERT_TRUE(ParseMarkerKind(name, &kind)) << name;
+    EXPECT_EQ(MarkerKindName(kind), name);
+  }
+  EXPECT_TRUE(ParseMarkerKind("HAZARD", &kind));
+  EXPECT_FALSE(ParseMarkerKind("kind_unspecified", &kind));
+  EXPECT_FALSE(ParseMarkerKind("dragon", &kind));
+  EXPECT_FALSE(ParseMarkerKind("", &kind));
+}
+
 TEST(RosterTest, KeepsEveryWearersLatestPoseAndState) {
   Roster roster;
   auto pose = [](double x, int64_t stamp) {

@@ -14,6 +14,7 @@
 #include <regex>
 
 #include "platform/clock.h"
+#include "platform/team.h"
 #include "platform/wgs84.h"
 
 namespace floorpose::tools {
@@ -235,8 +236,7 @@ void CotBridge::OnMarker(const v1::Marker& marker) {
   if (!Place(marker.plan_id(), marker.x(), marker.y(), &e)) return;
   e.uid = "floorpose-marker-" + marker.id();
   e.type = MarkerType(marker.kind());
-  std::string kind = v1::Marker::Kind_Name(marker.kind());
-  for (char& c : kind) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string kind = platform::MarkerKindName(marker.kind());
   e.callsign = kind + (marker.text().empty() ? "" : ": " + marker.text());
   e.remarks = kind + " marked by " + marker.author() + " on floor " + marker.floor();
   e.ce_m = marker.radius_m() > 0 ? marker.radius_m() : 1.0;

@@ -47,11 +47,6 @@ const char* FlagClass(int flag) {
   }
 }
 
-std::string Lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
 bool Finite(const v1::PlanPose& p) {
   return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.heading());
 }
@@ -369,7 +364,7 @@ std::string DashboardState::Frame(Cursor* cursor, Clock::time_point now) const {
     json& list = frame["markers"] = json::array();
     for (const auto& [id, m] : markers_.markers())
       list.push_back({{"id", id},
-                      {"kind", Lower(v1::Marker::Kind_Name(m.kind()))},
+                      {"kind", platform::MarkerKindName(m.kind())},
                       {"plan", m.plan_id()},
                       {"floor", m.floor()},
                       {"x", Mm(m.x())},
@@ -844,9 +839,7 @@ Dashboard::Dashboard(DashboardServerOptions options, std::vector<DashboardPlan> 
       marker.set_revision(held->revision() + 1);
     } else {
       v1::Marker::Kind kind{};
-      std::string name = body.value("kind", "");
-      for (char& c : name) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-      if (!v1::Marker::Kind_Parse(name, &kind) || kind == v1::Marker::KIND_UNSPECIFIED)
+      if (!platform::ParseMarkerKind(body.value("kind", ""), &kind))
         return refuse("kind must be hazard, victim, searched, blocked or note");
       if (!body.contains("x") || !body.contains("y") || !body["x"].is_number() ||
           !body["y"].is_number())
