@@ -4,10 +4,18 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <map>
+#include <string>
+#include <vector>
 
 namespace floorpose::tools {
 
 using Run = std::function<int()>;
+
+// The DEVICE_ID=VALUE pairs of a repeatable option (`--name` of dashboard and cot) into
+// `names`; false, with a log line naming `value` ("NAME", "CALLSIGN"), on one that is not.
+bool ParseDeviceNames(const std::vector<std::string>& specs, const char* value,
+                      std::map<std::string, std::string>* names);
 
 Run AddDemoCommand(CLI::App& app);
 Run AddReplayCommand(CLI::App& app);

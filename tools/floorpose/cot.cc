@@ -26,14 +26,7 @@ struct CotCommandOptions {
 volatile std::sig_atomic_t g_stop = 0;
 
 int RunCot(CotCommandOptions o) {
-  for (const std::string& n : o.names) {
-    const size_t eq = n.find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == n.size()) {
-      spdlog::error("--name {}: expected DEVICE_ID=CALLSIGN", n);
-      return 2;
-    }
-    o.cot.names[n.substr(0, eq)] = n.substr(eq + 1);
-  }
+  if (!ParseDeviceNames(o.names, "CALLSIGN", &o.cot.names)) return 2;
   std::vector<DashboardPlan> plans;
   if (!LoadDashboardPlans(o.plan, o.plans_dir, &plans)) return 1;
   const std::vector<CotPlan> placed = CotPlansOf(plans);

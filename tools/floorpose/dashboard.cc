@@ -30,14 +30,7 @@ struct DashboardCommandOptions {
 };
 
 int RunDashboard(DashboardCommandOptions o) {
-  for (const std::string& n : o.names) {
-    const size_t eq = n.find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == n.size()) {
-      spdlog::error("--name {}: expected DEVICE_ID=NAME", n);
-      return 2;
-    }
-    o.server.dashboard.names[n.substr(0, eq)] = n.substr(eq + 1);
-  }
+  if (!ParseDeviceNames(o.names, "NAME", &o.server.dashboard.names)) return 2;
   if (!(o.server.dashboard.stale_after_s > 0)) {
     spdlog::error("--stale-after must be positive");
     return 2;
@@ -90,6 +83,19 @@ int RunDashboard(DashboardCommandOptions o) {
 }
 
 }  // namespace
+
+bool ParseDeviceNames(const std::vector<std::string>& specs, const char* value,
+                      std::map<std::string, std::string>* names) {
+  for (const std::string& n : specs) {
+    const size_t eq = n.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == n.size()) {
+      spdlog::error("--name {}: expected DEVICE_ID={}", n, value);
+      return false;
+    }
+    (*names)[n.substr(0, eq)] = n.substr(eq + 1);
+  }
+  return true;
+}
 
 Run AddDashboardCommand(CLI::App& app) {
   auto o = std::make_shared<DashboardCommandOptions>();
