@@ -308,15 +308,11 @@ void Daemon::Publish(Topic topic, const google::protobuf::Message& msg) {
                              : topic == Topic::kMarker       ? marker_writer_.get()
                                                              : nullptr;
   if (!writer) return;
-  platform::Envelope e;
   // A marker is its own instance, keyed by its id; everything else is the device's.
-  e.device_id = topic == Topic::kMarker ? static_cast<const v1::Marker&>(msg).id()
-                                        : config_.dds().device_id();
-  e.seq = writer->NextSeq();
-  e.stamp_ns = platform::WallClockNs();
-  msg.SerializeToString(&e.payload);
+  const std::string& key = topic == Topic::kMarker ? static_cast<const v1::Marker&>(msg).id()
+                                                   : config_.dds().device_id();
   std::string error;
-  if (!writer->Write(e, &error))
+  if (!writer->WriteMessage(key, msg, platform::WallClockNs(), &error))
     spdlog::warn("publishing on {} failed: {}", platform::TopicName(topic), error);
 }
 

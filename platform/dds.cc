@@ -197,6 +197,16 @@ Writer::Writer(const Participant& participant, Topic topic,
 
 Writer::~Writer() { dds_delete(publisher_ ? publisher_ : writer_); }
 
+bool Writer::WriteMessage(const std::string& key, const google::protobuf::MessageLite& message,
+                          int64_t stamp_ns, std::string* error) {
+  Envelope e;
+  e.device_id = key;
+  e.seq = NextSeq();
+  e.stamp_ns = stamp_ns;
+  message.SerializeToString(&e.payload);
+  return Write(e, error);
+}
+
 bool Writer::Write(const Envelope& e, std::string* error) {
   floorpose_Envelope sample{};
   sample.device_id = const_cast<char*>(e.device_id.c_str());

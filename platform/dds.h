@@ -5,6 +5,7 @@
 #pragma once
 
 #include <dds/dds.h>
+#include <google/protobuf/message_lite.h>
 
 #include <chrono>
 #include <cstdint>
@@ -66,6 +67,10 @@ class Writer {
   Writer& operator=(const Writer&) = delete;
   // Returns false (and says why in *error) when DDS refuses the sample.
   bool Write(const Envelope& envelope, std::string* error = nullptr);
+  // `message` in an envelope keyed by `key` (the device id; a marker's id on the marker
+  // topic), with this writer's next seq and `stamp_ns`.
+  bool WriteMessage(const std::string& key, const google::protobuf::MessageLite& message,
+                    int64_t stamp_ns, std::string* error = nullptr);
   // The next sequence number of this writer (envelope seq counts per writer, from 1).
   uint64_t NextSeq() { return ++seq_; }
   // Number of matched readers (for start-up synchronisation in tools and tests).

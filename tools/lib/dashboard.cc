@@ -575,13 +575,8 @@ void Dashboard::Impl::OnReply(const std::string& device, const v1::CommandReply&
 void Dashboard::Impl::PublishMarker(const v1::Marker& marker) {
   std::lock_guard lock(write_mu);
   if (!marker_writer) return;
-  platform::Envelope e;
-  e.device_id = marker.id();  // the instance key of the marker topic
-  e.seq = marker_writer->NextSeq();
-  e.stamp_ns = platform::WallClockNs();
-  marker.SerializeToString(&e.payload);
-  std::string error;
-  if (!marker_writer->Write(e, &error))
+  std::string error;  // keyed by the marker's id, the instance key of the marker topic
+  if (!marker_writer->WriteMessage(marker.id(), marker, platform::WallClockNs(), &error))
     spdlog::warn("marker {} not published: {}", marker.id(), error);
 }
 
@@ -592,13 +587,9 @@ uint64_t Dashboard::Impl::SendCommand(const std::string& device, v1::Command com
   }
   std::lock_guard lock(write_mu);
   if (!command_writer) return command.request_id();
-  platform::Envelope e;
-  e.device_id = device;
-  e.seq = command_writer->NextSeq();
-  e.stamp_ns = platform::WallClockNs();
-  command.SerializeToString(&e.payload);
   std::string error;
-  if (!command_writer->Write(e, &error)) spdlog::warn("command to {} not sent: {}", device, error);
+  if (!command_writer->WriteMessage(device, command, platform::WallClockNs(), &error))
+    spdlog::warn("command to {} not sent: {}", device, error);
   return command.request_id();
 }
 

@@ -40,13 +40,7 @@ bool HeadsetLink::Send(Topic topic, const google::protobuf::Message& msg, int64_
                         : topic == Topic::kHeadsetPose ? pose_.get()
                         : topic == Topic::kCommand     ? command_.get()
                                                        : nullptr;
-  if (!w) return false;
-  platform::Envelope e;
-  e.device_id = device_id_;
-  e.seq = w->NextSeq();
-  e.stamp_ns = stamp_ns;
-  msg.SerializeToString(&e.payload);
-  return w->Write(e);
+  return w && w->WriteMessage(device_id_, msg, stamp_ns);
 }
 
 std::optional<v1::CommandReply> HeadsetLink::Request(v1::Command command,
