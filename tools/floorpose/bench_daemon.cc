@@ -112,6 +112,14 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
       o.domain >= 0 ? static_cast<uint32_t>(o.domain) : 201 + static_cast<uint32_t>(getpid() % 30);
   const fs::path tmp = fs::temp_directory_path() / ("floorpose-bench-" + std::to_string(getpid()));
   fs::create_directories(tmp);
+  // Removed on every way out, after the daemons (declared later, stopped first) are gone.
+  struct RemoveDir {
+    fs::path dir;
+    ~RemoveDir() {
+      std::error_code ignored;
+      fs::remove_all(dir, ignored);
+    }
+  } remove_tmp{tmp};
   const std::string floorposed = o.floorposed.empty() ? FindFloorposed() : o.floorposed;
   const HeadsetFrame frame = HeadsetFrame::kUnityLeftHandedYUp;
 
