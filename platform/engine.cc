@@ -25,8 +25,9 @@ Engine::Engine(v1::FloorposedConfig config, Publish publish, std::function<int64
       tracker_(ToMclOptions(config_)),
       store_(config_.walls().voxel_m()),
       floor_(config_.floor()),
-      clock_({static_cast<int64_t>(config_.limits().max_future_s() * 1e9),
-              static_cast<int64_t>(config_.limits().restart_gap_s() * 1e9)}),
+      intake_({static_cast<int64_t>(config_.limits().max_future_s() * 1e9),
+               static_cast<int64_t>(config_.limits().restart_gap_s() * 1e9)},
+              config_.limits().max_future_s(), now_ns_),
       crew_(config_.dds().device_id(),
             {config_.alerts().motion_m(), config_.alerts().pre_alert_s(),
              config_.alerts().no_motion_s()},
@@ -116,7 +117,7 @@ Engine::PlanLoad Engine::ReadPlan(const v1::FloorposedConfig& config,
 
 std::string Engine::UseLoad(PlanLoad load) {
   if (!load.error.empty()) {
-    counters_.set_plans_refused(counters_.plans_refused() + 1);
+    intake_.counters().set_plans_refused(intake_.counters().plans_refused() + 1);
     return load.error;
   }
   floor_ = load.floor;
@@ -215,7 +216,7 @@ void Engine::ChangeFloor(const FloorEntry& to, double slam_z, double height_m) {
   floor_ = to.id;  // what is published from here on carries it
   UsePlan(std::move(arriving), /*another_floor=*/true);
   floors_.Changed(to, slam_z);
-  counters_.set_floor_changes(counters_.floor_changes() + 1);
+  intake_.counters().set_floor_changes(intake_.counters().floor_changes() + 1);
   PublishAlignment();
 }
 
@@ -233,7 +234,8 @@ void Engine::ExploreWalls(const std::vector<WallPoint>& points) {
 void Engine::PublishExplored() {
   if (!plan_.explored || plan_.explored->revision() == explored_sent_) return;
   explored_sent_ = plan_.explored->revision();
-  publish_(Topic::kExplored, ToProto(*plan_.explored, plan_.id, floor_, clock_.newest_ns()));
+  publish_(Topic::kExplored,
+           ToProto(*plan_.explored, plan_.id, floor_, intake_.clock().newest_ns()));
 }
 
 WallExtractionOptions Engine::BandedWallOptions() const {
@@ -246,146 +248,91 @@ WallExtractionOptions Engine::BandedWallOptions() const {
   return o;
 }
 
-void Engine::Warn(const std::string& topic, const std::string& line) {
-  // At most one line a second on each topic, so that a flood of bad input cannot flood
-  // the journal; the next line says how many were held back.
-  Throttle& t = throttles_[topic];
-  const int64_t now = now_ns_();
-  if (now < t.next_ns) {
-    ++t.held_back;
-    return;
-  }
-  if (t.held_back > 0)
-    spdlog::warn("{} ({} more like it in the last second)", line, t.held_back);
-  else
-    spdlog::warn("{}", line);
-  t.held_back = 0;
-  t.next_ns = now + 1'000'000'000;
-}
-
-void Engine::Reject(Refusal kind, const std::string& why) {
-  counters_.set_rejected_messages(counters_.rejected_messages() + 1);
-  auto& c = counters_;
-  switch (kind) {
-    case Refusal::kMalformed: c.set_malformed(c.malformed() + 1); break;
-    case Refusal::kUnknownEnum: c.set_unknown_enum_values(c.unknown_enum_values() + 1); break;
-    case Refusal::kNonFinite: c.set_non_finite(c.non_finite() + 1); break;
-    case Refusal::kOutOfRange: c.set_out_of_range(c.out_of_range() + 1); break;
-    case Refusal::kOverLimits: c.set_over_limits(c.over_limits() + 1); break;
-    case Refusal::kInconsistent: c.set_inconsistent(c.inconsistent() + 1); break;
-    case Refusal::kFuture: c.set_future_stamps(c.future_stamps() + 1); break;
-  }
-  Warn("rejected " + std::to_string(static_cast<int>(kind)), "rejected: " + why);
-}
-
-void Engine::OnDdsLosses(Topic topic, uint64_t lost, uint64_t rejected) {
-  if (lost + rejected == 0) return;
-  counters_.set_samples_lost(counters_.samples_lost() + lost);
-  counters_.set_samples_rejected(counters_.samples_rejected() + rejected);
-  Warn(std::string("dds ") + TopicName(topic),
-       fmt::format("DDS lost {} and rejected {} samples of {} before they reached floorposed "
-                   "(a sample too large or a reader over its limits)",
-                   lost, rejected, TopicName(topic)));
-}
-
 bool Engine::TakeStamp(const std::string& what, int64_t* stamp_ns) {
-  const DeviceClock::Mapped m = clock_.Take(*stamp_ns, now_ns_());
-  switch (m.verdict) {
-    case DeviceClock::Verdict::kFuture:
-      Reject(Refusal::kFuture,
-             fmt::format("{} of {} ns is more than limits.max_future_s ({} s) ahead of the newest "
-                         "stamp taken: from the future",
-                         what, *stamp_ns, config_.limits().max_future_s()));
-      return false;
-    case DeviceClock::Verdict::kRestarted:
-      counters_.set_clock_restarts(counters_.clock_restarts() + 1);
-      Warn("clock restart",
-           fmt::format("{} of {} ns is {:.1f} s off the headset's clock: the clock started again "
-                       "(app restarted); ordering starts again, alignment and walls kept",
-                       what, *stamp_ns, -1e-9 * static_cast<double>(m.fell_back_ns)));
-      recent_.clear();  // its source stamps are of the old clock
-      break;
-    case DeviceClock::Verdict::kTaken: break;
-  }
-  *stamp_ns = m.timeline_ns;
+  bool restarted = false;
+  if (!intake_.TakeStamp(what, stamp_ns, &restarted)) return false;
+  if (restarted) recent_.clear();  // its source stamps are of the old clock
   return true;
 }
 
 void Engine::OnMeshDelta(const Envelope& e) {
   if (!Mine(e)) return;  // another wearer's daemon takes it
-  counters_.set_mesh_deltas_in(counters_.mesh_deltas_in() + 1);
+  intake_.counters().set_mesh_deltas_in(intake_.counters().mesh_deltas_in() + 1);
   DecodedMesh mesh;
   Refusal kind{};
   const std::string error = DecodeMeshDelta(e.payload, frame_, config_.limits(), &mesh, &kind);
-  if (!error.empty()) return Reject(kind, error);
+  if (!error.empty()) return intake_.Reject(kind, error);
   if (!TakeStamp("mesh " + std::to_string(mesh.mesh_id), &mesh.stamp_ns)) return;
   if (mesh.change == v1::MeshDelta::REMOVED) {
     if (store_.Remove(mesh.mesh_id)) {
-      counters_.set_meshes_removed(counters_.meshes_removed() + 1);
+      intake_.counters().set_meshes_removed(intake_.counters().meshes_removed() + 1);
     } else {
-      counters_.set_unknown_mesh_ids(counters_.unknown_mesh_ids() + 1);
-      Warn("unknown mesh",
-           "REMOVED for unknown mesh " + std::to_string(mesh.mesh_id) + ": ignored");
+      intake_.counters().set_unknown_mesh_ids(intake_.counters().unknown_mesh_ids() + 1);
+      intake_.Warn("unknown mesh",
+                   "REMOVED for unknown mesh " + std::to_string(mesh.mesh_id) + ": ignored");
     }
     return;
   }
   if (const auto stored = store_.MeshStamp(mesh.mesh_id); stored && mesh.stamp_ns < *stored) {
     // A late copy of an older scan: the store has a newer one of the same surface.
-    counters_.set_stale_stamps(counters_.stale_stamps() + 1);
-    Warn("stale mesh", "mesh " + std::to_string(mesh.mesh_id) + " " +
-                           v1::MeshDelta::Change_Name(mesh.change) + " of " +
-                           std::to_string(mesh.stamp_ns) + " ns is older than the stored one (" +
-                           std::to_string(*stored) + " ns): ignored");
+    intake_.counters().set_stale_stamps(intake_.counters().stale_stamps() + 1);
+    intake_.Warn("stale mesh", "mesh " + std::to_string(mesh.mesh_id) + " " +
+                                   v1::MeshDelta::Change_Name(mesh.change) + " of " +
+                                   std::to_string(mesh.stamp_ns) +
+                                   " ns is older than the stored one (" + std::to_string(*stored) +
+                                   " ns): ignored");
     return;
   }
   WallExtractionReport report;
   std::vector<WallPoint> points = ExtractWallPoints({&mesh.vertices, &mesh.triangles}, mesh.mesh_id,
                                                     BandedWallOptions(), &report);
   if (report.over_limit) {
-    return Reject(Refusal::kOverLimits, "mesh " + std::to_string(mesh.mesh_id) + ": " +
-                                            std::to_string(report.wall_area_m2) +
-                                            " m2 of wall would give more than " +
-                                            std::to_string(wall_options_.max_points) + " points");
+    return intake_.Reject(Refusal::kOverLimits, "mesh " + std::to_string(mesh.mesh_id) + ": " +
+                                                    std::to_string(report.wall_area_m2) +
+                                                    " m2 of wall would give more than " +
+                                                    std::to_string(wall_options_.max_points) +
+                                                    " points");
   }
   if (report.bad_indices || report.degenerate_triangles || mesh.unusable_vertices) {
-    auto& c = counters_;
+    auto& c = intake_.counters();
     c.set_bad_index_triangles(c.bad_index_triangles() + report.bad_indices);
     c.set_degenerate_triangles(c.degenerate_triangles() + report.degenerate_triangles);
     c.set_unusable_vertices(c.unusable_vertices() + mesh.unusable_vertices);
-    Warn("dropped triangles", "mesh " + std::to_string(mesh.mesh_id) + ": dropped " +
-                                  std::to_string(report.bad_indices) +
-                                  " triangles with bad indices, " +
-                                  std::to_string(report.degenerate_triangles) + " degenerate; " +
-                                  std::to_string(mesh.unusable_vertices) + " unusable vertices");
+    intake_.Warn("dropped triangles",
+                 "mesh " + std::to_string(mesh.mesh_id) + ": dropped " +
+                     std::to_string(report.bad_indices) + " triangles with bad indices, " +
+                     std::to_string(report.degenerate_triangles) + " degenerate; " +
+                     std::to_string(mesh.unusable_vertices) + " unusable vertices");
   }
   const bool known = store_.Contains(mesh.mesh_id);
   if (mesh.change == v1::MeshDelta::UPDATED && !known) {
     // Keep the data: an UPDATED whose ADDED was lost is still a good mesh.
-    counters_.set_unknown_mesh_ids(counters_.unknown_mesh_ids() + 1);
-    Warn("unknown mesh",
-         "UPDATED for unknown mesh " + std::to_string(mesh.mesh_id) + ": stored as new");
+    intake_.counters().set_unknown_mesh_ids(intake_.counters().unknown_mesh_ids() + 1);
+    intake_.Warn("unknown mesh",
+                 "UPDATED for unknown mesh " + std::to_string(mesh.mesh_id) + ": stored as new");
   }
   const size_t cap = config_.limits().max_wall_points();
   if (points.size() > cap)
-    return Reject(Refusal::kOverLimits, "mesh " + std::to_string(mesh.mesh_id) + ": " +
-                                            std::to_string(points.size()) +
-                                            " wall points, more than limits.max_wall_points");
+    return intake_.Reject(Refusal::kOverLimits,
+                          "mesh " + std::to_string(mesh.mesh_id) + ": " +
+                              std::to_string(points.size()) +
+                              " wall points, more than limits.max_wall_points");
   // At the cap the meshes scanned longest ago make room (WallStore::EvictOldest).
   const size_t replaced = known ? store_.MeshPoints(mesh.mesh_id) : 0;
   if (const size_t evicted = store_.EvictOldest(cap - points.size() + replaced, mesh.mesh_id)) {
-    counters_.set_meshes_evicted(counters_.meshes_evicted() + evicted);
-    Warn("evicted", "wall-point store at limits.max_wall_points (" + std::to_string(cap) +
-                        "): the " + std::to_string(evicted) +
-                        " meshes scanned longest ago evicted for mesh " +
-                        std::to_string(mesh.mesh_id));
+    intake_.counters().set_meshes_evicted(intake_.counters().meshes_evicted() + evicted);
+    intake_.Warn("evicted", "wall-point store at limits.max_wall_points (" + std::to_string(cap) +
+                                "): the " + std::to_string(evicted) +
+                                " meshes scanned longest ago evicted for mesh " +
+                                std::to_string(mesh.mesh_id));
   }
   ExploreWalls(points);
   const size_t extracted = points.size();
   store_.Upsert(mesh.mesh_id, std::move(points), mesh.stamp_ns);
   if (mesh.change == v1::MeshDelta::ADDED && !known)
-    counters_.set_meshes_added(counters_.meshes_added() + 1);
+    intake_.counters().set_meshes_added(intake_.counters().meshes_added() + 1);
   else
-    counters_.set_meshes_updated(counters_.meshes_updated() + 1);
+    intake_.counters().set_meshes_updated(intake_.counters().meshes_updated() + 1);
   spdlog::debug(
       "mesh {} {}: {} wall points ({} of {} triangles vertical, {} points outside the height "
       "band); store {} points in {} meshes",
@@ -395,32 +342,21 @@ void Engine::OnMeshDelta(const Envelope& e) {
 
 void Engine::OnHeadsetPose(const Envelope& e) {
   if (!Mine(e)) return;
-  counters_.set_poses_in(counters_.poses_in() + 1);
+  intake_.counters().set_poses_in(intake_.counters().poses_in() + 1);
   DecodedPose pose;
   Refusal kind{};
   const std::string error = DecodeHeadsetPose(e.payload, frame_, config_.limits(), &pose, &kind);
-  if (!error.empty()) return Reject(kind, error);
+  if (!error.empty()) return intake_.Reject(kind, error);
   const int64_t source_stamp_ns = pose.stamp_ns;  // as the headset stamped it
   if (!TakeStamp("pose", &pose.stamp_ns)) return;
-  if (last_pose_stamp_ns_ && pose.stamp_ns == *last_pose_stamp_ns_) {
-    counters_.set_duplicate_stamps(counters_.duplicate_stamps() + 1);
-    Warn("duplicate pose",
-         "pose of " + std::to_string(source_stamp_ns) + " ns again: dropped (answered already)");
-    return;
-  }
+  const Intake::PoseOrder order = intake_.TakePose(pose.stamp_ns, source_stamp_ns);
+  if (order == Intake::PoseOrder::kDuplicate) return;
   if (pose.odometry != odometry_) UseOdometry(pose.odometry);
   PlanPoseEstimate est;
-  if (last_pose_stamp_ns_ && pose.stamp_ns < *last_pose_stamp_ns_) {
+  if (order == Intake::PoseOrder::kLate) {
     // Late: answered under the alignment in use, but the walk is not walked backwards.
-    counters_.set_stale_stamps(counters_.stale_stamps() + 1);
-    Warn("stale pose",
-         fmt::format("pose of {} ns is {:.3f} s older than the newest taken: not "
-                     "tracked",
-                     source_stamp_ns,
-                     1e-9 * static_cast<double>(*last_pose_stamp_ns_ - pose.stamp_ns)));
     est = tracker_.Project(pose.pose_slam);
   } else {
-    last_pose_stamp_ns_ = pose.stamp_ns;
     eye_z_ = pose.pose_slam.z;
     FollowFloors(pose);
     if (pose.tracking == v1::HeadsetPose::TRACKING_LOST) {
@@ -431,10 +367,10 @@ void Engine::OnHeadsetPose(const Envelope& e) {
     }
   }
   if (!tracker_.has_plan()) {
-    counters_.set_poses_without_plan(counters_.poses_without_plan() + 1);
-    Warn("no plan",
-         "pose before a floor plan is loaded: answered in slam coordinates, "
-         "UNRELIABLE");
+    intake_.counters().set_poses_without_plan(intake_.counters().poses_without_plan() + 1);
+    intake_.Warn("no plan",
+                 "pose before a floor plan is loaded: answered in slam coordinates, "
+                 "UNRELIABLE");
   }
   if (pose.tracking == v1::HeadsetPose::TRACKING_LOST) {
     // The headset itself does not know where it is: neither do we.
@@ -451,8 +387,8 @@ void Engine::OnHeadsetPose(const Envelope& e) {
       recent_.pop_front();
   }
   publish_(Topic::kPlanPose, out);
-  counters_.set_plan_poses_out(counters_.plan_poses_out() + 1);
-  if (pose.stamp_ns != *last_pose_stamp_ns_) return;  // a late pose: not where the wearer is
+  intake_.counters().set_plan_poses_out(intake_.counters().plan_poses_out() + 1);
+  if (order == Intake::PoseOrder::kLate) return;  // not where the wearer is
   last_plan_pose_ = out;
   crew_.Watch(pose.stamp_ns, pose.pose_slam, floor_, out);
   if (plan_.explored) {
@@ -531,7 +467,7 @@ const char* CommandName(v1::Command::CommandCase c) {
 
 void Engine::OnCommand(const Envelope& e) {
   if (!Mine(e)) return;
-  counters_.set_commands_in(counters_.commands_in() + 1);
+  intake_.counters().set_commands_in(intake_.counters().commands_in() + 1);
   v1::Command cmd;
   std::string error = DecodeCommand(e.payload, &cmd);
   v1::CommandReply reply;
@@ -581,18 +517,18 @@ void Engine::OnCommand(const Envelope& e) {
                       normal.head<2>(),
                       {p.plan_x(), p.plan_y()},
                       {p.plan_normal_x(), p.plan_normal_y()}};
-        error = tracker_.ApplyWallPick(pick, clock_.newest_ns());
+        error = tracker_.ApplyWallPick(pick, intake_.clock().newest_ns());
         if (error.empty()) done = "wall pick applied";
         break;
       }
       case v1::Command::kFlip:
-        error = tracker_.Flip(clock_.newest_ns());
+        error = tracker_.Flip(intake_.clock().newest_ns());
         if (error.empty()) done = "flipped";
         break;
       case v1::Command::kReset:
         tracker_.Reset();
         store_.Clear();
-        clock_.Reset();
+        intake_.clock().Reset();
         crew_.Reset();
         done = "reset: alignment, wall store, way back and the headset's clock cleared";
         break;
@@ -641,8 +577,8 @@ void Engine::FinishCommand(const v1::Command& cmd, v1::CommandReply reply, const
   reply.set_ok(error.empty());
   reply.set_message(error.empty() ? done : error);
   if (!error.empty()) {
-    counters_.set_commands_refused(counters_.commands_refused() + 1);
-    Warn("command refused", "command refused: " + prefix + error);
+    intake_.counters().set_commands_refused(intake_.counters().commands_refused() + 1);
+    intake_.Warn("command refused", "command refused: " + prefix + error);
   } else if (cmd.command_case() == v1::Command::kLoadPlan ||
              cmd.command_case() == v1::Command::kWallPick ||
              cmd.command_case() == v1::Command::kFlip ||
@@ -671,7 +607,7 @@ v1::DaemonStatus Engine::Status(const std::string& message) const {
   s.set_plan_id(tracker_.has_plan() ? tracker_.index()->plan().id : "");
   s.set_live_meshes(store_.meshes());
   s.set_wall_points(store_.points());
-  *s.mutable_counters() = counters_;
+  *s.mutable_counters() = intake_.counters();
   if (last_registration_) {
     *s.mutable_last_registration() = ToProto(last_registration_->result);
     s.mutable_last_registration()->set_accepted(last_registration_->accepted);
@@ -688,7 +624,7 @@ v1::DaemonStatus Engine::Status(const std::string& message) const {
 
 std::string Engine::StatusLine() const {
   return std::string(ToString(state())) + ", " + std::to_string(store_.points()) +
-         " wall points, " + std::to_string(counters_.plan_poses_out()) + " plan poses";
+         " wall points, " + std::to_string(intake_.counters().plan_poses_out()) + " plan poses";
 }
 
 }  // namespace floorpose::platform

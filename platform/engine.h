@@ -12,7 +12,6 @@
 #include <mutex>
 #include <optional>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include "core/explored_map.h"
@@ -32,6 +31,7 @@
 #include "platform/device_clock.h"
 #include "platform/floor_follower.h"
 #include "platform/floor_plan_io.h"
+#include "platform/intake.h"
 #include "platform/search_memory.h"
 
 namespace floorpose::platform {
@@ -116,10 +116,13 @@ class Engine {
   // when new, so that they outlive their author's writer), plan poses and statuses (the
   // teammates).
   void OnTeam(Topic topic, const Envelope& e) {
-    if (std::string why = crew_.OnTeam(topic, e, now_ns_()); !why.empty()) Warn("marker", why);
+    if (std::string why = crew_.OnTeam(topic, e, now_ns_()); !why.empty())
+      intake_.Warn("marker", why);
   }
   // Samples of `topic` DDS lost or rejected before they reached us: counted and logged.
-  void OnDdsLosses(Topic topic, uint64_t lost, uint64_t rejected);
+  void OnDdsLosses(Topic topic, uint64_t lost, uint64_t rejected) {
+    intake_.OnDdsLosses(topic, lost, rejected);
+  }
 
   // The worker's job when one is due and none is running, and its result.
   std::optional<Job> TakeDueJob();
@@ -139,7 +142,7 @@ class Engine {
   // Publishes the alignment in use (version 0: none), as after every change.
   void PublishAlignment();
 
-  const v1::DaemonStatus::Counters& counters() const { return counters_; }
+  const v1::DaemonStatus::Counters& counters() const { return intake_.counters(); }
   // The estimator: its alignment, state and reliability.
   const tracking::MclTracker& tracker() const { return tracker_; }
   const AlignmentState& alignment() const { return tracker_.alignment(); }
@@ -187,13 +190,8 @@ class Engine {
   // The recent trajectory under the alignment in use (PlanTrack).
   void PublishTrack();
   v1::PlanPose ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) const;
-  // Maps an input's stamp onto the device's timeline (clock_), in place; false: refused.
+  // Maps an input's stamp onto the device's timeline, in place; false: refused.
   bool TakeStamp(const std::string& what, int64_t* stamp_ns);
-  // A refused input: counted by kind (DaemonStatus.Counters) and logged through Warn.
-  void Reject(Refusal kind, const std::string& why);
-  // A warning, at most one line a second per topic (the next one says how many were held
-  // back): bad input at 100 Hz must not flood the journal.
-  void Warn(const std::string& topic, const std::string& line);
   // The wall options with the height band about the wearer's eyes, once a pose is known.
   WallExtractionOptions BandedWallOptions() const;
   bool Mine(const Envelope& e) const { return e.device_id == config_.dds().device_id(); }
@@ -248,22 +246,13 @@ class Engine {
   uint64_t explored_sent_ = 0;  // revision last published
   int64_t next_explored_ns_ = 0;
   std::optional<v1::PlanPose> last_plan_pose_;  // as published
-  v1::DaemonStatus::Counters counters_;
   struct LastRegistration {
     RegistrationResult result;
     bool accepted = false;
     std::string why;
   };
   std::optional<LastRegistration> last_registration_;
-  // The device's stamps as one forward timeline; every stamp below is on it, except the
-  // source stamps of published poses. Its newest stamp is the scheduling clock.
-  DeviceClock clock_;
-  std::optional<int64_t> last_pose_stamp_ns_;  // of the newest pose taken
-  struct Throttle {
-    int64_t next_ns = 0;
-    uint64_t held_back = 0;
-  };
-  std::unordered_map<std::string, Throttle> throttles_;
+  Intake intake_;                // the device's timeline, its refusals counted, warnings paced
   std::optional<double> eye_z_;  // slam height of the latest pose
   // Recent poses: slam, and as published (for PlanTrack).
   std::deque<std::pair<Pose2, v1::PlanPose>> recent_;

@@ -70,13 +70,13 @@ std::optional<Engine::Job> Engine::SearchJob(int64_t since, size_t min_points) {
   job.refine = tracker_.options().refine;
   job.initial = alignment().T_plan_slam;
   job.version = alignment().version;
-  job.stamp_ns = clock_.newest_ns();
+  job.stamp_ns = intake_.clock().newest_ns();
   return job;
 }
 
 std::optional<Engine::Job> Engine::TakeDueJob() {
   if (running_) return std::nullopt;
-  const int64_t now = clock_.newest_ns();
+  const int64_t now = intake_.clock().newest_ns();
   const tracking::MclOptions& options = tracker_.options();
   // Wall points from before a loss of tracking are in another frame.
   const auto since = [&](double window_s) {
@@ -121,7 +121,7 @@ void Engine::OnRegistrationDone(Done done) {
     return;
   }
   if (!done.mcl) return;
-  counters_.set_registrations(counters_.registrations() + 1);
+  intake_.counters().set_registrations(intake_.counters().registrations() + 1);
   const size_t samples = done.mcl->belief.size(), places = done.mcl->places;
   const double fit = done.mcl->fit;
   const bool polished = done.mcl->polished;
@@ -131,7 +131,7 @@ void Engine::OnRegistrationDone(Done done) {
   spdlog::info("belief: {} samples, {} place(s), fit {:.2f}, polished {}, {:.1f} ms: {:.0f}% {}",
                samples, places, fit, polished, done.result.time_ms, 100 * r.probability, r.reason);
   if (!taken) return;
-  counters_.set_registrations_accepted(counters_.registrations_accepted() + 1);
+  intake_.counters().set_registrations_accepted(intake_.counters().registrations_accepted() + 1);
   PublishAlignment();
   PublishTrack();
 }

@@ -10,8 +10,8 @@ v1::StateSnapshot Engine::SaveState() const {
   s.set_plan_path(plan_path_);
   s.set_plan_digest(plan_.digest);
   s.set_floor(floor_);
-  s.set_latest_stamp_ns(clock_.newest_ns());
-  s.set_stamp_offset_ns(clock_.offset_ns());
+  s.set_latest_stamp_ns(intake_.clock().newest_ns());
+  s.set_stamp_offset_ns(intake_.clock().offset_ns());
   const TrackerState t = tracker_.SaveState();
   *s.mutable_alignment() = ToProto(t.alignment, floor_);
   s.set_next_version(t.next_version);
@@ -131,7 +131,8 @@ std::string Engine::RestoreState(const v1::StateSnapshot& s) {
   store_.Clear();
   for (auto& [m, points] : meshes) store_.Upsert(m->mesh_id(), std::move(points), m->stamp_ns());
   store_.TakeNewPoints();
-  clock_.Restore(std::max(clock_.newest_ns(), s.latest_stamp_ns()), s.stamp_offset_ns(), now_ns_());
+  intake_.clock().Restore(std::max(intake_.clock().newest_ns(), s.latest_stamp_ns()),
+                          s.stamp_offset_ns(), now_ns_());
   return {};
 }
 
