@@ -24,7 +24,7 @@ Engine::Engine(v1::FloorposedConfig config, Publish publish, std::function<int64
       wall_options_(ToWallExtractionOptions(config_)),
       tracker_(ToMclOptions(config_)),
       store_(config_.walls().voxel_m()),
-      floor_(config_.floor()),
+      plans_(config_.floor()),
       intake_({static_cast<int64_t>(config_.limits().max_future_s() * 1e9),
                static_cast<int64_t>(config_.limits().restart_gap_s() * 1e9)},
               config_.limits().max_future_s(), now_ns_),
@@ -40,79 +40,8 @@ std::string Engine::Start() {
   return e;
 }
 
-namespace {
-
-// Why a plan is refused before anything is built from it, or empty.
-std::string PlanOutOfLimits(const FloorPlan& plan, const v1::LimitsConfig& limits) {
-  const double max_coordinate = limits.max_plan_coordinate_m();
-  for (const Eigen::Vector2d& corner : {plan.min, plan.max})
-    if (!corner.allFinite() || corner.cwiseAbs().maxCoeff() > max_coordinate)
-      return fmt::format("a coordinate beyond limits.max_plan_coordinate_m ({} m)", max_coordinate);
-  const Eigen::Vector2d extent = plan.max - plan.min;
-  if (extent.maxCoeff() > limits.max_plan_extent_m())
-    return fmt::format("{:.0f} x {:.0f} m, larger than limits.max_plan_extent_m ({} m) on a side",
-                       extent.x(), extent.y(), limits.max_plan_extent_m());
-  return {};
-}
-
-// How many times coarser than configured a plan's grids must be to stay within
-// limits.max_plan_memory_mb. Bytes a cell, as measured on ILC F1 (240 x 176 m: 436 MB of
-// RSS at the default cells): routes 20 (passable, components, a search's distances and
-// parents), rooms and explored maps 8 each, the closest-wall index 8 (cells and lists).
-double PlanGridScale(const FloorPlan& plan, const v1::FloorposedConfig& c) {
-  const Eigen::Vector2d extent = (plan.max - plan.min).array() + 2.0;  // the grids' margins
-  auto per_m2 = [](double bytes_per_cell, double cell_m) {
-    return bytes_per_cell / (cell_m * cell_m);
-  };
-  const double bytes =
-      extent.x() * extent.y() *
-      (per_m2(20, c.routes().cell_m()) + per_m2(8, RoomOptions{}.cell_m) +
-       per_m2(8, c.explored().cell_m()) + per_m2(8, ClosestWallIndex::Options{}.cell_m));
-  const double budget = static_cast<double>(c.limits().max_plan_memory_mb()) * (1 << 20);
-  return std::max(1.0, std::sqrt(bytes / budget));
-}
-
-}  // namespace
-
 std::string Engine::LoadPlan(const std::string& path, const std::string& floor) {
   return UseLoad(ReadPlan(config_, now_ns_, path, floor));
-}
-
-Engine::PlanLoad Engine::ReadPlan(const v1::FloorposedConfig& config,
-                                  const std::function<int64_t()>& now_ns, const std::string& path,
-                                  const std::string& floor) {
-  auto Refused = [](std::string error) {
-    PlanLoad refused;
-    refused.error = std::move(error);
-    return refused;
-  };
-  PlanLoad load;
-  load.path = path;
-  load.floor = floor;
-  load.file = path;
-  if (IsFloorSet(path)) {
-    load.set = LoadFloorSet(path);
-    const FloorEntry* entry = load.set.ok() ? load.set.Find(floor) : nullptr;
-    if (load.set.ok() && !entry) load.set.error = path + ": no floor '" + floor + "' in the set";
-    if (!load.set.ok()) return Refused(load.set.error);
-    load.file = entry->plan_path;
-  }
-  const FloorPlanParse parsed = LoadFloorPlan(load.file);
-  if (!parsed.ok()) return Refused(parsed.error);
-  if (const std::string e = PlanOutOfLimits(parsed.plan, config.limits()); !e.empty())
-    return Refused(load.file + ": " + e);
-  // Every other floor of a set is built now, so that a floor change on the stairs costs
-  // the poses nothing; one that does not load refuses the set.
-  for (const FloorEntry& f : load.set.floors) {
-    if (f.id == floor) continue;
-    const FloorPlanParse other = LoadFloorPlan(f.plan_path);
-    if (!other.ok()) return Refused(path + ": floor " + f.id + ": " + other.error);
-    if (const std::string e = PlanOutOfLimits(other.plan, config.limits()); !e.empty())
-      return Refused(path + ": floor " + f.id + ": " + e);
-    load.others[f.id] = BuildPlan(config, now_ns, other, f.plan_path);
-  }
-  load.assets = BuildPlan(config, now_ns, parsed, load.file);
-  return load;
 }
 
 std::string Engine::UseLoad(PlanLoad load) {
@@ -120,122 +49,62 @@ std::string Engine::UseLoad(PlanLoad load) {
     intake_.counters().set_plans_refused(intake_.counters().plans_refused() + 1);
     return load.error;
   }
-  floor_ = load.floor;
-  plan_path_ = load.path;
-  floors_.Reset(std::move(load.set));
-  other_floors_ = std::move(load.others);
-  UsePlan(std::move(load.assets), /*another_floor=*/false);
+  plans_.Take(std::move(load));
+  UsePlan(/*another_floor=*/false);
   return {};
 }
 
-Engine::PlanAssets Engine::BuildPlan(const v1::FloorposedConfig& config,
-                                     const std::function<int64_t()>& now_ns,
-                                     const FloorPlanParse& parsed, const std::string& file) {
-  PlanAssets a;
-  const double scale = PlanGridScale(parsed.plan, config);
-  if (scale > 1)
-    spdlog::warn(
-        "floor plan {}: grids {:.1f} times coarser than configured, to stay within "
-        "limits.max_plan_memory_mb ({} MB)",
-        file, scale, config.limits().max_plan_memory_mb());
-  ClosestWallIndex::Options index_options;
-  index_options.cell_m *= scale;
-  index_options.max_distance_m = std::max(3.0, config.icp().max_correspondence_m());
-  a.index = std::make_shared<const ClosestWallIndex>(parsed.plan, index_options);
-  spdlog::info("floor plan {}: {} segments ({} dropped), {:.1f} x {:.1f} m, index {:.1f} MB", file,
-               parsed.plan.segments.size(), parsed.dropped_segments,
-               parsed.plan.max.x() - parsed.plan.min.x(), parsed.plan.max.y() - parsed.plan.min.y(),
-               static_cast<double>(a.index->MemoryBytes()) / 1e6);
-  if (!parsed.frame.empty()) spdlog::info("floor plan {}: {}", file, parsed.frame);
-  {
-    // Up to 12 places while they score 98% of the best (a hall of repeated bays).
-    GlobalSearchOptions search;
-    search.crowd_ratio = 0.98;
-    a.global = std::make_shared<GlobalSearchCache>(parsed.plan, search);
-  }
-  a.id = parsed.plan.id;
-  a.digest = FloorPlanDigest(parsed.plan);
-  const int64_t t0 = now_ns();
-  RouteOptions route;
-  route.body_radius_m = config.routes().body_radius_m();
-  route.cell_m = config.routes().cell_m() * scale;
-  route.snap_m = config.routes().snap_m();
-  a.routes = std::make_unique<RoutePlanner>(parsed.plan, route);
-  const v1::ExploredConfig& e = config.explored();
-  if (e.enabled()) {
-    RoomOptions rooms;
-    rooms.max_door_m = e.max_door_m();
-    rooms.cell_m *= scale;
-    ExploredOptions explored;
-    explored.cell_m = e.cell_m() * scale;
-    explored.max_ray_m = e.max_ray_m();
-    explored.min_visit_poses = static_cast<int>(e.min_visit_poses());
-    explored.body_radius_m = route.body_radius_m;
-    a.explored = std::make_unique<ExploredMap>(
-        parsed.plan, std::make_shared<const RoomMap>(parsed.plan, rooms), explored);
-  }
-  spdlog::info("routes on a {} x {} grid of {:.2f} m, {} rooms, in {:.0f} ms", a.routes->grid().nx,
-               a.routes->grid().ny, a.routes->grid().cell_m,
-               a.explored ? a.explored->rooms()->rooms().size() : 0,
-               static_cast<double>(now_ns() - t0) * 1e-6);
-  return a;
-}
-
-void Engine::UsePlan(PlanAssets assets, bool another_floor) {
-  plan_ = std::move(assets);
+void Engine::UsePlan(bool another_floor) {
+  PlanAssets& plan = plans_.current();
   if (another_floor)
-    tracker_.ChangeFloor(plan_.index);
+    tracker_.ChangeFloor(plan.index);
   else
-    tracker_.SetPlan(plan_.index);
+    tracker_.SetPlan(plan.index);
   last_plan_pose_.reset();
   // Its explored map at once: the plan's rooms, or the floor as it was left.
-  if (plan_.explored) explored_sent_ = plan_.explored->revision() - 1;
+  if (plan.explored) plan.explored_sent = plan.explored->revision() - 1;
   PublishExplored();
 }
 
 void Engine::FollowFloors(const DecodedPose& pose) {
   const auto change =
-      floors_.Observe(floor_, pose.pose_slam.z, pose.stamp_ns, config_.floors().change_margin_m(),
-                      config_.floors().change_hold_s());
-  if (change) ChangeFloor(*change->to, pose.pose_slam.z, change->height_m);
-}
-
-void Engine::ChangeFloor(const FloorEntry& to, double slam_z, double height_m) {
-  const auto next = other_floors_.find(to.id);
-  if (next == other_floors_.end()) return;  // built with the set: cannot happen
+      plans_.Follow(pose.pose_slam.z, pose.stamp_ns, config_.floors().change_margin_m(),
+                    config_.floors().change_hold_s());
+  if (!change) return;
+  const FloorEntry& to = *change->to;
+  const std::string left = plans_.floor();
+  const size_t dropped = store_.points();
+  if (!plans_.ChangeFloor(to, pose.pose_slam.z)) return;  // built with the set: cannot happen
   // The walls in the store are the floor's left behind: registered against this floor's
   // plan they would pull the alignment onto the wrong walls.
   spdlog::info(
       "floor {} -> {}: the headset is at {:.2f} m (floor {} at {:.2f} m); {} wall points "
       "of floor {} dropped",
-      floor_, to.id, height_m, to.id, to.height_m, store_.points(), floor_);
+      left, to.id, change->height_m, to.id, to.height_m, dropped, left);
   store_.Clear();
-  PlanAssets arriving = std::move(next->second);
-  other_floors_.erase(next);
-  other_floors_[floor_] = std::move(plan_);
-  floor_ = to.id;  // what is published from here on carries it
-  UsePlan(std::move(arriving), /*another_floor=*/true);
-  floors_.Changed(to, slam_z);
+  UsePlan(/*another_floor=*/true);  // what is published from here on carries the new floor
   intake_.counters().set_floor_changes(intake_.counters().floor_changes() + 1);
   PublishAlignment();
 }
 
 void Engine::ExploreWalls(const std::vector<WallPoint>& points) {
-  if (!plan_.explored || !last_plan_pose_ || alignment().version == 0 ||
+  ExploredMap* explored = plans_.current().explored.get();
+  if (!explored || !last_plan_pose_ || alignment().version == 0 ||
       last_plan_pose_->reliability().flag() != v1::Reliability::RELIABLE)
     return;
   const Se2& T = alignment().T_plan_slam;
   std::vector<Eigen::Vector2d> plan;
   plan.reserve(points.size());
   for (const WallPoint& w : points) plan.push_back(T * w.p.cast<double>());
-  plan_.explored->AddWalls({last_plan_pose_->x(), last_plan_pose_->y()}, plan);
+  explored->AddWalls({last_plan_pose_->x(), last_plan_pose_->y()}, plan);
 }
 
 void Engine::PublishExplored() {
-  if (!plan_.explored || plan_.explored->revision() == explored_sent_) return;
-  explored_sent_ = plan_.explored->revision();
+  PlanAssets& plan = plans_.current();
+  if (!plan.explored || plan.explored->revision() == plan.explored_sent) return;
+  plan.explored_sent = plan.explored->revision();
   publish_(Topic::kExplored,
-           ToProto(*plan_.explored, plan_.id, floor_, intake_.clock().newest_ns()));
+           ToProto(*plan.explored, plan.id, plans_.floor(), intake_.clock().newest_ns()));
 }
 
 WallExtractionOptions Engine::BandedWallOptions() const {
@@ -390,13 +259,14 @@ void Engine::OnHeadsetPose(const Envelope& e) {
   intake_.counters().set_plan_poses_out(intake_.counters().plan_poses_out() + 1);
   if (order == Intake::PoseOrder::kLate) return;  // not where the wearer is
   last_plan_pose_ = out;
-  crew_.Watch(pose.stamp_ns, pose.pose_slam, floor_, out);
-  if (plan_.explored) {
+  crew_.Watch(pose.stamp_ns, pose.pose_slam, plans_.floor(), out);
+  PlanAssets& plan = plans_.current();
+  if (plan.explored) {
     if (out.reliability().flag() == v1::Reliability::RELIABLE && out.alignment_version() > 0)
-      plan_.explored->AddVisit({out.x(), out.y()});
-    if (pose.stamp_ns >= next_explored_ns_) {
+      plan.explored->AddVisit({out.x(), out.y()});
+    if (pose.stamp_ns >= plan.next_explored_ns) {
       PublishExplored();
-      next_explored_ns_ =
+      plan.next_explored_ns =
           pose.stamp_ns + static_cast<int64_t>(config_.explored().publish_period_s() * 1e9);
     }
   }
@@ -421,7 +291,7 @@ v1::PlanPose Engine::ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) c
   out.set_y(est.pose.position.y());
   out.set_heading(est.pose.heading);
   out.set_height(est.pose.z);
-  out.set_floor(floor_);
+  out.set_floor(plans_.floor());
   out.set_alignment_version(est.alignment_version);
   *out.mutable_reliability() = ToProto(est.reliability);
   return out;
@@ -432,7 +302,7 @@ void Engine::PublishTrack() {
   v1::PlanTrack track;
   const AlignmentState& a = alignment();
   track.set_alignment_version(a.version);
-  track.set_floor(floor_);
+  track.set_floor(plans_.floor());
   for (const auto& [slam, published] : recent_) {
     v1::PlanPose* p = track.add_poses();
     *p = published;
@@ -595,7 +465,9 @@ void Engine::FinishCommand(const v1::Command& cmd, v1::CommandReply reply, const
   publish_(Topic::kCommandReply, reply);
 }
 
-void Engine::PublishAlignment() { publish_(Topic::kAlignment, ToProto(alignment(), floor_)); }
+void Engine::PublishAlignment() {
+  publish_(Topic::kAlignment, ToProto(alignment(), plans_.floor()));
+}
 
 void Engine::PublishStatus(const std::string& message) {
   publish_(Topic::kStatus, Status(message));

@@ -32,6 +32,7 @@
 #include "platform/floor_follower.h"
 #include "platform/floor_plan_io.h"
 #include "platform/intake.h"
+#include "platform/plan_assets.h"
 #include "platform/search_memory.h"
 
 namespace floorpose::platform {
@@ -49,19 +50,6 @@ class Engine {
   // Receives every message to publish, with its topic.
   using Publish = std::function<void(Topic, const google::protobuf::Message&)>;
 
-  // The plan's GlobalSearch grids, built on first use by the thread that runs the job.
-  class GlobalSearchCache {
-   public:
-    GlobalSearchCache(FloorPlan plan, GlobalSearchOptions options)
-        : plan_(std::move(plan)), options_(options) {}
-    const GlobalSearch& Get();
-
-   private:
-    FloorPlan plan_;
-    GlobalSearchOptions options_;
-    std::once_flag once_;
-    std::unique_ptr<GlobalSearch> search_;
-  };
   // A job for the worker, everything it needs copied so it can run on any thread: an
   // update of the belief, or a search of the whole plan.
   struct Job {
@@ -152,7 +140,7 @@ class Engine {
   // The configuration in use: as configured, for the device's odometry (ForOdometry).
   const v1::FloorposedConfig& config() const { return config_; }
   // What the wearer has explored on the loaded plan; null without a plan or when disabled.
-  const ExploredMap* explored() const { return plan_.explored.get(); }
+  const ExploredMap* explored() const { return plans_.current().explored.get(); }
   // Publishes the explored map now if it changed since the last one.
   void PublishExplored();
   // The alert, the way back, the markers and the teammates. The daemon saves and restores
@@ -162,28 +150,18 @@ class Engine {
  private:
   // A plan file, or floor `floor` of a .floors set.
   std::string LoadPlan(const std::string& path, const std::string& floor);
-  struct PlanAssets;
-  struct PlanLoad;
-  // Reads and builds a plan (every floor of a set): on any thread, touching nothing of the
-  // engine's; UseLoad then makes it the plan in use, or counts the refusal.
-  static PlanLoad ReadPlan(const v1::FloorposedConfig& config,
-                           const std::function<int64_t()>& now_ns, const std::string& path,
-                           const std::string& floor);
+  // A plan read and built (ReadPlan, on any thread) becomes the plan in use, or its
+  // refusal is counted.
   std::string UseLoad(PlanLoad load);
-  // A plan's index, search, routes, rooms and explored map.
-  static PlanAssets BuildPlan(const v1::FloorposedConfig& config,
-                              const std::function<int64_t()>& now_ns, const FloorPlanParse& parsed,
-                              const std::string& file);
   // The end of a command: its reply and status, and what it changed published.
   void FinishCommand(const v1::Command& cmd, v1::CommandReply reply, const std::string& error,
                      const std::string& done);
-  // Makes them the plan in use; the alignment goes with the old plan, or stays when the
-  // new one is another floor of the same set.
-  void UsePlan(PlanAssets assets, bool another_floor);
+  // The plan in use (plans_) is new: the alignment goes with the old plan, or stays when
+  // the new one is another floor of the same set.
+  void UsePlan(bool another_floor);
   // A .floors set: takes the floor the headset's height says, once it has said so for
   // floors.change_hold_s.
   void FollowFloors(const DecodedPose& pose);
-  void ChangeFloor(const FloorEntry& to, double slam_z, double height_m);
   // A search of the whole plan over the walls since `since_ns`; nothing when those walls
   // were searched already or are too few.
   std::optional<Job> SearchJob(int64_t since_ns, size_t min_points);
@@ -216,35 +194,9 @@ class Engine {
   WallExtractionOptions wall_options_;
   tracking::MclTracker tracker_;
   WallStore store_;
-  std::string floor_;
-  std::string plan_path_;  // as loaded (a plan or a .floors set), with its FloorPlanDigest
-  FloorFollower floors_;   // the floor of a .floors set the headset's height says
-  // A floor's plan and what is made from it: the index, the plan search, routes, rooms
-  // and the explored map.
-  struct PlanAssets {
-    std::shared_ptr<const ClosestWallIndex> index;
-    std::shared_ptr<GlobalSearchCache> global;
-    std::unique_ptr<RoutePlanner> routes;
-    std::unique_ptr<ExploredMap> explored;
-    std::string id;
-    uint64_t digest = 0;
-  };
-  PlanAssets plan_;  // the plan in use (its index is the tracker's)
-  // A plan read and built, with what a .floors set brings.
-  struct PlanLoad {
-    std::string error;  // why it was refused; the rest is then empty
-    std::string path, floor, file;
-    FloorSet set;
-    PlanAssets assets;
-    std::map<std::string, PlanAssets> others;
-  };
+  PlansInUse plans_;  // the plan in use (its index is the tracker's), and a set's other floors
   Offload offload_;
-  bool plan_loading_ = false;  // a load_plan command is being built elsewhere
-  // For a .floors set, every floor not in use, built at the load: a floor change costs
-  // the poses nothing, and a wearer coming back finds the floor explored as it was.
-  std::map<std::string, PlanAssets> other_floors_;
-  uint64_t explored_sent_ = 0;  // revision last published
-  int64_t next_explored_ns_ = 0;
+  bool plan_loading_ = false;                   // a load_plan command is being built elsewhere
   std::optional<v1::PlanPose> last_plan_pose_;  // as published
   struct LastRegistration {
     RegistrationResult result;

@@ -8,11 +8,6 @@
 
 namespace floorpose::platform {
 
-const GlobalSearch& Engine::GlobalSearchCache::Get() {
-  std::call_once(once_, [this] { search_ = std::make_unique<GlobalSearch>(plan_, options_); });
-  return *search_;
-}
-
 std::vector<GlobalPlace> Engine::RefineAsSearch(const Job& job,
                                                 const std::vector<GlobalPlace>& places,
                                                 const std::vector<GlobalPlace>& ranked) {
@@ -64,7 +59,7 @@ std::optional<Engine::Job> Engine::SearchJob(int64_t since, size_t min_points) {
   // where the headset has meshed everything): the same places again, no new evidence.
   if (!searches_.NewSearch(job.cloud, alignment().version)) return std::nullopt;
   job.path = searches_.PathSince(since);
-  job.global = plan_.global;
+  job.global = plans_.current().global;
   job.index = tracker_.index();
   job.icp = tracker_.options().icp;
   job.refine = tracker_.options().refine;
@@ -83,7 +78,7 @@ std::optional<Engine::Job> Engine::TakeDueJob() {
     return std::max(tracker_.frame_since_ns(),
                     window_s > 0 ? now - static_cast<int64_t>(window_s * 1e9) : INT64_MIN);
   };
-  if (plan_.global && tracker_.SearchDue(now, store_.points())) {
+  if (plans_.current().global && tracker_.SearchDue(now, store_.points())) {
     // Where on the whole plan do the walls fit: to seed the belief, or to reseed it.
     tracker_.MarkSearchStarted(now);
     std::optional<Job> job = SearchJob(since(options.search_window_s), options.search_min_points);

@@ -7,13 +7,13 @@ namespace floorpose::platform {
 v1::StateSnapshot Engine::SaveState() const {
   v1::StateSnapshot s;
   s.set_device_id(config_.dds().device_id());
-  s.set_plan_path(plan_path_);
-  s.set_plan_digest(plan_.digest);
-  s.set_floor(floor_);
+  s.set_plan_path(plans_.path());
+  s.set_plan_digest(plans_.current().digest);
+  s.set_floor(plans_.floor());
   s.set_latest_stamp_ns(intake_.clock().newest_ns());
   s.set_stamp_offset_ns(intake_.clock().offset_ns());
   const TrackerState t = tracker_.SaveState();
-  *s.mutable_alignment() = ToProto(t.alignment, floor_);
+  *s.mutable_alignment() = ToProto(t.alignment, plans_.floor());
   s.set_next_version(t.next_version);
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) s.add_covariance(t.P(r, c));
@@ -53,26 +53,25 @@ std::string Engine::RestoreState(const v1::StateSnapshot& s) {
   if (s.plan_path().empty()) return "without a floor plan";
   // The app may have loaded another plan before the restart: that one again, and back to
   // the configured one if the snapshot is refused after all.
-  const std::string configured_plan = plan_path_, configured_floor = floor_;
+  const std::string configured_plan = plans_.path(), configured_floor = plans_.floor();
   bool switched = false;
   auto refuse = [&](const std::string& why) {
     if (switched) {
       if (configured_plan.empty()) {
         tracker_.SetPlan(nullptr);
-        plan_ = {};
-        plan_path_.clear();
+        plans_.Clear();
       } else {
         LoadPlan(configured_plan, configured_floor);
       }
     }
     return why;
   };
-  if (s.plan_path() != plan_path_ || s.floor() != floor_) {
+  if (s.plan_path() != plans_.path() || s.floor() != plans_.floor()) {
     if (const std::string e = LoadPlan(s.plan_path(), s.floor()); !e.empty())
       return refuse("of plan " + s.plan_path() + ", which does not load now: " + e);
     switched = true;
   }
-  if (s.plan_digest() != plan_.digest)
+  if (s.plan_digest() != plans_.current().digest)
     return refuse("of plan " + s.plan_path() + " as it was before it changed");
   // The wall store first, checked whole before anything is kept.
   // Coordinates as the codec bounds the headset's (slam frame), twice that on the plan.

@@ -6,7 +6,7 @@
 namespace floorpose::platform {
 
 std::optional<Crew::OnPlan> Engine::WhereOnPlan(std::string* error) const {
-  if (!plan_.routes) {
+  if (!plans_.current().routes) {
     *error = "no floor plan";
     return std::nullopt;
   }
@@ -14,7 +14,8 @@ std::optional<Crew::OnPlan> Engine::WhereOnPlan(std::string* error) const {
     *error = "no position on the plan yet";
     return std::nullopt;
   }
-  return Crew::OnPlan{plan_.routes.get(), plan_.id, floor_, alignment().T_plan_slam,
+  return Crew::OnPlan{plans_.current().routes.get(), plans_.current().id, plans_.floor(),
+                      alignment().T_plan_slam,
                       Eigen::Vector2d(last_plan_pose_->x(), last_plan_pose_->y())};
 }
 
