@@ -261,7 +261,7 @@ void Daemon::AfterInput() {
 }
 
 void Daemon::ApplyFinished(bool wait) {
-  std::optional<platform::Engine::Done> done;
+  std::optional<platform::Done> done;
   {
     std::unique_lock lock(mu_);
     if (wait) cv_.wait(lock, [&] { return stop_ || done_.has_value(); });
@@ -279,7 +279,7 @@ void Daemon::WorkerLoop() {
   if (setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), 10) != 0)
     spdlog::debug("registration worker keeps its priority: {}", std::strerror(errno));
   while (true) {
-    platform::Engine::Job job;
+    platform::Job job;
     {
       std::unique_lock lock(mu_);
       cv_.wait(lock, [&] { return stop_ || job_.has_value(); });
@@ -287,7 +287,7 @@ void Daemon::WorkerLoop() {
       job = std::move(*job_);
       job_.reset();
     }
-    platform::Engine::Done done = platform::Engine::Run(std::move(job), platform::MonotonicNs);
+    platform::Done done = platform::RunJob(std::move(job), platform::MonotonicNs);
     {
       std::lock_guard lock(mu_);
       done_ = std::move(done);

@@ -65,8 +65,8 @@ class Daemon {
   // Io thread <-> worker: one job slot, one result slot (latest wins).
   std::mutex mu_;
   std::condition_variable cv_;
-  std::optional<platform::Engine::Job> job_;
-  std::optional<platform::Engine::Done> done_;
+  std::optional<platform::Job> job_;
+  std::optional<platform::Done> done_;
   bool stop_ = false;
 
   // Io thread -> snapshot thread: the latest snapshot to write (latest wins).

@@ -248,7 +248,7 @@ void Engine::OnHeadsetPose(const Envelope& e) {
     est.reliability.reason = "headset tracking lost";
   }
   const v1::PlanPose out = ToPlanPose(est, source_stamp_ns);
-  searches_.AddPosition(pose.stamp_ns, pose.pose_slam.position, tracker_.options().search_window_s);
+  jobs_.AddPosition(pose.stamp_ns, pose.pose_slam.position, tracker_.options().search_window_s);
   if (config_.track_history_s() > 0) {
     recent_.emplace_back(pose.pose_slam, out);
     const auto horizon = static_cast<int64_t>(config_.track_history_s() * 1e9);
@@ -480,11 +480,10 @@ v1::DaemonStatus Engine::Status(const std::string& message) const {
   s.set_live_meshes(store_.meshes());
   s.set_wall_points(store_.points());
   *s.mutable_counters() = intake_.counters();
-  if (last_registration_) {
-    *s.mutable_last_registration() = ToProto(last_registration_->result);
-    s.mutable_last_registration()->set_accepted(last_registration_->accepted);
-    if (!last_registration_->accepted)
-      s.mutable_last_registration()->set_reason(last_registration_->why);
+  if (const auto& last = jobs_.last()) {
+    *s.mutable_last_registration() = ToProto(last->result);
+    s.mutable_last_registration()->set_accepted(last->accepted);
+    if (!last->accepted) s.mutable_last_registration()->set_reason(last->why);
   }
   s.set_alignment_version(alignment().version);
   s.set_stamp_ns(now_ns_());

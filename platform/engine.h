@@ -32,8 +32,8 @@
 #include "platform/floor_follower.h"
 #include "platform/floor_plan_io.h"
 #include "platform/intake.h"
+#include "platform/jobs.h"
 #include "platform/plan_assets.h"
-#include "platform/search_memory.h"
 
 namespace floorpose::platform {
 
@@ -49,39 +49,6 @@ class Engine {
  public:
   // Receives every message to publish, with its topic.
   using Publish = std::function<void(Topic, const google::protobuf::Message&)>;
-
-  // A job for the worker, everything it needs copied so it can run on any thread: an
-  // update of the belief, or a search of the whole plan.
-  struct Job {
-    std::vector<Eigen::Vector2d> cloud;  // the window's wall points, slam frame
-    std::shared_ptr<const ClosestWallIndex> index;
-    Se2 initial;           // the alignment in use (a search refines it with its places)
-    uint64_t version = 0;  // ...and its version (0: none)
-    int64_t stamp_ns = 0;
-    // Set: search the whole plan for the cloud, then refine the places on `index` with
-    // `icp`, as `refine` says, on the wearer's slam positions over the same window.
-    std::shared_ptr<GlobalSearchCache> global;
-    IcpOptions icp;
-    RefineOptions refine;
-    std::vector<Eigen::Vector2d> path;
-    // Else: an update of the belief on `cloud`.
-    std::optional<tracking::MclUpdate> mcl;
-    tracking::MclOptions mcl_options;
-  };
-  struct Done {
-    Job job;
-    RegistrationResult result;                     // the update's polish (time_ms: the whole job's)
-    std::vector<GlobalPlace> places;               // of a search, best first
-    std::optional<tracking::MclUpdateResult> mcl;  // of an update
-  };
-  // Runs a job; now_ns() is read before and after to fill result.time_ms.
-  static Done Run(Job job, const std::function<int64_t()>& now_ns);
-  // Places refined and ranked on a search job's walls and path, as Run does with the
-  // search's own (the tools score the true place this way).
-  // `ranked`: places it returned before on this job, ranked with the new ones.
-  static std::vector<GlobalPlace> RefineAsSearch(const Job& job,
-                                                 const std::vector<GlobalPlace>& places,
-                                                 const std::vector<GlobalPlace>& ranked = {});
 
   // now_ns stamps statuses: the daemon's monotonic clock, or a virtual one.
   Engine(v1::FloorposedConfig config, Publish publish, std::function<int64_t()> now_ns);
@@ -115,7 +82,7 @@ class Engine {
   // The worker's job when one is due and none is running, and its result.
   std::optional<Job> TakeDueJob();
   void OnRegistrationDone(Done done);
-  bool registration_running() const { return running_; }
+  bool registration_running() const { return jobs_.running(); }
 
   // Publishes a status (message: a command's result, or empty).
   void PublishStatus(const std::string& message);
@@ -162,9 +129,6 @@ class Engine {
   // A .floors set: takes the floor the headset's height says, once it has said so for
   // floors.change_hold_s.
   void FollowFloors(const DecodedPose& pose);
-  // A search of the whole plan over the walls since `since_ns`; nothing when those walls
-  // were searched already or are too few.
-  std::optional<Job> SearchJob(int64_t since_ns, size_t min_points);
   // The recent trajectory under the alignment in use (PlanTrack).
   void PublishTrack();
   v1::PlanPose ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) const;
@@ -198,19 +162,12 @@ class Engine {
   Offload offload_;
   bool plan_loading_ = false;                   // a load_plan command is being built elsewhere
   std::optional<v1::PlanPose> last_plan_pose_;  // as published
-  struct LastRegistration {
-    RegistrationResult result;
-    bool accepted = false;
-    std::string why;
-  };
-  std::optional<LastRegistration> last_registration_;
   Intake intake_;                // the device's timeline, its refusals counted, warnings paced
   std::optional<double> eye_z_;  // slam height of the latest pose
   // Recent poses: slam, and as published (for PlanTrack).
   std::deque<std::pair<Pose2, v1::PlanPose>> recent_;
-  SearchMemory searches_;  // the path and walls of the plan's searches
-  Crew crew_;              // the alert, the way back, markers, teammates
-  bool running_ = false;
+  Crew crew_;          // the alert, the way back, markers, teammates
+  JobScheduler jobs_;  // the worker's: which is due, the latest update's result
 };
 
 }  // namespace floorpose::platform

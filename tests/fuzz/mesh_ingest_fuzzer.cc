@@ -71,7 +71,7 @@ class Session {
       case 3: Raw(in); break;
     }
     if (auto job = engine_.TakeDueJob())
-      engine_.OnRegistrationDone(Engine::Run(std::move(*job), [this] { return stamp_; }));
+      engine_.OnRegistrationDone(RunJob(std::move(*job), [this] { return stamp_; }));
   }
 
   void Finish() {

@@ -54,7 +54,7 @@ void GoOn(Engine& engine, int64_t stamp_ns) {
   for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) wall.add_triangles(i);
   engine.OnMeshDelta(Wrap(wall, stamp_ns));
   if (auto job = engine.TakeDueJob())
-    engine.OnRegistrationDone(Engine::Run(std::move(*job), [] { return int64_t{0}; }));
+    engine.OnRegistrationDone(RunJob(std::move(*job), [] { return int64_t{0}; }));
   engine.SaveState();
   engine.Status("");
 }

@@ -257,7 +257,7 @@ TEST_F(EngineInputTest, TheSearchWaitsForNewWalls) {
   engine_->OnHeadsetPose(Wrap(Pose(1 * s)));
   auto first = engine_->TakeDueJob();
   ASSERT_TRUE(first && first->global);
-  engine_->OnRegistrationDone(Engine::Run(std::move(*first), [] { return int64_t{0}; }));
+  engine_->OnRegistrationDone(RunJob(std::move(*first), [] { return int64_t{0}; }));
   ASSERT_FALSE(engine_->tracker().has_alignment());
   // The wearer stands; intervals pass with nothing new scanned: no search.
   for (int k = 2; k <= 10; ++k) {
@@ -267,7 +267,7 @@ TEST_F(EngineInputTest, TheSearchWaitsForNewWalls) {
   // The wall is scanned again (its points sampled anew): searched again, within an
   // interval.
   engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::UPDATED, 11 * s, 9.0)));
-  std::optional<Engine::Job> second;
+  std::optional<Job> second;
   for (int k = 11; k <= 14 && !second; ++k) {
     engine_->OnHeadsetPose(Wrap(Pose(k * s)));
     second = engine_->TakeDueJob();

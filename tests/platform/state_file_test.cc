@@ -184,7 +184,7 @@ class EngineStateTest : public testing::TempDirTest {
     engine.OnHeadsetPose(
         Wrap(tools::ToHeadsetPose(step.slam, kFrame, step.stamp_ns), step.stamp_ns));
     if (auto job = engine.TakeDueJob())
-      engine.OnRegistrationDone(Engine::Run(std::move(*job), [] { return int64_t{0}; }));
+      engine.OnRegistrationDone(RunJob(std::move(*job), [] { return int64_t{0}; }));
   }
   // Walks the first half of a walk through the room after a wall pick.
   sim::DemoWalk WalkInto(Engine& engine) {

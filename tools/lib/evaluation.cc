@@ -164,7 +164,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     }
     if (baseline != Baseline::kNone) continue;  // baselines never register
     if (auto job = engine.TakeDueJob()) {
-      platform::Engine::Done done = platform::Engine::Run(std::move(*job), platform::MonotonicNs);
+      platform::Done done = platform::RunJob(std::move(*job), platform::MonotonicNs);
       if (done.job.global)
         ++report->global_searches;
       else
@@ -175,7 +175,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
         // The true place as a search would have it: is it missed, or beaten?
         const double score = done.job.global->Get().Score(done.job.cloud, latest->T_plan_slam);
         const std::vector<GlobalPlace> true_place =
-            platform::Engine::RefineAsSearch(done.job, {{latest->T_plan_slam, score}});
+            platform::RefineAsSearch(done.job, {{latest->T_plan_slam, score}});
         for (const GlobalPlace& place : true_place)
           spdlog::debug(
               "truth itself: scoring {:.3f}, refined fit {:.4f}, {:.0f}% inliers, {} crossings, "
