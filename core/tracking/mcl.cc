@@ -315,7 +315,9 @@ std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places, int64_
     StartBelief(fit[0]->T_plan_slam, AlignmentSource::kGlobalSearch, stamp_ns);
     // The search chose these places for fitting the window's walls: those walls say
     // nothing more about them (the best of many random places fits them well too). Only
-    // walls that come after the search weigh the belief and its doubt.
+    // walls that come after the search weigh the belief and its doubt, and until they
+    // have there is no place to publish: the first of k equal places is a guess.
+    alignment_.version = 0;
     last_update_ns_ = stamp_ns;
     return "seeded with " + std::to_string(k) + " place(s)";
   }

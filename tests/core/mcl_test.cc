@@ -242,6 +242,8 @@ TEST(MclTrackerTest, ASearchedPlaceIsNotVouchedForByTheWallsItWasFoundWith) {
   GlobalPlace right;
   right.T_plan_slam = room.truth;
   ASSERT_THAT(mcl.OfferPlaces({right}, t), ::testing::HasSubstr("seeded with 1"));
+  EXPECT_FALSE(mcl.has_alignment()) << "no place to publish before new walls weigh the seed";
+  EXPECT_EQ(mcl.Project({Eigen::Vector2d(2, 2), 0, 1.6}).alignment_version, 0u);
   EXPECT_FALSE(mcl.UpdateDue(t, 1000)) << "nothing new since the search";
   t += 1000000000;
   ASSERT_TRUE(mcl.UpdateDue(t, 1000));
@@ -249,6 +251,7 @@ TEST(MclTrackerTest, ASearchedPlaceIsNotVouchedForByTheWallsItWasFoundWith) {
   EXPECT_NEAR(u.evidence, 1.0 / mcl.options().window_s, 1e-9) << "only the walls since the search";
   mcl.FinishUpdate(RunMclUpdate(std::move(u), room.SeenFrom({2, 2}), *room.index, mcl.options()),
                    t);
+  EXPECT_TRUE(mcl.has_alignment()) << "weighed: its leading place is published";
   EXPECT_NE(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable)
       << "the best of many places fits the walls it was chosen for, right or not";
   // The walls that come after the search do vouch for it.
