@@ -36,6 +36,26 @@ tracking::MclOptions ToMclOptions(const v1::FloorposedConfig& config);
 // The configuration a device moving on this odometry is tracked with: for WHEEL,
 // tracking.wheel replaces the headset's drift and window.
 v1::FloorposedConfig ForOdometry(v1::FloorposedConfig config, v1::HeadsetPose::Odometry odometry);
+// The configuration a device is tracked with: as configured, for the odometry its poses
+// say (ForOdometry).
+class DeviceConfig {
+ public:
+  explicit DeviceConfig(v1::FloorposedConfig configured)
+      : configured_(std::move(configured)), in_use_(configured_) {}
+  // The device's poses say `odometry`: false when that is the one in use already.
+  bool Use(v1::HeadsetPose::Odometry odometry) {
+    if (odometry == odometry_) return false;
+    odometry_ = odometry;
+    in_use_ = ForOdometry(configured_, odometry);
+    return true;
+  }
+  const v1::FloorposedConfig& get() const { return in_use_; }
+
+ private:
+  const v1::FloorposedConfig configured_;
+  v1::FloorposedConfig in_use_;
+  v1::HeadsetPose::Odometry odometry_ = v1::HeadsetPose::VISUAL_INERTIAL;
+};
 // The DDS Security files of dds.security, or nothing when it is not set.
 std::optional<DdsSecurity> ToDdsSecurity(const v1::FloorposedConfig& config);
 WallExtractionOptions ToWallExtractionOptions(const v1::FloorposedConfig& config);

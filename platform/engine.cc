@@ -14,34 +14,33 @@
 
 namespace floorpose::platform {
 
-Engine::Engine(v1::FloorposedConfig config, Publish publish, std::function<int64_t()> now_ns)
-    : base_config_(std::move(config)),
-      config_(base_config_),
+Engine::Engine(v1::FloorposedConfig configured, Publish publish, std::function<int64_t()> now_ns)
+    : config_(std::move(configured)),
       publish_(std::move(publish)),
       now_ns_(std::move(now_ns)),
       frame_(
-          ParseHeadsetFrame(config_.headset_frame()).value_or(HeadsetFrame::kUnityLeftHandedYUp)),
-      wall_options_(ToWallExtractionOptions(config_)),
-      tracker_(ToMclOptions(config_)),
-      store_(config_.walls().voxel_m()),
-      plans_(config_.floor()),
-      intake_({static_cast<int64_t>(config_.limits().max_future_s() * 1e9),
-               static_cast<int64_t>(config_.limits().restart_gap_s() * 1e9)},
-              config_.limits().max_future_s(), now_ns_),
-      crew_(config_.dds().device_id(),
-            {config_.alerts().motion_m(), config_.alerts().pre_alert_s(),
-             config_.alerts().no_motion_s()},
+          ParseHeadsetFrame(config().headset_frame()).value_or(HeadsetFrame::kUnityLeftHandedYUp)),
+      wall_options_(ToWallExtractionOptions(config())),
+      tracker_(ToMclOptions(config())),
+      store_(config().walls().voxel_m()),
+      plans_(config().floor()),
+      intake_({static_cast<int64_t>(config().limits().max_future_s() * 1e9),
+               static_cast<int64_t>(config().limits().restart_gap_s() * 1e9)},
+              config().limits().max_future_s(), now_ns_),
+      crew_(config().dds().device_id(),
+            {config().alerts().motion_m(), config().alerts().pre_alert_s(),
+             config().alerts().no_motion_s()},
             publish_) {}
 
 std::string Engine::Start() {
-  if (config_.plan_path().empty()) return {};
-  const std::string e = LoadPlan(config_.plan_path(), config_.floor());
+  if (config().plan_path().empty()) return {};
+  const std::string e = LoadPlan(config().plan_path(), config().floor());
   if (!e.empty()) spdlog::error("{}; waiting for a LoadPlan command", e);
   return e;
 }
 
 std::string Engine::LoadPlan(const std::string& path, const std::string& floor) {
-  return UseLoad(ReadPlan(config_, now_ns_, path, floor));
+  return UseLoad(ReadPlan(config(), now_ns_, path, floor));
 }
 
 std::string Engine::UseLoad(PlanLoad load) {
@@ -68,8 +67,8 @@ void Engine::UsePlan(bool another_floor) {
 
 void Engine::FollowFloors(const DecodedPose& pose) {
   const auto change =
-      plans_.Follow(pose.pose_slam.z, pose.stamp_ns, config_.floors().change_margin_m(),
-                    config_.floors().change_hold_s());
+      plans_.Follow(pose.pose_slam.z, pose.stamp_ns, config().floors().change_margin_m(),
+                    config().floors().change_hold_s());
   if (!change) return;
   const FloorEntry& to = *change->to;
   const std::string left = plans_.floor();
@@ -109,10 +108,10 @@ void Engine::PublishExplored() {
 
 WallExtractionOptions Engine::BandedWallOptions() const {
   WallExtractionOptions o = wall_options_;
-  const double lo = config_.walls().min_height_above_eye_m();
+  const double lo = config().walls().min_height_above_eye_m();
   if (eye_z_ && lo > -10) {
     o.min_z = *eye_z_ + lo;
-    o.max_z = *eye_z_ + config_.walls().max_height_above_eye_m();
+    o.max_z = *eye_z_ + config().walls().max_height_above_eye_m();
   }
   return o;
 }
@@ -129,7 +128,7 @@ void Engine::OnMeshDelta(const Envelope& e) {
   intake_.counters().set_mesh_deltas_in(intake_.counters().mesh_deltas_in() + 1);
   DecodedMesh mesh;
   Refusal kind{};
-  const std::string error = DecodeMeshDelta(e.payload, frame_, config_.limits(), &mesh, &kind);
+  const std::string error = DecodeMeshDelta(e.payload, frame_, config().limits(), &mesh, &kind);
   if (!error.empty()) return intake_.Reject(kind, error);
   if (!TakeStamp("mesh " + std::to_string(mesh.mesh_id), &mesh.stamp_ns)) return;
   if (mesh.change == v1::MeshDelta::REMOVED) {
@@ -180,7 +179,7 @@ void Engine::OnMeshDelta(const Envelope& e) {
     intake_.Warn("unknown mesh",
                  "UPDATED for unknown mesh " + std::to_string(mesh.mesh_id) + ": stored as new");
   }
-  const size_t cap = config_.limits().max_wall_points();
+  const size_t cap = config().limits().max_wall_points();
   if (points.size() > cap)
     return intake_.Reject(Refusal::kOverLimits,
                           "mesh " + std::to_string(mesh.mesh_id) + ": " +
@@ -214,13 +213,13 @@ void Engine::OnHeadsetPose(const Envelope& e) {
   intake_.counters().set_poses_in(intake_.counters().poses_in() + 1);
   DecodedPose pose;
   Refusal kind{};
-  const std::string error = DecodeHeadsetPose(e.payload, frame_, config_.limits(), &pose, &kind);
+  const std::string error = DecodeHeadsetPose(e.payload, frame_, config().limits(), &pose, &kind);
   if (!error.empty()) return intake_.Reject(kind, error);
   const int64_t source_stamp_ns = pose.stamp_ns;  // as the headset stamped it
   if (!TakeStamp("pose", &pose.stamp_ns)) return;
   const Intake::PoseOrder order = intake_.TakePose(pose.stamp_ns, source_stamp_ns);
   if (order == Intake::PoseOrder::kDuplicate) return;
-  if (pose.odometry != odometry_) UseOdometry(pose.odometry);
+  if (config_.Use(pose.odometry)) UseOdometry(pose.odometry);
   PlanPoseEstimate est;
   if (order == Intake::PoseOrder::kLate) {
     // Late: answered under the alignment in use, but the walk is not walked backwards.
@@ -249,9 +248,9 @@ void Engine::OnHeadsetPose(const Envelope& e) {
   }
   const v1::PlanPose out = ToPlanPose(est, source_stamp_ns);
   jobs_.AddPosition(pose.stamp_ns, pose.pose_slam.position, tracker_.options().search_window_s);
-  if (config_.track_history_s() > 0) {
+  if (config().track_history_s() > 0) {
     recent_.emplace_back(pose.pose_slam, out);
-    const auto horizon = static_cast<int64_t>(config_.track_history_s() * 1e9);
+    const auto horizon = static_cast<int64_t>(config().track_history_s() * 1e9);
     while (!recent_.empty() && recent_.front().second.source_stamp_ns() < source_stamp_ns - horizon)
       recent_.pop_front();
   }
@@ -267,20 +266,18 @@ void Engine::OnHeadsetPose(const Envelope& e) {
     if (pose.stamp_ns >= plan.next_explored_ns) {
       PublishExplored();
       plan.next_explored_ns =
-          pose.stamp_ns + static_cast<int64_t>(config_.explored().publish_period_s() * 1e9);
+          pose.stamp_ns + static_cast<int64_t>(config().explored().publish_period_s() * 1e9);
     }
   }
 }
 
 void Engine::UseOdometry(v1::HeadsetPose::Odometry odometry) {
-  odometry_ = odometry;
-  config_ = ForOdometry(base_config_, odometry);
-  const tracking::MclOptions o = ToMclOptions(config_);
+  const tracking::MclOptions o = ToMclOptions(config());
   tracker_.SetDrift(o.motion, o.window_s);
   spdlog::info(
       "device {} moves on {} odometry: heading drift {:.2f} deg/sqrt(m), {:.3f} per turn, "
       "window {} s",
-      config_.dds().device_id(), v1::HeadsetPose::Odometry_Name(odometry),
+      config().dds().device_id(), v1::HeadsetPose::Odometry_Name(odometry),
       o.motion.heading_rad_per_sqrt_m * 180 / M_PI, o.motion.heading_per_turn, o.window_s);
 }
 
@@ -354,11 +351,11 @@ void Engine::OnCommand(const Envelope& e) {
         else if (load.plan_id().empty() && load.path().empty())
           error = "load_plan without plan_id or path";
         else if (!load.plan_id().empty())
-          FindPlanFile(config_.plan_dir(), load.plan_id(), &path, &error);
+          FindPlanFile(config().plan_dir(), load.plan_id(), &path, &error);
         else if (plan_loading_)
           error = "another plan is loading: try again when it is answered";
         if (!error.empty()) break;
-        const std::string floor = load.floor().empty() ? config_.floor() : load.floor();
+        const std::string floor = load.floor().empty() ? config().floor() : load.floor();
         // Read and built elsewhere; the poses meanwhile go on on the plan in use.
         auto built = std::make_shared<PlanLoad>();
         auto finish = [this, built, cmd, reply, path] {
@@ -367,7 +364,7 @@ void Engine::OnCommand(const Envelope& e) {
           if (refused.empty()) store_.TakeNewPoints();  // the store is kept: the same walls
           FinishCommand(cmd, reply, refused, refused.empty() ? "plan loaded: " + path : "");
         };
-        auto work = [built, config = config_, now = now_ns_, path, floor] {
+        auto work = [built, config = config(), now = now_ns_, path, floor] {
           *built = ReadPlan(config, now, path, floor);
         };
         if (!offload_) {
@@ -403,7 +400,7 @@ void Engine::OnCommand(const Envelope& e) {
         done = "reset: alignment, wall store, way back and the headset's clock cleared";
         break;
       case v1::Command::kGetState:
-        for (std::string& id : ListPlanIds(config_.plan_dir())) reply.add_plans(std::move(id));
+        for (std::string& id : ListPlanIds(config().plan_dir())) reply.add_plans(std::move(id));
         done = "state";
         break;
       case v1::Command::kRoute: {

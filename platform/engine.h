@@ -26,6 +26,7 @@
 #include "floorpose/v1/config.pb.h"
 #include "floorpose/v1/floorpose.pb.h"
 #include "platform/codec.h"
+#include "platform/config.h"
 #include "platform/crew.h"
 #include "platform/dds.h"
 #include "platform/device_clock.h"
@@ -51,7 +52,7 @@ class Engine {
   using Publish = std::function<void(Topic, const google::protobuf::Message&)>;
 
   // now_ns stamps statuses: the daemon's monotonic clock, or a virtual one.
-  Engine(v1::FloorposedConfig config, Publish publish, std::function<int64_t()> now_ns);
+  Engine(v1::FloorposedConfig configured, Publish publish, std::function<int64_t()> now_ns);
 
   // Loads the configured plan, if any; returns the error (the engine then waits for a
   // LoadPlan command).
@@ -105,7 +106,7 @@ class Engine {
   Reliability reliability() const { return tracker_.CurrentReliability(); }
   const WallStore& store() const { return store_; }
   // The configuration in use: as configured, for the device's odometry (ForOdometry).
-  const v1::FloorposedConfig& config() const { return config_; }
+  const v1::FloorposedConfig& config() const { return config_.get(); }
   // What the wearer has explored on the loaded plan; null without a plan or when disabled.
   const ExploredMap* explored() const { return plans_.current().explored.get(); }
   // Publishes the explored map now if it changed since the last one.
@@ -136,8 +137,8 @@ class Engine {
   bool TakeStamp(const std::string& what, int64_t* stamp_ns);
   // The wall options with the height band about the wearer's eyes, once a pose is known.
   WallExtractionOptions BandedWallOptions() const;
-  bool Mine(const Envelope& e) const { return e.device_id == config_.dds().device_id(); }
-  // Tracks the device with the options for its odometry from now on (ForOdometry).
+  bool Mine(const Envelope& e) const { return e.device_id == config().dds().device_id(); }
+  // The device moves on a new odometry (config_ has taken it): tracked with its drift.
   void UseOdometry(v1::HeadsetPose::Odometry odometry);
   // The plan and alignment in use and the wearer's latest plan position, for the crew's
   // routes and markers; why there are none (no plan, no position yet) in *error.
@@ -149,9 +150,7 @@ class Engine {
   // the position is RELIABLE.
   void ExploreWalls(const std::vector<WallPoint>& points);
 
-  const v1::FloorposedConfig base_config_;  // as configured
-  v1::FloorposedConfig config_;             // ...for the device's odometry
-  v1::HeadsetPose::Odometry odometry_ = v1::HeadsetPose::VISUAL_INERTIAL;
+  DeviceConfig config_;  // as configured, for the device's odometry
   Publish publish_;
   std::function<int64_t()> now_ns_;
   HeadsetFrame frame_;

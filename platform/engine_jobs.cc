@@ -8,7 +8,7 @@ namespace floorpose::platform {
 
 std::optional<Job> Engine::TakeDueJob() {
   return jobs_.TakeDue(tracker_, store_, plans_.current().global,
-                       config_.walls().window_max_points(), intake_.clock().newest_ns());
+                       config().walls().window_max_points(), intake_.clock().newest_ns());
 }
 
 void Engine::OnRegistrationDone(Done done) {

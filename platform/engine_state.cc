@@ -6,7 +6,7 @@ namespace floorpose::platform {
 
 v1::StateSnapshot Engine::SaveState() const {
   v1::StateSnapshot s;
-  s.set_device_id(config_.dds().device_id());
+  s.set_device_id(config().dds().device_id());
   s.set_plan_path(plans_.path());
   s.set_plan_digest(plans_.current().digest);
   s.set_floor(plans_.floor());
@@ -48,8 +48,8 @@ v1::StateSnapshot Engine::SaveState() const {
 }
 
 std::string Engine::RestoreState(const v1::StateSnapshot& s) {
-  if (s.device_id() != config_.dds().device_id())
-    return "of device '" + s.device_id() + "', not '" + config_.dds().device_id() + "'";
+  if (s.device_id() != config().dds().device_id())
+    return "of device '" + s.device_id() + "', not '" + config().dds().device_id() + "'";
   if (s.plan_path().empty()) return "without a floor plan";
   // The app may have loaded another plan before the restart: that one again, and back to
   // the configured one if the snapshot is refused after all.
@@ -75,13 +75,13 @@ std::string Engine::RestoreState(const v1::StateSnapshot& s) {
     return refuse("of plan " + s.plan_path() + " as it was before it changed");
   // The wall store first, checked whole before anything is kept.
   // Coordinates as the codec bounds the headset's (slam frame), twice that on the plan.
-  const double max_abs = config_.limits().max_abs_coordinate_m();
+  const double max_abs = config().limits().max_abs_coordinate_m();
   auto within = [](const Eigen::Vector2d& v, double limit) {
     return v.allFinite() && v.cwiseAbs().maxCoeff() <= limit;
   };
   size_t total = 0;
   for (const v1::StateSnapshot::Mesh& m : s.meshes()) total += m.points_size() / 2;
-  if (total > config_.limits().max_wall_points())
+  if (total > config().limits().max_wall_points())
     return refuse(std::to_string(total) + " wall points, more than limits.max_wall_points");
   std::vector<std::pair<const v1::StateSnapshot::Mesh*, std::vector<WallPoint>>> meshes;
   for (const v1::StateSnapshot::Mesh& m : s.meshes()) {

@@ -44,7 +44,7 @@ std::string Engine::PlaceMarker(const v1::Command::PlaceMarker& request, v1::Mar
   if (!at) return error + ": the gaze point has no place on the plan";
   const auto& h = request.headset_point();
   const Eigen::Vector3d slam = PointToSlam(frame_, {h.x(), h.y(), h.z()});
-  if (!slam.allFinite() || slam.cwiseAbs().maxCoeff() > config_.limits().max_abs_coordinate_m())
+  if (!slam.allFinite() || slam.cwiseAbs().maxCoeff() > config().limits().max_abs_coordinate_m())
     return "gaze point not finite or out of range";
   return crew_.PlaceMarker(request, *at, at->T_plan_slam * slam.head<2>(),
                            last_plan_pose_->reliability(), marker);
