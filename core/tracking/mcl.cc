@@ -250,7 +250,9 @@ MclUpdate MclTracker::PrepareUpdate(int64_t now_ns) {
   u.evidence = std::clamp(u.dt_s / options_.window_s, 0.0, 1.0);
   u.seed = rng_.Next();
   u.belief_version = belief_version_;
-  if (has_alignment()) u.published = alignment_.T_plan_slam;
+  // The place in use stays until another holds twice its mass; a search's seed is its
+  // best place, published or not yet.
+  if (!belief_.empty()) u.published = alignment_.T_plan_slam;
   // From here: the walk since prepared, from where the wearer is.
   u.path_slam = std::move(odometry_.path);
   odometry_.path.clear();
