@@ -48,6 +48,16 @@ double Metres(const Eigen::Vector2d& p, const Eigen::Vector2d& q) {
                     (p.y() - q.y()) * M_PI / 180 * 6371000 * std::cos(phi));
 }
 
+// The events a receiver has written so far, one JSON object a line.
+std::vector<json> ReadEvents(const fs::path& path) {
+  std::vector<json> events;
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line))
+    if (!line.empty()) events.push_back(json::parse(line));
+  return events;
+}
+
 using CotTest = DaemonTest;
 
 TEST_F(CotTest, AtakSeesTheWearerWhereTheDaemonPutsItAndTheMarkersPlaced) {
@@ -112,11 +122,7 @@ TEST_F(CotTest, AtakSeesTheWearerWhereTheDaemonPutsItAndTheMarkersPlaced) {
   bool have_last = false, have_marker = false;
   while (std::chrono::steady_clock::now() < deadline && !(have_last && have_marker)) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    got.clear();
-    std::ifstream in(events);
-    std::string line;
-    while (std::getline(in, line))
-      if (!line.empty()) got.push_back(json::parse(line));
+    got = ReadEvents(events);
     have_last = false, have_marker = false;
     for (const json& e : got) {
       if (e.contains("error")) continue;
@@ -155,11 +161,7 @@ TEST_F(CotTest, AtakSeesTheWearerWhereTheDaemonPutsItAndTheMarkersPlaced) {
   bool dashboard_has_last = false;
   for (int i = 0; i < 50 && !dashboard_has_last; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    from_dashboard.clear();
-    std::ifstream in(dashboard_events);
-    std::string line;
-    while (std::getline(in, line))
-      if (!line.empty()) from_dashboard.push_back(json::parse(line));
+    from_dashboard = ReadEvents(dashboard_events);
     for (const json& e : from_dashboard)
       dashboard_has_last |= !e.contains("error") && e["uid"] == "floorpose-hl-test" &&
                             e["callsign"] == "Alice" &&
