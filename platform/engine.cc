@@ -59,7 +59,7 @@ void Engine::UsePlan(bool another_floor) {
     tracker_.ChangeFloor(plan.index);
   else
     tracker_.SetPlan(plan.index);
-  last_plan_pose_.reset();
+  history_.ForgetLatest();
   // Its explored map at once: the plan's rooms, or the floor as it was left.
   if (plan.explored) plan.explored_sent = plan.explored->revision() - 1;
   PublishExplored();
@@ -88,14 +88,15 @@ void Engine::FollowFloors(const DecodedPose& pose) {
 
 void Engine::ExploreWalls(const std::vector<WallPoint>& points) {
   ExploredMap* explored = plans_.current().explored.get();
-  if (!explored || !last_plan_pose_ || alignment().version == 0 ||
-      last_plan_pose_->reliability().flag() != v1::Reliability::RELIABLE)
+  const std::optional<v1::PlanPose>& latest = history_.latest();
+  if (!explored || !latest || alignment().version == 0 ||
+      latest->reliability().flag() != v1::Reliability::RELIABLE)
     return;
   const Se2& T = alignment().T_plan_slam;
   std::vector<Eigen::Vector2d> plan;
   plan.reserve(points.size());
   for (const WallPoint& w : points) plan.push_back(T * w.p.cast<double>());
-  explored->AddWalls({last_plan_pose_->x(), last_plan_pose_->y()}, plan);
+  explored->AddWalls({latest->x(), latest->y()}, plan);
 }
 
 void Engine::PublishExplored() {
@@ -109,9 +110,9 @@ void Engine::PublishExplored() {
 WallExtractionOptions Engine::BandedWallOptions() const {
   WallExtractionOptions o = wall_options_;
   const double lo = config().walls().min_height_above_eye_m();
-  if (eye_z_ && lo > -10) {
-    o.min_z = *eye_z_ + lo;
-    o.max_z = *eye_z_ + config().walls().max_height_above_eye_m();
+  if (const auto eye_z = history_.eye_z(); eye_z && lo > -10) {
+    o.min_z = *eye_z + lo;
+    o.max_z = *eye_z + config().walls().max_height_above_eye_m();
   }
   return o;
 }
@@ -119,7 +120,7 @@ WallExtractionOptions Engine::BandedWallOptions() const {
 bool Engine::TakeStamp(const std::string& what, int64_t* stamp_ns) {
   bool restarted = false;
   if (!intake_.TakeStamp(what, stamp_ns, &restarted)) return false;
-  if (restarted) recent_.clear();  // its source stamps are of the old clock
+  if (restarted) history_.ClearTrack();  // its source stamps are of the old clock
   return true;
 }
 
@@ -225,7 +226,7 @@ void Engine::OnHeadsetPose(const Envelope& e) {
     // Late: answered under the alignment in use, but the walk is not walked backwards.
     est = tracker_.Project(pose.pose_slam);
   } else {
-    eye_z_ = pose.pose_slam.z;
+    history_.SetEyeZ(pose.pose_slam.z);
     FollowFloors(pose);
     if (pose.tracking == v1::HeadsetPose::TRACKING_LOST) {
       tracker_.LoseTracking();
@@ -248,16 +249,11 @@ void Engine::OnHeadsetPose(const Envelope& e) {
   }
   const v1::PlanPose out = ToPlanPose(est, source_stamp_ns);
   jobs_.AddPosition(pose.stamp_ns, pose.pose_slam.position, tracker_.options().search_window_s);
-  if (config().track_history_s() > 0) {
-    recent_.emplace_back(pose.pose_slam, out);
-    const auto horizon = static_cast<int64_t>(config().track_history_s() * 1e9);
-    while (!recent_.empty() && recent_.front().second.source_stamp_ns() < source_stamp_ns - horizon)
-      recent_.pop_front();
-  }
+  history_.Record(pose.pose_slam, out, config().track_history_s());
   publish_(Topic::kPlanPose, out);
   intake_.counters().set_plan_poses_out(intake_.counters().plan_poses_out() + 1);
   if (order == Intake::PoseOrder::kLate) return;  // not where the wearer is
-  last_plan_pose_ = out;
+  history_.SetLatest(out);
   crew_.Watch(pose.stamp_ns, pose.pose_slam, plans_.floor(), out);
   PlanAssets& plan = plans_.current();
   if (plan.explored) {
@@ -295,21 +291,8 @@ v1::PlanPose Engine::ToPlanPose(const PlanPoseEstimate& est, int64_t stamp_ns) c
 }
 
 void Engine::PublishTrack() {
-  if (recent_.empty() || alignment().version == 0) return;
-  v1::PlanTrack track;
-  const AlignmentState& a = alignment();
-  track.set_alignment_version(a.version);
-  track.set_floor(plans_.floor());
-  for (const auto& [slam, published] : recent_) {
-    v1::PlanPose* p = track.add_poses();
-    *p = published;
-    const Pose2 plan = Apply(a.T_plan_slam, slam);
-    p->set_x(plan.position.x());
-    p->set_y(plan.position.y());
-    p->set_heading(plan.heading);
-    p->set_alignment_version(a.version);
-  }
-  publish_(Topic::kPlanTrack, track);
+  if (const auto track = history_.Track(alignment(), plans_.floor()))
+    publish_(Topic::kPlanTrack, *track);
 }
 
 namespace {
@@ -423,7 +406,7 @@ void Engine::OnCommand(const Envelope& e) {
         }
         break;
       case v1::Command::kAcknowledgeAlert:
-        if (!crew_.Acknowledge(cmd.acknowledge_alert().by(), last_plan_pose_))
+        if (!crew_.Acknowledge(cmd.acknowledge_alert().by(), history_.latest()))
           error = "no alert to acknowledge";
         else
           done = "alert acknowledged";
@@ -454,7 +437,7 @@ void Engine::FinishCommand(const v1::Command& cmd, v1::CommandReply reply, const
     // Always: after a reset or a new plan, version 0 tells late joiners the old one is void.
     PublishAlignment();
     if (cmd.command_case() == v1::Command::kReset || cmd.command_case() == v1::Command::kLoadPlan)
-      recent_.clear();  // that track belonged to the old alignment or plan
+      history_.ClearTrack();  // that track belonged to the old alignment or plan
     PublishTrack();
   }
   *reply.mutable_status() = Status(prefix + (error.empty() ? done : "refused: " + error));
@@ -486,7 +469,7 @@ v1::DaemonStatus Engine::Status(const std::string& message) const {
   s.set_stamp_ns(now_ns_());
   s.set_message(message);
   *s.mutable_reliability() = ToProto(reliability());
-  *s.mutable_alert() = crew_.AlertMessage(last_plan_pose_);
+  *s.mutable_alert() = crew_.AlertMessage(history_.latest());
   return s;
 }
 

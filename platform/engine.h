@@ -5,7 +5,6 @@
 // the two give the same plan poses.
 #pragma once
 
-#include <deque>
 #include <functional>
 #include <map>
 #include <memory>
@@ -35,6 +34,7 @@
 #include "platform/intake.h"
 #include "platform/jobs.h"
 #include "platform/plan_assets.h"
+#include "platform/pose_history.h"
 
 namespace floorpose::platform {
 
@@ -159,14 +159,11 @@ class Engine {
   WallStore store_;
   PlansInUse plans_;  // the plan in use (its index is the tracker's), and a set's other floors
   Offload offload_;
-  bool plan_loading_ = false;                   // a load_plan command is being built elsewhere
-  std::optional<v1::PlanPose> last_plan_pose_;  // as published
-  Intake intake_;                // the device's timeline, its refusals counted, warnings paced
-  std::optional<double> eye_z_;  // slam height of the latest pose
-  // Recent poses: slam, and as published (for PlanTrack).
-  std::deque<std::pair<Pose2, v1::PlanPose>> recent_;
-  Crew crew_;          // the alert, the way back, markers, teammates
-  JobScheduler jobs_;  // the worker's: which is due, the latest update's result
+  bool plan_loading_ = false;  // a load_plan command is being built elsewhere
+  Intake intake_;              // the device's timeline, its refusals counted, warnings paced
+  PoseHistory history_;        // the latest pose as published, the eye height, the recent track
+  Crew crew_;                  // the alert, the way back, markers, teammates
+  JobScheduler jobs_;          // the worker's: which is due, the latest update's result
 };
 
 }  // namespace floorpose::platform

@@ -10,13 +10,13 @@ std::optional<Crew::OnPlan> Engine::WhereOnPlan(std::string* error) const {
     *error = "no floor plan";
     return std::nullopt;
   }
-  if (!last_plan_pose_ || last_plan_pose_->alignment_version() == 0 || alignment().version == 0) {
+  const std::optional<v1::PlanPose>& latest = history_.latest();
+  if (!latest || latest->alignment_version() == 0 || alignment().version == 0) {
     *error = "no position on the plan yet";
     return std::nullopt;
   }
   return Crew::OnPlan{plans_.current().routes.get(), plans_.current().id, plans_.floor(),
-                      alignment().T_plan_slam,
-                      Eigen::Vector2d(last_plan_pose_->x(), last_plan_pose_->y())};
+                      alignment().T_plan_slam, Eigen::Vector2d(latest->x(), latest->y())};
 }
 
 std::string Engine::PlanRoute(const v1::Command::Route& request, v1::RouteReply* reply) {
@@ -33,7 +33,7 @@ std::string Engine::PlanRoute(const v1::Command::Route& request, v1::RouteReply*
   }
   reply->set_length_m(route.length_m);
   reply->set_goal_moved_m(route.goal_moved_m);
-  *reply->mutable_from_reliability() = last_plan_pose_->reliability();
+  *reply->mutable_from_reliability() = history_.latest()->reliability();
   reply->set_time_ms(static_cast<double>(now_ns_() - t0) * 1e-6);
   return {};
 }
@@ -47,7 +47,7 @@ std::string Engine::PlaceMarker(const v1::Command::PlaceMarker& request, v1::Mar
   if (!slam.allFinite() || slam.cwiseAbs().maxCoeff() > config().limits().max_abs_coordinate_m())
     return "gaze point not finite or out of range";
   return crew_.PlaceMarker(request, *at, at->T_plan_slam * slam.head<2>(),
-                           last_plan_pose_->reliability(), marker);
+                           history_.latest()->reliability(), marker);
 }
 
 }  // namespace floorpose::platform
