@@ -93,7 +93,9 @@ TEST_F(TeamTest, TheWayOutAndTheWayBackKeepClearOfWallsAndOfABlockedMarker) {
   ASSERT_EQ(last.reliability().flag(), v1::Reliability::RELIABLE) << last.ShortDebugString();
   const double body = 0.3;  // routes.body_radius_m
 
-  // The wearer marks a victim where the headset is: it lands where the wearer is.
+  // The wearer marks a victim where the headset is: it lands where the wearer is, under
+  // the alignment in use when it is placed (an update that ends after the last pose moves
+  // it by millimetres from the last pose published).
   v1::Command place;
   place.mutable_place_marker()->set_kind(v1::Marker::VICTIM);
   place.mutable_place_marker()->set_text("conscious");
@@ -101,8 +103,8 @@ TEST_F(TeamTest, TheWayOutAndTheWayBackKeepClearOfWallsAndOfABlockedMarker) {
       tools::ToHeadsetPose(walk.steps.back().slam, kFrame, 0).position();
   const auto placed = link_->Request(place, seconds(5));
   ASSERT_TRUE(placed && placed->ok()) << (placed ? placed->message() : "no reply");
-  EXPECT_NEAR(placed->marker().x(), last.x(), 1e-6);
-  EXPECT_NEAR(placed->marker().y(), last.y(), 1e-6);
+  EXPECT_NEAR(placed->marker().x(), last.x(), 0.05);
+  EXPECT_NEAR(placed->marker().y(), last.y(), 0.05);
   EXPECT_EQ(placed->marker().plan_id(), "office");
   EXPECT_EQ(placed->marker().author(), "hl-test");
   EXPECT_EQ(placed->marker().placed_from().flag(), v1::Reliability::RELIABLE);
@@ -150,14 +152,19 @@ TEST_F(TeamTest, TheWayOutAndTheWayBackKeepClearOfWallsAndOfABlockedMarker) {
   ASSERT_NO_FATAL_FAILURE(PlaceAsLead(m));
   // The daemon holds it once it re-publishes it (it keeps every marker for late joiners).
   platform::Reader markers(*lead_, Topic::kMarker);
-  std::vector<platform::Envelope> heard;
+  // The reader also hears the markers the daemon kept from before (the victim's), so
+  // only copies of this one count.
+  size_t heard = 0;
   ASSERT_TRUE(link_->WaitUntil(
       [&] {
-        for (auto& e : markers.Take()) heard.push_back(std::move(e));
-        return heard.size() >= 2;  // the lead's own and the daemon's copy
+        for (const platform::Envelope& e : markers.Take()) {
+          v1::Marker copy;
+          heard += copy.ParseFromString(e.payload) && copy.id() == m.id();
+        }
+        return heard >= 2;  // the lead's own and the daemon's copy
       },
       seconds(10)))
-      << heard.size() << " copies";
+      << heard << " copies";
   for (const auto& [to, name] : {std::pair{v1::Command::Route::EXIT, "exit"},
                                  std::pair{v1::Command::Route::BACKTRACK, "backtrack"}}) {
     SCOPED_TRACE(name);
