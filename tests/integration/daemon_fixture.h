@@ -107,7 +107,8 @@ class DaemonTest : public ::testing::Test {
 
   // Sends the walk's wall pick (made at step 1), then its meshes and poses paced like a
   // fast replay, so that registrations run while the walk goes on; waits for every
-  // plan pose.
+  // plan pose. The plan-pose writer keeps only its latest pose for a reader it matches
+  // late, so the walk goes on once the first pose's answer is here.
   void PickAndWalk(const sim::DemoWalk& walk) { PickAndWalk(walk, *link_); }
   static void PickAndWalk(const sim::DemoWalk& walk, tools::HeadsetLink& link) {
     link.Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
@@ -117,6 +118,10 @@ class DaemonTest : public ::testing::Test {
         link.Send(Topic::kMeshDelta, tools::ToMeshDelta(m, kFrame, step.stamp_ns), step.stamp_ns);
       link.Send(Topic::kHeadsetPose, tools::ToHeadsetPose(step.slam, kFrame, step.stamp_ns),
                 step.stamp_ns);
+      if (&step == &walk.steps.front()) {
+        ASSERT_TRUE(link.WaitUntil([&] { return !link.plan_poses.empty(); }, seconds(10)))
+            << "no answer to the first pose";
+      }
       link.WaitUntil([] { return false; }, std::chrono::milliseconds(15));
     }
     ASSERT_TRUE(
