@@ -127,9 +127,8 @@ std::optional<ClosestWall> ClosestWallIndex::Query(const Eigen::Vector2d& p) con
   return hit;
 }
 
-std::optional<Eigen::Vector2d> ClosestWallIndex::StepCrossing(const Eigen::Vector2d& p,
-                                                              const Eigen::Vector2d& q) const {
-  if (!p.allFinite() || !q.allFinite()) return std::nullopt;
+bool ClosestWallIndex::StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Vector2d& q) const {
+  if (!p.allFinite() || !q.allFinite()) return false;
   auto cross = [](const Eigen::Vector2d& u, const Eigen::Vector2d& v) {
     return u.x() * v.y() - u.y() * v.x();
   };
@@ -152,10 +151,10 @@ std::optional<Eigen::Vector2d> ClosestWallIndex::StepCrossing(const Eigen::Vecto
       const SegmentData& s = data_[candidates_[j]];
       const double d1 = cross(step, s.a - p), d2 = cross(step, s.a + s.d - p);
       const double d3 = cross(s.d, p - s.a), d4 = cross(s.d, q - s.a);
-      if (d1 * d2 < 0 && d3 * d4 < 0) return p + step * (d3 / (d3 - d4));
+      if (d1 * d2 < 0 && d3 * d4 < 0) return true;
     }
   }
-  return std::nullopt;
+  return false;
 }
 
 size_t ClosestWallIndex::MemoryBytes() const {

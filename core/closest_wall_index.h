@@ -41,12 +41,7 @@ class ClosestWallIndex {
   // candidate lists: exact, in pieces no longer than a cell (any wall across a piece is
   // close enough to its middle for the middle's cell to list it). For every sample of the
   // belief at every step.
-  bool StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Vector2d& q) const {
-    return StepCrossing(p, q).has_value();
-  }
-  // ...and where: the point of a wall the step crosses.
-  std::optional<Eigen::Vector2d> StepCrossing(const Eigen::Vector2d& p,
-                                              const Eigen::Vector2d& q) const;
+  bool StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Vector2d& q) const;
 
   const FloorPlan& plan() const { return plan_; }
   double max_distance_m() const { return options_.max_distance_m; }

@@ -22,7 +22,6 @@ MclTracker::MclTracker(MclOptions options) : options_(std::move(options)) {}
 void MclTracker::SetPlan(std::shared_ptr<const ClosestWallIndex> index) {
   index_ = std::move(index);
   if (index_) recovery_ = Recovery(options_.recovery, options_.measurement, *index_);
-  openings_ = Openings(options_.motion.through_wall);
   Reset();
 }
 
@@ -35,7 +34,6 @@ void MclTracker::ChangeFloor(std::shared_ptr<const ClosestWallIndex> index) {
   checked_ = false;
   last_update_ns_.reset();
   recovery_ = Recovery(options_.recovery, options_.measurement, *index_);  // this floor's walls
-  openings_ = Openings(options_.motion.through_wall);
 }
 
 void MclTracker::Reset() {
@@ -255,7 +253,6 @@ MclUpdate MclTracker::PrepareUpdate(int64_t now_ns) {
   // The place in use stays until another holds twice its mass; a search's seed is its
   // best place, published or not yet.
   if (!belief_.empty()) u.published = alignment_.T_plan_slam;
-  u.openings = openings_;
   // From here: the walk since prepared, from where the wearer is.
   u.path_slam = std::move(odometry_.path);
   odometry_.path.clear();
@@ -275,7 +272,6 @@ bool MclTracker::FinishUpdate(MclUpdateResult result, int64_t stamp_ns) {
       s.T_plan_slam = options_.motion.Sample(
           s.T_plan_slam, s.T_plan_slam * odometry_.position.value_or(Eigen::Vector2d::Zero()),
           sigmas, rng_);
-  const bool had_alignment = has_alignment();
   recovery_.Observe(result.fit, result.exponent, result.dt_s);
   places_ = result.places;
   checked_ = true;
@@ -284,12 +280,6 @@ bool MclTracker::FinishUpdate(MclUpdateResult result, int64_t stamp_ns) {
   alignment_.source = AlignmentSource::kRegistration;
   alignment_.stamp_ns = stamp_ns;
   alignment_.registration = result.icp;
-  // The lines the published walk went through are likelier open there, the more so the
-  // likelier the walk was right, as the belief says having weighed it.
-  if (had_alignment && !result.published_crossings.empty()) {
-    const double right = CurrentReliability().probability;
-    for (const Eigen::Vector2d& at : result.published_crossings) openings_.Observe(at, right);
-  }
   return true;
 }
 

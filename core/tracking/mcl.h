@@ -80,7 +80,6 @@ struct MclUpdate {
   uint64_t seed = 0;
   uint64_t belief_version = 0;
   std::optional<Se2> published;  // the alignment published now, if any
-  Openings openings;             // where walks went through plan lines
 };
 
 struct MclUpdateResult {
@@ -92,8 +91,6 @@ struct MclUpdateResult {
   size_t places = 0;       // places holding at least 5% of the belief
   RegistrationResult icp;  // the polish of the leading place
   bool polished = false;   // ...taken
-  // Where the walk crossed plan lines under the alignment published when it was prepared.
-  std::vector<Eigen::Vector2d> published_crossings;
   double dt_s = 0;
   uint64_t belief_version = 0;
 };
@@ -170,7 +167,6 @@ class MclTracker {
   Belief belief_;
   uint64_t belief_version_ = 0;
   Recovery recovery_;
-  Openings openings_;  // of this plan's floor, learned over every belief on it
   AlignmentState alignment_;
   uint64_t next_version_ = 1;
   SplitMix64 rng_{0x6d636c};

@@ -19,21 +19,11 @@ Se2 MotionModel::Sample(const Se2& T, const Eigen::Vector2d& pivot, const Eigen:
 }
 
 double MotionModel::PathLogPrior(const std::vector<Eigen::Vector2d>& path_slam, const Se2& T,
-                                 const ClosestWallIndex& index, const Openings& openings) {
-  double log_prior = 0;
+                                 const ClosestWallIndex& index) const {
+  int crossings = 0;
   for (size_t i = 1; i < path_slam.size(); ++i)
-    if (const auto at = index.StepCrossing(T * path_slam[i - 1], T * path_slam[i]))
-      log_prior += std::log(openings.Open(*at));
-  return log_prior;
-}
-
-std::vector<Eigen::Vector2d> MotionModel::Crossings(const std::vector<Eigen::Vector2d>& path_slam,
-                                                    const Se2& T, const ClosestWallIndex& index) {
-  std::vector<Eigen::Vector2d> out;
-  for (size_t i = 1; i < path_slam.size(); ++i)
-    if (const auto at = index.StepCrossing(T * path_slam[i - 1], T * path_slam[i]))
-      out.push_back(*at);
-  return out;
+    crossings += index.StepCrossesWall(T * path_slam[i - 1], T * path_slam[i]);
+  return crossings * std::log(through_wall);
 }
 
 }  // namespace floorpose::tracking

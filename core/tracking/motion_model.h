@@ -12,7 +12,6 @@
 #include "core/closest_wall_index.h"
 #include "core/random.h"
 #include "core/se2.h"
-#include "core/tracking/openings.h"
 
 namespace floorpose::tracking {
 
@@ -33,8 +32,7 @@ struct MotionModel {
   double relocalization_rad = 10.0 * M_PI / 180;
   // The map's part of the motion model (Probabilistic Robotics, section 5.7): a wearer
   // walks through a plan line only where the line is not there (a door drawn closed, a
-  // wall since removed); the probability of that, per line walked through where nobody
-  // has been seen to walk through it (Openings learns where they have).
+  // wall since removed); the probability of that, per line walked through.
   double through_wall = 0.1;
 
   // Standard deviations (heading rad, position m) of the drift of a walk of `metres`
@@ -46,13 +44,10 @@ struct MotionModel {
   Se2 Sample(const Se2& T, const Eigen::Vector2d& pivot, const Eigen::Vector2d& sigmas,
              SplitMix64& rng) const;
 
-  // The log-probability of the wearer's path (slam frame, in order) under T: for every
-  // step that crosses a plan wall, the probability that the wall is not there.
-  static double PathLogPrior(const std::vector<Eigen::Vector2d>& path_slam, const Se2& T,
-                             const ClosestWallIndex& index, const Openings& openings);
-  // Where the path crosses plan walls under T (plan frame, one point per step at most).
-  static std::vector<Eigen::Vector2d> Crossings(const std::vector<Eigen::Vector2d>& path_slam,
-                                                const Se2& T, const ClosestWallIndex& index);
+  // The log-probability of the wearer's path (slam frame, in order) under T: through_wall
+  // for every step that crosses a plan wall.
+  double PathLogPrior(const std::vector<Eigen::Vector2d>& path_slam, const Se2& T,
+                      const ClosestWallIndex& index) const;
 };
 
 }  // namespace floorpose::tracking

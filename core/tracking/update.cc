@@ -57,8 +57,6 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
       predictive ? ThinCloud(u.fresh_slam, 0.1, options.weigh_points)
                  : std::vector<Eigen::Vector2d>{};
   const std::vector<double> prior = belief.Weights();
-  if (u.published)
-    out.published_crossings = MotionModel::Crossings(u.path_slam, *u.published, index);
   double fit = 0;
   for (size_t i = 0; i < belief.size(); ++i) {
     Sample& s = belief.samples()[i];
@@ -66,8 +64,7 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
     fit += prior[i] *
            (predictive ? options.measurement.MeanLogLikelihood(fresh, s.T_plan_slam, index, reach)
                        : mll);
-    s.log_weight +=
-        exponent * mll + MotionModel::PathLogPrior(u.path_slam, s.T_plan_slam, index, u.openings);
+    s.log_weight += exponent * mll + options.motion.PathLogPrior(u.path_slam, s.T_plan_slam, index);
   }
   out.fit = fit;
   out.exponent = exponent;

@@ -58,36 +58,14 @@ TEST(MeasurementModelTest, NearWallsIsLikelierAndFarIsClutter) {
 TEST(MotionModelTest, AWalkThroughAPlanWallCostsThroughWallPerWall) {
   const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
   MotionModel motion;
-  const Openings none(motion.through_wall);
   // Three metres along the room's left part: short of the inner wall at x = 4 under one
   // alignment, across it under another a metre to the right.
   const std::vector<Eigen::Vector2d> path_slam = {{0.5, 1}, {1.5, 1}, {2.5, 1}, {3.5, 1}};
   const Se2 beside{0, {0, 0}}, through{0, {1, 0}};
-  EXPECT_EQ(MotionModel::PathLogPrior(path_slam, beside, index, none), 0.0);
-  EXPECT_NEAR(MotionModel::PathLogPrior(path_slam, through, index, none),
-              std::log(motion.through_wall), 1e-12)
+  EXPECT_EQ(motion.PathLogPrior(path_slam, beside, index), 0.0);
+  EXPECT_NEAR(motion.PathLogPrior(path_slam, through, index), std::log(motion.through_wall), 1e-12)
       << "one wall crossed, once";
-  EXPECT_EQ(MotionModel::PathLogPrior({{0.5, 1}}, through, index, none), 0.0) << "no step";
-  const auto at = MotionModel::Crossings(path_slam, through, index);
-  ASSERT_EQ(at.size(), 1u);
-  EXPECT_NEAR((at[0] - Eigen::Vector2d(4, 1)).norm(), 0.0, 1e-12) << "where the wall is crossed";
-}
-
-TEST(OpeningsTest, AWallTheTrustedWalkWentThroughIsOpenThereAndNowhereElse) {
-  Openings openings(0.1);
-  const Eigen::Vector2d door(4, 1);
-  EXPECT_EQ(openings.Open(door), 0.1) << "nobody walked through it yet";
-  openings.Observe(door, 0.0);
-  EXPECT_EQ(openings.Open(door), 0.1) << "a walk surely wrong says nothing";
-  openings.Observe(door, 0.95);
-  const double odds = 0.1 / 0.9 / 0.05;  // the prior's odds, by 1 / (1 - 0.95)
-  EXPECT_NEAR(openings.Open(door), odds / (1 + odds), 1e-12);
-  EXPECT_NEAR(openings.Open(door + Eigen::Vector2d(0, 0.4)), openings.Open(door), 1e-12)
-      << "the same doorway";
-  EXPECT_EQ(openings.Open(door + Eigen::Vector2d(0, 3)), 0.1) << "the wall elsewhere";
-  openings.Observe({NAN, 0}, 1.0);
-  openings.Observe({1e300, 0}, 1.0);
-  EXPECT_EQ(openings.size(), 1u) << "points that are not on a plan are ignored";
+  EXPECT_EQ(motion.PathLogPrior({{0.5, 1}}, through, index), 0.0) << "no step";
 }
 
 TEST(RecoveryTest, AFitLikeARandomPlaceKeepsTheDoubtAndARightOneClearsIt) {
