@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -331,6 +332,50 @@ TEST(EvalSuiteTest, CarmenLogsOneRowEachDevelopmentAndValidationApart) {
   EXPECT_LT(std::stod(orebro[0][3]), 0.5) << "mean error on the log's own plan";
   RemoveSuite(dir);
   fs::remove_all(logs);
+}
+
+// `floorpose eval-compare` on a suite against itself and against a copy with one walk's
+// false poses raised, as a user compares two settings.
+TEST(EvalSuiteTest, EvalComparePairsTheWalksOfTwoSuites) {
+  const fs::path dir = RunSuite(
+      "compare", {"--seeds", "1", "--length", "60", "--methods", "mcl", "--scenarios", "office"},
+      std::chrono::seconds(120));
+  ASSERT_FALSE(dir.empty());
+  const fs::path raised = dir / "raised.json";
+  {
+    std::ifstream in(dir / "results.json");
+    std::ofstream out(raised);
+    for (std::string line; std::getline(in, line);) {
+      nlohmann::json run = nlohmann::json::parse(line, nullptr, false);
+      ASSERT_TRUE(run.is_object()) << line;
+      run["false_reliable_poses"] = run["false_reliable_poses"].get<double>() + 1000;
+      out << run.dump() << "\n";
+    }
+  }
+  auto compare = [&](const std::vector<std::string>& args, std::string* out) {
+    std::vector<std::string> argv = {FLOORPOSE_PATH, "eval-compare"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    const std::string log = dir.string() + "-compare.log";
+    tools::ChildProcess p(argv, log);
+    const std::optional<int> rc = p.started() ? p.Wait(std::chrono::seconds(30)) : std::nullopt;
+    *out = testing::ReadText(log);
+    return rc.value_or(-1);
+  };
+  std::string same, more, missing;
+  ASSERT_EQ(compare({dir.string(), dir.string()}, &same), 0) << same;
+  const std::vector<std::vector<std::string>> rows = RowsStartingWith(same, "mean error, m");
+  ASSERT_EQ(rows.size(), 1u) << same;
+  EXPECT_EQ(rows[0][3], "+0.000");
+  EXPECT_EQ(rows[0][5], "within noise");
+  ASSERT_EQ(compare({dir.string(), raised.string()}, &more), 0) << more;
+  const auto off = RowsStartingWith(more, "RELIABLE more than 1 m off");
+  ASSERT_EQ(off.size(), 1u) << more;
+  EXPECT_EQ(off[0][3], "+1000");
+  EXPECT_EQ(off[0][5], "higher") << "one walk, drawn every time";
+  EXPECT_NE(compare({dir.string(), (dir / "none").string()}, &missing), 0) << missing;
+  EXPECT_NE(missing.find("cannot read"), std::string::npos) << missing;
+  fs::remove(dir.string() + "-compare.log");
+  RemoveSuite(dir);
 }
 
 }  // namespace

@@ -25,6 +25,7 @@ Run AddImportCommand(CLI::App& app);
 Run AddImportCarmenCommand(CLI::App& app);
 Run AddEvalCommand(CLI::App& app);
 Run AddEvalSuiteCommand(CLI::App& app);
+Run AddEvalCompareCommand(CLI::App& app);
 Run AddBenchCommand(CLI::App& app);
 Run AddRouteCommand(CLI::App& app);
 Run AddDashboardCommand(CLI::App& app);

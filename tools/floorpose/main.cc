@@ -30,6 +30,8 @@ int main(int argc, char** argv) {
       floorpose::tools::AddEvalCommand);
   add("eval-suite", "every plan x scenario x seed x method, as a table",
       floorpose::tools::AddEvalSuiteCommand);
+  add("eval-compare", "two eval-suite runs of the same walks: the differences, with 95% intervals",
+      floorpose::tools::AddEvalCompareCommand);
   add("route", "the shortest route a wearer can walk between two points of a floor plan",
       floorpose::tools::AddRouteCommand);
   add("dashboard", "serve a live map of every wearer to browsers on the local network",
