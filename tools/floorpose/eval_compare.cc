@@ -38,15 +38,12 @@ Run AddEvalCompareCommand(CLI::App& app) {
     std::printf(
         "| figure | base | next | next - base | 95%% interval | |\n|---|---|---|---|---|---|\n");
     for (const Difference& d : diffs) {
-      const bool share = std::string(d.name).find("RELIABLE ") == 0 &&
-                         std::string(d.name).find("off") == std::string::npos;
-      const double k = share ? 100.0 : 1.0;  // shares in percent
-      const char* unit = share ? "%" : "";
+      const double k = std::string(d.unit) == "%" ? 100.0 : 1.0;
       const char* verdict = d.low > 0 ? "higher" : d.high < 0 ? "lower" : "within noise";
-      const int digits = std::string(d.name).find(", m") != std::string::npos || share ? 3 : 0;
-      std::printf("| %s | %.*f%s | %.*f%s | %+.*f | %+.*f to %+.*f | %s |\n", d.name, digits,
-                  k * d.base, unit, digits, k * d.next, unit, digits, k * (d.next - d.base), digits,
-                  k * d.low, digits, k * d.high, verdict);
+      const int n = d.digits;
+      std::printf("| %s | %.*f%s | %.*f%s | %+.*f | %+.*f to %+.*f | %s |\n", d.name, n, k * d.base,
+                  d.unit, n, k * d.next, d.unit, n, k * (d.next - d.base), n, k * d.low, n,
+                  k * d.high, verdict);
     }
     std::printf("\n%zu runs of the base, %zu of the next; paired on those of both.\n", a.size(),
                 b.size());

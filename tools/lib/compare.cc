@@ -36,13 +36,18 @@ std::vector<Difference> Compare(const std::vector<RunFigures>& base,
       a.push_back(it->second);
       b.push_back(&r);
     }
-  using Field = double SuiteFigures::*;
-  const std::vector<std::pair<const char*, Field>> fields = {
-      {"mean error, m", &SuiteFigures::mean_error_m},
-      {"runs more than 5 m off", &SuiteFigures::runs_over_5m},
-      {"RELIABLE share", &SuiteFigures::reliable},
-      {"RELIABLE within 1 m", &SuiteFigures::precision},
-      {"RELIABLE more than 1 m off", &SuiteFigures::false_poses}};
+  struct Field {
+    const char* name;
+    double SuiteFigures::*value;
+    const char* unit;
+    int digits;
+  };
+  const std::vector<Field> fields = {
+      {"mean error, m", &SuiteFigures::mean_error_m, "", 3},
+      {"runs more than 5 m off", &SuiteFigures::runs_over_5m, "", 0},
+      {"RELIABLE share", &SuiteFigures::reliable, "%", 3},
+      {"RELIABLE within 1 m", &SuiteFigures::precision, "%", 3},
+      {"RELIABLE more than 1 m off", &SuiteFigures::false_poses, "", 0}};
   const SuiteFigures fa = Figures(a), fb = Figures(b);
   std::vector<std::vector<double>> draws(fields.size());
   SplitMix64 rng(seed);
@@ -55,11 +60,12 @@ std::vector<Difference> Compare(const std::vector<RunFigures>& base,
     }
     const SuiteFigures da = Figures(ra), db = Figures(rb);
     for (size_t f = 0; f < fields.size(); ++f)
-      draws[f].push_back(db.*fields[f].second - da.*fields[f].second);
+      draws[f].push_back(db.*fields[f].value - da.*fields[f].value);
   }
   std::vector<Difference> out;
   for (size_t f = 0; f < fields.size(); ++f) {
-    Difference d{fields[f].first, fa.*fields[f].second, fb.*fields[f].second};
+    const Field& field = fields[f];
+    Difference d{field.name, field.unit, field.digits, fa.*field.value, fb.*field.value};
     std::vector<double>& v = draws[f];
     if (!v.empty()) {
       std::sort(v.begin(), v.end());

@@ -33,7 +33,9 @@ SuiteFigures Figures(const std::vector<const RunFigures*>& runs);
 
 struct Difference {
   const char* name;
-  double base = 0, next = 0;  // the figure of each suite
+  const char* unit = "";      // "%": a share, printed times 100
+  int digits = 0;             // decimals to print it with
+  double base = 0, next = 0;  // the figure of each suite (a share as a fraction)
   double low = 0, high = 0;   // 95% interval of next - base
 };
 
