@@ -88,6 +88,8 @@ std::optional<Job> JobScheduler::TakeDue(tracking::MclTracker& tracker, WallStor
   std::vector<Eigen::Vector2d> fresh = store.Snapshot(window_max_points, fresh_since);
   job.mcl = tracker.PrepareUpdate(now);
   job.mcl->fresh_slam = std::move(fresh);
+  job.mcl->sight_slam = searches_.PathBetween(
+      since(options.window_s), now - static_cast<int64_t>(tracking::kMeshLatencyS * 1e9));
   job.mcl_options = options;
   job.index = tracker.index();
   job.version = tracker.alignment().version;

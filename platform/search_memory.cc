@@ -13,9 +13,13 @@ void SearchMemory::AddPosition(int64_t stamp_ns, const Eigen::Vector2d& position
 }
 
 std::vector<Eigen::Vector2d> SearchMemory::PathSince(int64_t since_ns) const {
+  return PathBetween(since_ns, INT64_MAX);
+}
+
+std::vector<Eigen::Vector2d> SearchMemory::PathBetween(int64_t since_ns, int64_t until_ns) const {
   std::vector<Eigen::Vector2d> path;
   for (const auto& [stamp, position] : path_)
-    if (stamp >= since_ns) path.push_back(position);
+    if (stamp >= since_ns && stamp < until_ns) path.push_back(position);
   return path;
 }
 

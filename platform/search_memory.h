@@ -20,6 +20,8 @@ class SearchMemory {
   void AddPosition(int64_t stamp_ns, const Eigen::Vector2d& position, double window_s);
   // The kept positions stamped since_ns or later, in order.
   std::vector<Eigen::Vector2d> PathSince(int64_t since_ns) const;
+  // ...and stamped before until_ns.
+  std::vector<Eigen::Vector2d> PathBetween(int64_t since_ns, int64_t until_ns) const;
   // Whether a search on these walls, checking the alignment of this version, would be a
   // new one; if so it is remembered as the last.
   bool NewSearch(const std::vector<Eigen::Vector2d>& cloud, uint64_t alignment_version);

@@ -75,6 +75,9 @@ struct MclUpdate {
   std::vector<Eigen::Vector2d> path_slam;  // the wearer's walk since the last update
   // The window's wall points that came since the last update (none: the whole window).
   std::vector<Eigen::Vector2d> fresh_slam;
+  // The wearer's positions over the window, up to where the mesh around them has come
+  // (kMeshLatencyS): where plan walls in sight should show (SightLogLikelihood).
+  std::vector<Eigen::Vector2d> sight_slam;
   double evidence = 0;  // the tempering exponent: the window's share that is new
   double dt_s = 0;
   uint64_t seed = 0;

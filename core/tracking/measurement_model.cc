@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <unordered_set>
 
 namespace floorpose::tracking {
@@ -28,6 +29,33 @@ double MeasurementModel::MeanLogLikelihood(const std::vector<Eigen::Vector2d>& p
     sum += hit ? PointLogLikelihood(hit->distance, reach_m) : far;
   }
   return sum / static_cast<double>(points_slam.size());
+}
+
+std::vector<double> NearestWallPoint(const std::vector<Eigen::Vector2d>& positions,
+                                     const std::vector<Eigen::Vector2d>& points) {
+  std::vector<double> nearest(positions.size(), std::numeric_limits<double>::infinity());
+  for (size_t i = 0; i < positions.size(); ++i)
+    for (const Eigen::Vector2d& p : points)
+      nearest[i] = std::min(nearest[i], (p - positions[i]).squaredNorm());
+  for (double& d : nearest) d = std::sqrt(d);
+  return nearest;
+}
+
+SightFit SightLogLikelihood(const MeasurementModel& model,
+                            const std::vector<Eigen::Vector2d>& positions_slam,
+                            const std::vector<double>& nearest_point, const Se2& T,
+                            const ClosestWallIndex& index) {
+  const double missed = std::log(model.clutter), seen = std::log1p(-model.clutter);
+  SightFit fit;
+  for (size_t i = 0; i < positions_slam.size(); ++i) {
+    const auto hit = index.Query(T * positions_slam[i]);
+    const double plan = std::min(hit ? hit->distance : kSightM, kSightM);
+    if (plan < kBodyM) continue;  // a walk through a plan line: the motion model's to price
+    const double mesh = std::min(nearest_point[i], kSightM);
+    fit.log_likelihood += std::abs(mesh - plan) > kSeenMarginM ? missed : seen;
+    ++fit.asked;
+  }
+  return fit;
 }
 
 std::vector<Eigen::Vector2d> ThinCloud(const std::vector<Eigen::Vector2d>& points, double voxel_m,

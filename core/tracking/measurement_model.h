@@ -22,8 +22,10 @@ namespace floorpose::tracking {
 
 struct MeasurementModel {
   double sigma_m = 0.1;  // wall-point noise about a plan wall, metres
-  // The share of wall points that no plan wall explains, anywhere within the index's
-  // reach: clutter and walls the plan lacks.
+  // Where the plan and the building disagree, as a share: of the wall points, those no
+  // plan wall explains, anywhere within the index's reach (clutter, walls the plan
+  // lacks); of the plan walls in sight of the wearer, those no wall point shows (glass,
+  // walls since removed, doors drawn closed).
   double clutter = 0.2;
   // What a whole window of wall points is worth in independent measurements.
   double independent_points = 5.0;
@@ -37,6 +39,36 @@ struct MeasurementModel {
   // reach_m: clutter alone).
   double PointLogLikelihood(double d, double reach_m) const;
 };
+
+// What the wearer had in sight (Probabilistic Robotics 6.3: the beam model's view, which
+// also counts what is not there): from where the wearer stood, the nearest wall within
+// kSightM (none: at kSightM) is as far on the plan as in the mesh, within kSeenMarginM
+// (a door's jambs, thinning), unless the plan and the building disagree there. So a place
+// that puts plan walls beside the walk where the mesh shows none, or open floor where
+// the mesh shows walls, is less likely, not ruled out. The mesh around a position comes
+// within kMeshLatencyS, so only positions that old are asked.
+constexpr double kSightM = 2.0;
+constexpr double kSeenMarginM = 0.5;
+constexpr double kMeshLatencyS = 5.0;
+// A wearer is never nearer a real wall than this: a position that near a plan wall is a
+// walk through it, which the motion model prices (through_wall), so it is not asked.
+constexpr double kBodyM = 0.3;
+
+// For each wearer position (slam), the distance to the nearest wall point (slam).
+std::vector<double> NearestWallPoint(const std::vector<Eigen::Vector2d>& positions,
+                                     const std::vector<Eigen::Vector2d>& points);
+// What was in sight under T: the sum of the log-likelihoods of the positions asked (the
+// plan's nearest wall and the mesh's disagree at `model.clutter`, agree at 1 - clutter).
+struct SightFit {
+  double log_likelihood = 0;
+  size_t asked = 0;
+  // Per position asked, 0 when none was.
+  double Mean() const { return asked == 0 ? 0.0 : log_likelihood / static_cast<double>(asked); }
+};
+SightFit SightLogLikelihood(const MeasurementModel& model,
+                            const std::vector<Eigen::Vector2d>& positions_slam,
+                            const std::vector<double>& nearest_point, const Se2& T_plan_slam,
+                            const ClosestWallIndex& index);
 
 // At most `max_points` of the cloud, spread over it (voxels of `voxel_m`, then a stride):
 // the window's evidence at a fixed cost.

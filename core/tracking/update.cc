@@ -57,6 +57,7 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
       predictive ? ThinCloud(u.fresh_slam, 0.1, options.weigh_points)
                  : std::vector<Eigen::Vector2d>{};
   const std::vector<double> prior = belief.Weights();
+  const std::vector<double> nearest = NearestWallPoint(u.sight_slam, cloud);
   double fit = 0;
   for (size_t i = 0; i < belief.size(); ++i) {
     Sample& s = belief.samples()[i];
@@ -64,7 +65,10 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
     fit += prior[i] *
            (predictive ? options.measurement.MeanLogLikelihood(fresh, s.T_plan_slam, index, reach)
                        : mll);
-    s.log_weight += exponent * mll + options.motion.PathLogPrior(u.path_slam, s.T_plan_slam, index);
+    const SightFit sight =
+        SightLogLikelihood(options.measurement, u.sight_slam, nearest, s.T_plan_slam, index);
+    s.log_weight += exponent * (mll + sight.Mean()) +
+                    options.motion.PathLogPrior(u.path_slam, s.T_plan_slam, index);
   }
   out.fit = fit;
   out.exponent = exponent;

@@ -55,6 +55,40 @@ TEST(MeasurementModelTest, NearWallsIsLikelierAndFarIsClutter) {
   EXPECT_GT(expected, m.PointLogLikelihood(1.0, 3.0));
 }
 
+TEST(MeasurementModelTest, WhatWasInSightPricesPlanWallsTheMeshLacksAndTheReverse) {
+  const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
+  MeasurementModel m;
+  // The wearer walks along y = 1, a metre from the bottom wall, in the room's left part;
+  // the mesh shows the bottom wall only.
+  const std::vector<Eigen::Vector2d> walk = {{1, 1}, {2, 1}, {3, 1}};
+  std::vector<Eigen::Vector2d> mesh;
+  for (double x = 0; x <= 4; x += 0.1) mesh.push_back({x, 0});
+  const std::vector<double> nearest = NearestWallPoint(walk, mesh);
+  EXPECT_THAT(nearest, ::testing::Each(::testing::DoubleNear(1.0, 1e-9)));
+  const double agree = std::log1p(-m.clutter), disagree = std::log(m.clutter);
+  // Right: the bottom wall is the nearest plan wall, as far as in the mesh.
+  EXPECT_NEAR(SightLogLikelihood(m, walk, nearest, Se2{0, {0, 0}}, index).log_likelihood, 3 * agree,
+              1e-12);
+  // 0.6 m lower, the plan's bottom wall is 0.4 m off the walk, the mesh's 1 m.
+  EXPECT_NEAR(SightLogLikelihood(m, walk, nearest, Se2{0, {0, -0.6}}, index).log_likelihood,
+              3 * disagree, 1e-12);
+  // In the middle of the right part no plan wall is in sight: the mesh's wall a metre
+  // off disagrees, and a mesh with none in sight agrees.
+  const std::vector<Eigen::Vector2d> two = {{1, 1}, {2, 1}};  // to (6.6, 2.5) and (7.6, 2.5)
+  const Se2 open{0, {5.6, 1.5}};
+  EXPECT_NEAR(SightLogLikelihood(m, two, NearestWallPoint(two, mesh), open, index).log_likelihood,
+              2 * disagree, 1e-12);
+  EXPECT_NEAR(SightLogLikelihood(m, two, NearestWallPoint(two, {}), open, index).log_likelihood,
+              2 * agree, 1e-12);
+  EXPECT_EQ(SightLogLikelihood(m, {}, {}, open, index).asked, 0u) << "no positions";
+  // A position on a plan wall is a walk through it, the motion model's to price: not asked.
+  const std::vector<Eigen::Vector2d> through = {{1, 0.1}, {2, 1}};
+  const SightFit fit =
+      SightLogLikelihood(m, through, NearestWallPoint(through, mesh), Se2{0, {0, 0}}, index);
+  EXPECT_EQ(fit.asked, 1u);
+  EXPECT_NEAR(fit.log_likelihood, agree, 1e-12);
+}
+
 TEST(MotionModelTest, AWalkThroughAPlanWallCostsThroughWallPerWall) {
   const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
   MotionModel motion;
