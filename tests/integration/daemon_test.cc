@@ -31,11 +31,18 @@ TEST_F(DaemonTest, EveryPoseGivesAPlanPoseAndThePickSetsTheTransform) {
     return s.state() == v1::DaemonStatus::WAITING_FOR_ALIGNMENT;
   }));
 
-  // Before the pick: plan poses still come, flagged unreliable with version 0.
+  // Before the pick: plan poses still come, flagged unreliable with version 0. The
+  // plan-pose writer keeps only its latest pose for a reader it matches late, so the
+  // rest go once the first pose's answer is here.
   const size_t before = 10;
-  for (size_t k = 0; k < before; ++k)
+  for (size_t k = 0; k < before; ++k) {
     link_->Send(Topic::kHeadsetPose,
                 tools::ToHeadsetPose(walk.steps[k].slam, kFrame, walk.steps[k].stamp_ns), 0);
+    if (k == 0) {
+      ASSERT_TRUE(link_->WaitUntil([&] { return !link_->plan_poses.empty(); }, seconds(10)))
+          << "no answer to the first pose";
+    }
+  }
   ASSERT_TRUE(link_->WaitUntil([&] { return link_->plan_poses.size() == before; }, seconds(10)));
   for (const v1::PlanPose& p : link_->plan_poses) {
     EXPECT_EQ(p.alignment_version(), 0u);

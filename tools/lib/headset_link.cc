@@ -30,7 +30,9 @@ bool HeadsetLink::WaitForDaemon(std::chrono::milliseconds timeout) {
   return WaitUntil(
       [&] {
         return mesh_->MatchedReaders() > 0 && pose_->MatchedReaders() > 0 &&
-               command_->MatchedReaders() > 0 && reply_->MatchedWriters() > 0 && status.has_value();
+               command_->MatchedReaders() > 0 && reply_->MatchedWriters() > 0 &&
+               plan_pose_->MatchedWriters() > 0 && alignment_->MatchedWriters() > 0 &&
+               status.has_value();
       },
       timeout);
 }

@@ -20,7 +20,8 @@ class HeadsetLink {
   HeadsetLink(uint32_t domain_id, const std::string& cyclone_config, std::string device_id,
               const platform::DdsSecurity* security = nullptr);
 
-  // Waits until the daemon's readers matched our writers and a status arrived.
+  // Waits until the daemon's readers matched our writers, our readers its writers, and
+  // a status arrived.
   bool WaitForDaemon(std::chrono::milliseconds timeout);
   // Polls until pred() holds or the timeout passes; returns pred().
   template <typename Pred>
