@@ -91,6 +91,9 @@ class DaemonTest : public ::testing::Test {
       const auto code = daemon_->Terminate(seconds(2));
       EXPECT_EQ(code, 0) << "floorposed did not stop cleanly within 2 s after SIGTERM";
     }
+    // A failed test keeps its directory (configuration, plan, daemon log) to look at.
+    std::error_code ignored;
+    if (!HasFailure()) fs::remove_all(dir_, ignored);
   }
 
   // The latest launch's log.

@@ -239,7 +239,13 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
         o.headsets, domain, plan_path.c_str(), headsets.front().walk.length_m, walk_s / 60.0,
         headsets.front().walk.steps.size(), headsets.front().mesh_deltas, o.rate_scale, o.speed);
   std::fflush(stdout);
-  const auto t0 = std::chrono::steady_clock::now();
+  auto wait_for = [](auto pred, std::chrono::seconds timeout) {
+    const auto until = std::chrono::steady_clock::now() + timeout;
+    while (!pred() && std::chrono::steady_clock::now() < until)
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    return pred();
+  };
+  auto t0 = std::chrono::steady_clock::now();
   const int64_t ten_minutes_ns = first_stamp + static_cast<int64_t>(600e9);
   bool sampled_10min = false;
   for (size_t k = 0; k < steps; ++k) {
@@ -267,14 +273,19 @@ int RunBenchDaemon(const BenchDaemonOptions& o) {
                       ToWallPickCommand(hs.walk.pick, hs.walk.pick_height_m, frame, 1),
                       step.stamp_ns);
     }
+    if (k == 0) {
+      // The plan-pose writers keep only their latest pose for a reader they match late:
+      // the walk goes on, from now, once every daemon has answered its first pose.
+      if (!wait_for([&] { return answered.load() >= poses_sent; }, std::chrono::seconds(15)))
+        spdlog::warn("the first poses were not all answered within 15 s");
+      t0 = std::chrono::steady_clock::now();
+    }
     if (!sampled_10min && stamp >= ten_minutes_ns) {
       for (Headset& hs : headsets) hs.at_10min = SampleProcess(hs.daemon->pid());
       sampled_10min = true;
     }
   }
-  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-  while (answered.load() < poses_sent && std::chrono::steady_clock::now() < until)
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  wait_for([&] { return answered.load() >= poses_sent; }, std::chrono::seconds(5));
   const double played_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (Headset& hs : headsets) {
