@@ -96,25 +96,52 @@ ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
       if (is_candidate(i, SegmentDistance(s, c))) candidates_[fill[i]++] = k;
     });
   }
+  // Pass 3: each list nearest its cell's centre first (see Query), ties in segment order.
+  std::vector<std::pair<double, uint32_t>> sorted;
+  for (int iy = 0; iy < ny_; ++iy) {
+    for (int ix = 0; ix < nx_; ++ix) {
+      const size_t i = static_cast<size_t>(iy) * nx_ + ix;
+      sorted.clear();
+      for (uint32_t j = cell_begin_[i]; j < cell_begin_[i + 1]; ++j)
+        sorted.emplace_back(data_[candidates_[j]].Distance2(centre(ix, iy)), candidates_[j]);
+      std::sort(sorted.begin(), sorted.end());
+      for (size_t j = 0; j < sorted.size(); ++j) candidates_[cell_begin_[i] + j] = sorted[j].second;
+    }
+  }
 }
 
 std::optional<ClosestWall> ClosestWallIndex::Query(const Eigen::Vector2d& p) const {
   const double fx = (p.x() - origin_.x()) / options_.cell_m;
   const double fy = (p.y() - origin_.y()) / options_.cell_m;
   if (!(fx >= 0 && fy >= 0 && fx < nx_ && fy < ny_)) return std::nullopt;  // also NaN
-  const size_t i = static_cast<size_t>(static_cast<int>(fy)) * nx_ + static_cast<int>(fx);
+  const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
+  const size_t i = static_cast<size_t>(iy) * nx_ + ix;
   double best = options_.max_distance_m * options_.max_distance_m;
   int64_t best_k = -1;
   double best_u = 0;
-  for (uint32_t j = cell_begin_[i]; j < cell_begin_[i + 1]; ++j) {
-    const SegmentData& s = data_[candidates_[j]];
-    const Eigen::Vector2d ap = p - s.a;
-    const double u = std::clamp(ap.dot(s.d) * s.inv_len2, 0.0, 1.0);
-    const double d2 = (ap - u * s.d).squaredNorm();
-    if (d2 <= best) {
-      best = d2;
-      best_k = candidates_[j];
-      best_u = u;
+  // A list runs nearest the cell's centre c first, and no point of the cell is nearer a
+  // segment s than d(s, c) - r. So once a chunk's first candidate is that far beyond the
+  // best so far, so is every later one (a raster plan lists dozens of cells' segments).
+  constexpr uint32_t kChunk = 8;
+  const double cell = options_.cell_m;
+  const Eigen::Vector2d c = origin_ + Eigen::Vector2d((ix + 0.5) * cell, (iy + 0.5) * cell);
+  const double r = 0.5 * cell * std::sqrt(2.0) + 1e-6;
+  const uint32_t begin = cell_begin_[i], end = cell_begin_[i + 1];
+  for (uint32_t chunk = begin; chunk < end; chunk += kChunk) {
+    if (chunk != begin) {
+      const double beyond = std::sqrt(data_[candidates_[chunk]].Distance2(c)) - r;
+      if (beyond > 0 && beyond * beyond > best) break;
+    }
+    for (uint32_t j = chunk; j < std::min(end, chunk + kChunk); ++j) {
+      const int64_t k = candidates_[j];
+      double u = 0;
+      const double d2 = data_[k].Distance2(p, &u);
+      // Ties go to the higher segment index, whatever the list's order.
+      if (d2 < best || (d2 == best && k > best_k)) {
+        best = d2;
+        best_k = k;
+        best_u = u;
+      }
     }
   }
   if (best_k < 0) return std::nullopt;

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -53,6 +54,13 @@ class ClosestWallIndex {
   struct SegmentData {
     Eigen::Vector2d a, d, normal;
     double inv_len2;
+    // The squared distance from p, and where along the segment (0 at a, 1 at b).
+    double Distance2(const Eigen::Vector2d& p, double* u_out = nullptr) const {
+      const Eigen::Vector2d ap = p - a;
+      const double u = std::clamp(ap.dot(d) * inv_len2, 0.0, 1.0);
+      if (u_out) *u_out = u;
+      return (ap - u * d).squaredNorm();
+    }
   };
 
   FloorPlan plan_;
@@ -61,7 +69,8 @@ class ClosestWallIndex {
   Eigen::Vector2d origin_;
   int nx_ = 0, ny_ = 0;
   std::vector<uint32_t> cell_begin_;  // CSR layout: candidates of cell i are
-  std::vector<uint32_t> candidates_;  // candidates_[cell_begin_[i] .. cell_begin_[i+1])
+  std::vector<uint32_t> candidates_;  // candidates_[cell_begin_[i] .. cell_begin_[i+1]),
+                                      // nearest the cell's centre first
 };
 
 // The same answer by trying every segment: the oracle for tests and the baseline for
