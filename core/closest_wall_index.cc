@@ -54,9 +54,6 @@ ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
   // Only segments within this distance of a centre can matter (see the header).
   const double reach = options_.max_distance_m + 2 * r;
 
-  auto centre = [&](int ix, int iy) {
-    return Eigen::Vector2d(origin_.x() + (ix + 0.5) * cell, origin_.y() + (iy + 0.5) * cell);
-  };
   // Visits the cells whose centres may lie within `reach` of segment s.
   auto for_cells_near = [&](const Segment& s, auto&& fn) {
     const Eigen::Vector2d lo = s.a.cwiseMin(s.b) - Eigen::Vector2d::Constant(reach);
@@ -66,7 +63,7 @@ ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
     const int x1 = std::min(nx_ - 1, static_cast<int>(std::floor((hi.x() - origin_.x()) / cell)));
     const int y1 = std::min(ny_ - 1, static_cast<int>(std::floor((hi.y() - origin_.y()) / cell)));
     for (int iy = y0; iy <= y1; ++iy)
-      for (int ix = x0; ix <= x1; ++ix) fn(static_cast<size_t>(iy) * nx_ + ix, centre(ix, iy));
+      for (int ix = x0; ix <= x1; ++ix) fn(static_cast<size_t>(iy) * nx_ + ix, CellCentre(ix, iy));
   };
 
   // Pass 1: d* per cell, clipped at reach.
@@ -103,7 +100,7 @@ ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
       const size_t i = static_cast<size_t>(iy) * nx_ + ix;
       sorted.clear();
       for (uint32_t j = cell_begin_[i]; j < cell_begin_[i + 1]; ++j)
-        sorted.emplace_back(data_[candidates_[j]].Distance2(centre(ix, iy)), candidates_[j]);
+        sorted.emplace_back(data_[candidates_[j]].Distance2(CellCentre(ix, iy)), candidates_[j]);
       std::sort(sorted.begin(), sorted.end());
       for (size_t j = 0; j < sorted.size(); ++j) candidates_[cell_begin_[i] + j] = sorted[j].second;
     }
@@ -123,9 +120,8 @@ std::optional<ClosestWall> ClosestWallIndex::Query(const Eigen::Vector2d& p) con
   // segment s than d(s, c) - r. So once a chunk's first candidate is that far beyond the
   // best so far, so is every later one (a raster plan lists dozens of cells' segments).
   constexpr uint32_t kChunk = 8;
-  const double cell = options_.cell_m;
-  const Eigen::Vector2d c = origin_ + Eigen::Vector2d((ix + 0.5) * cell, (iy + 0.5) * cell);
-  const double r = 0.5 * cell * std::sqrt(2.0) + 1e-6;
+  const Eigen::Vector2d c = CellCentre(ix, iy);
+  const double r = 0.5 * options_.cell_m * std::sqrt(2.0) + 1e-6;
   const uint32_t begin = cell_begin_[i], end = cell_begin_[i + 1];
   for (uint32_t chunk = begin; chunk < end; chunk += kChunk) {
     if (chunk != begin) {

@@ -63,6 +63,12 @@ class ClosestWallIndex {
     }
   };
 
+  // The centre of cell (ix, iy): what the lists are sorted by and Query bounds from, so
+  // one formula for both.
+  Eigen::Vector2d CellCentre(int ix, int iy) const {
+    return {origin_.x() + (ix + 0.5) * options_.cell_m, origin_.y() + (iy + 0.5) * options_.cell_m};
+  }
+
   FloorPlan plan_;
   Options options_;
   std::vector<SegmentData> data_;
