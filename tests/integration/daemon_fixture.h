@@ -110,8 +110,7 @@ class DaemonTest : public ::testing::Test {
 
   // Sends the walk's wall pick (made at step 1), then its meshes and poses paced like a
   // fast replay, so that registrations run while the walk goes on; waits for every
-  // plan pose. The plan-pose writer keeps only its latest pose for a reader it matches
-  // late, so the walk goes on once the first pose's answer is here.
+  // plan pose (the first before the rest: HeadsetLink::SendPoseAndAwaitAnswer).
   void PickAndWalk(const sim::DemoWalk& walk) { PickAndWalk(walk, *link_); }
   static void PickAndWalk(const sim::DemoWalk& walk, tools::HeadsetLink& link) {
     link.Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
@@ -119,12 +118,12 @@ class DaemonTest : public ::testing::Test {
     for (const sim::SimStep& step : walk.steps) {
       for (const sim::SimMesh& m : step.meshes)
         link.Send(Topic::kMeshDelta, tools::ToMeshDelta(m, kFrame, step.stamp_ns), step.stamp_ns);
-      link.Send(Topic::kHeadsetPose, tools::ToHeadsetPose(step.slam, kFrame, step.stamp_ns),
-                step.stamp_ns);
-      if (&step == &walk.steps.front()) {
-        ASSERT_TRUE(link.WaitUntil([&] { return !link.plan_poses.empty(); }, seconds(10)))
+      const v1::HeadsetPose pose = tools::ToHeadsetPose(step.slam, kFrame, step.stamp_ns);
+      if (&step == &walk.steps.front())
+        ASSERT_TRUE(link.SendPoseAndAwaitAnswer(pose, step.stamp_ns, seconds(10)))
             << "no answer to the first pose";
-      }
+      else
+        link.Send(Topic::kHeadsetPose, pose, step.stamp_ns);
       link.WaitUntil([] { return false; }, std::chrono::milliseconds(15));
     }
     ASSERT_TRUE(

@@ -31,17 +31,16 @@ TEST_F(DaemonTest, EveryPoseGivesAPlanPoseAndThePickSetsTheTransform) {
     return s.state() == v1::DaemonStatus::WAITING_FOR_ALIGNMENT;
   }));
 
-  // Before the pick: plan poses still come, flagged unreliable with version 0. The
-  // plan-pose writer keeps only its latest pose for a reader it matches late, so the
-  // rest go once the first pose's answer is here.
+  // Before the pick: plan poses still come, flagged unreliable with version 0.
   const size_t before = 10;
   for (size_t k = 0; k < before; ++k) {
-    link_->Send(Topic::kHeadsetPose,
-                tools::ToHeadsetPose(walk.steps[k].slam, kFrame, walk.steps[k].stamp_ns), 0);
-    if (k == 0) {
-      ASSERT_TRUE(link_->WaitUntil([&] { return !link_->plan_poses.empty(); }, seconds(10)))
+    const v1::HeadsetPose pose =
+        tools::ToHeadsetPose(walk.steps[k].slam, kFrame, walk.steps[k].stamp_ns);
+    if (k == 0)
+      ASSERT_TRUE(link_->SendPoseAndAwaitAnswer(pose, 0, seconds(10)))
           << "no answer to the first pose";
-    }
+    else
+      link_->Send(Topic::kHeadsetPose, pose, 0);
   }
   ASSERT_TRUE(link_->WaitUntil([&] { return link_->plan_poses.size() == before; }, seconds(10)));
   for (const v1::PlanPose& p : link_->plan_poses) {

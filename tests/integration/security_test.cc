@@ -45,20 +45,18 @@ class SecurityTest : public DaemonTest {
            s.permissions + "' }";
   }
   // Sends a wall pick and the walk's poses on `link`, paced so that the daemon's keep-last
-  // reader never has to drop one on a loaded machine. The rest of the walk waits for the
-  // first pose's answer: the plan-pose writer keeps only its latest pose for a reader it
-  // matches late (as PickAndWalk does).
+  // reader never has to drop one on a loaded machine (the first before the rest:
+  // HeadsetLink::SendPoseAndAwaitAnswer).
   static void Drive(tools::HeadsetLink& link, const sim::DemoWalk& walk, int64_t stamp_offset) {
     link.Send(Topic::kCommand, tools::ToWallPickCommand(walk, kFrame, 1), 0);
-    const size_t before = link.plan_poses.size();
     for (const sim::SimStep& step : walk.steps) {
-      link.Send(Topic::kHeadsetPose,
-                tools::ToHeadsetPose(step.slam, kFrame, step.stamp_ns + stamp_offset),
-                step.stamp_ns + stamp_offset);
-      if (&step == &walk.steps.front()) {
-        ASSERT_TRUE(link.WaitUntil([&] { return link.plan_poses.size() > before; }, seconds(10)))
+      const int64_t stamp = step.stamp_ns + stamp_offset;
+      const v1::HeadsetPose pose = tools::ToHeadsetPose(step.slam, kFrame, stamp);
+      if (&step == &walk.steps.front())
+        ASSERT_TRUE(link.SendPoseAndAwaitAnswer(pose, stamp, seconds(10)))
             << "no answer to the first pose";
-      }
+      else
+        link.Send(Topic::kHeadsetPose, pose, stamp);
       link.WaitUntil([] { return false; }, std::chrono::milliseconds(5));
     }
   }

@@ -45,6 +45,14 @@ bool HeadsetLink::Send(Topic topic, const google::protobuf::Message& msg, int64_
   return w && w->WriteMessage(device_id_, msg, stamp_ns);
 }
 
+bool HeadsetLink::SendPoseAndAwaitAnswer(const v1::HeadsetPose& pose, int64_t stamp_ns,
+                                         std::chrono::milliseconds timeout) {
+  Poll();
+  const size_t before = plan_poses.size();
+  return Send(Topic::kHeadsetPose, pose, stamp_ns) &&
+         WaitUntil([&] { return plan_poses.size() > before; }, timeout);
+}
+
 std::optional<v1::CommandReply> HeadsetLink::Request(v1::Command command,
                                                      std::chrono::milliseconds timeout) {
   command.set_request_id(++last_request_id_);

@@ -28,6 +28,11 @@ class HeadsetLink {
   bool WaitUntil(Pred pred, std::chrono::milliseconds timeout);
 
   bool Send(platform::Topic topic, const google::protobuf::Message& msg, int64_t stamp_ns);
+  // Sends a pose and waits for its plan pose. A walk's first pose goes this way: the
+  // daemon's plan-pose writer keeps only its latest pose for a reader it matches late,
+  // so poses sent before the first answer came can be lost to this link.
+  bool SendPoseAndAwaitAnswer(const v1::HeadsetPose& pose, int64_t stamp_ns,
+                              std::chrono::milliseconds timeout);
   // Sends the command with the next request id and waits for its reply.
   std::optional<v1::CommandReply> Request(v1::Command command, std::chrono::milliseconds timeout);
   void Poll();  // drains the output readers into the fields below
