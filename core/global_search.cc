@@ -40,33 +40,36 @@ GlobalSearch::GlobalSearch(const FloorPlan& plan, GlobalSearchOptions options) :
   stride_ = grid_.nx + pad_;
   rows_ = grid_.ny + pad_;
   const size_t size = static_cast<size_t>(stride_) * static_cast<size_t>(rows_);
-  pyramid_.assign(static_cast<size_t>(options_.depth), std::vector<float>(size, 0.0f));
-  std::vector<float>& level0 = pyramid_[0];
+  likelihood_.assign(size, 0.0f);
   for (int iy = 0; iy < grid_.ny; ++iy)
     for (int ix = 0; ix < grid_.nx; ++ix) {
       const auto hit = index.Query(grid_.CellCentre(iy * grid_.nx + ix));
       if (!hit) continue;
-      level0[static_cast<size_t>(iy + pad_) * stride_ + ix + pad_] =
+      likelihood_[static_cast<size_t>(iy + pad_) * stride_ + ix + pad_] =
           static_cast<float>(std::exp(-hit->distance * hit->distance / (2 * sigma * sigma)));
     }
-  // Level h from h - 1: the best of the four half-size squares that tile it.
+  // Level h from h - 1: the best of the four half-size squares that tile it. Level 1 is
+  // rounded up to steps (a float times kSteps is exact in double), so it bounds level 0.
+  bounds_.assign(static_cast<size_t>(options_.depth - 1), std::vector<uint8_t>(size, 0));
   for (int h = 1; h < options_.depth; ++h) {
     const int half = 1 << (h - 1);
-    const std::vector<float>& below = pyramid_[static_cast<size_t>(h - 1)];
-    std::vector<float>& level = pyramid_[static_cast<size_t>(h)];
-    auto at = [&](int X, int Y) {
-      return X < stride_ && Y < rows_ ? below[static_cast<size_t>(Y) * stride_ + X] : 0.0f;
+    std::vector<uint8_t>& level = bounds_[static_cast<size_t>(h - 1)];
+    auto at = [&](int X, int Y) -> double {
+      if (X >= stride_ || Y >= rows_) return 0.0;
+      const size_t i = static_cast<size_t>(Y) * stride_ + X;
+      return h == 1 ? kSteps * static_cast<double>(likelihood_[i])
+                    : bounds_[static_cast<size_t>(h - 2)][i];
     };
     for (int Y = 0; Y < rows_; ++Y)
       for (int X = 0; X < stride_; ++X)
-        level[static_cast<size_t>(Y) * stride_ + X] =
-            std::max({at(X, Y), at(X + half, Y), at(X, Y + half), at(X + half, Y + half)});
+        level[static_cast<size_t>(Y) * stride_ + X] = static_cast<uint8_t>(
+            std::min<double>(kSteps, std::ceil(std::max({at(X, Y), at(X + half, Y), at(X, Y + half),
+                                                         at(X + half, Y + half)}))));
   }
 }
 
 size_t GlobalSearch::MemoryBytes() const {
-  return pyramid_.size() * static_cast<size_t>(stride_) * static_cast<size_t>(rows_) *
-         sizeof(float);
+  return likelihood_.size() * sizeof(float) + bounds_.size() * likelihood_.size();
 }
 
 double GlobalSearch::HeadingStep(double reach_m) const {
@@ -171,7 +174,7 @@ double GlobalSearch::Score(const std::vector<Eigen::Vector2d>& points_slam,
     if (!p.allFinite()) continue;
     ++n;
     const int cell = grid_.CellOf(T_plan_slam * p);
-    if (cell >= 0) sum += Bound(0, cell % grid_.nx, cell / grid_.nx);
+    if (cell >= 0) sum += Likelihood(cell % grid_.nx, cell / grid_.nx);
   }
   return n ? sum / static_cast<double>(n) : 0.0;
 }
@@ -226,12 +229,18 @@ std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>
                               static_cast<int>(std::floor(q.y() + 0.5)));
     }
   }
+  // A leaf's score, or a node's bound on the scores of the leaves under it.
   auto bound = [&](int r, int h, int x, int y) {
-    float sum = 0;
-    for (const Eigen::Vector2i& o : offsets[static_cast<size_t>(r)])
-      sum += Bound(h, x + o.x(), y + o.y());
     ++st.nodes;
-    return sum / static_cast<float>(n_points);
+    const std::vector<Eigen::Vector2i>& offset = offsets[static_cast<size_t>(r)];
+    if (h == 0) {
+      float sum = 0;
+      for (const Eigen::Vector2i& o : offset) sum += Likelihood(x + o.x(), y + o.y());
+      return sum / static_cast<float>(n_points);
+    }
+    uint32_t steps = 0;
+    for (const Eigen::Vector2i& o : offset) steps += BoundSteps(h, x + o.x(), y + o.y());
+    return static_cast<float>(steps) / (static_cast<float>(kSteps) * static_cast<float>(n_points));
   };
 
   // Best first: a leaf off the top of the heap scores at least as well as every

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "core/closest_wall_index.h"
@@ -110,20 +111,34 @@ class GlobalSearch {
   struct Node;
   // One cell of arc at reach_m (Hess et al. eq. 7), or rotation_step_rad when set.
   double HeadingStep(double reach_m) const;
-  // Level h at cell (x, y): the best likelihood of the square [x, x + 2^h) x [y, y + 2^h),
-  // for x, y from -pad_ on (0 outside the plan's grid).
-  float Bound(int h, int x, int y) const {
+  // The pyramid at cell (x, y), for x, y from -pad_ on (0 outside the plan's grid):
+  // the likelihood of the cell (level 0) and, for h >= 1, at least the best likelihood of
+  // the square [x, x + 2^h) x [y, y + 2^h), in 1/kSteps. Upper levels are only bounds, so
+  // they are kept in bytes rounded up, as Cartographer keeps its precomputation grids: the
+  // places and their scores are those of float bounds, in well under half the memory.
+  static constexpr int kSteps = 255;
+  size_t At(int x, int y) const {
     x += pad_;
     y += pad_;
-    if (x < 0 || y < 0 || x >= stride_ || y >= rows_) return 0.0f;
-    return pyramid_[static_cast<size_t>(h)][static_cast<size_t>(y) * stride_ + x];
+    return x < 0 || y < 0 || x >= stride_ || y >= rows_
+               ? SIZE_MAX
+               : static_cast<size_t>(y) * static_cast<size_t>(stride_) + static_cast<size_t>(x);
+  }
+  float Likelihood(int x, int y) const {
+    const size_t i = At(x, y);
+    return i == SIZE_MAX ? 0.0f : likelihood_[i];
+  }
+  uint32_t BoundSteps(int h, int x, int y) const {
+    const size_t i = At(x, y);
+    return i == SIZE_MAX ? 0 : bounds_[static_cast<size_t>(h - 1)][i];
   }
 
   GlobalSearchOptions options_;
   std::vector<double> plan_directions_;  // wall length per degree of direction, modulo pi
   GridGeometry grid_;
   int pad_ = 0, stride_ = 0, rows_ = 0;
-  std::vector<std::vector<float>> pyramid_;
+  std::vector<float> likelihood_;             // level 0
+  std::vector<std::vector<uint8_t>> bounds_;  // levels 1 .. depth - 1
 };
 
 // How RefinePlaces scores and orders places.
