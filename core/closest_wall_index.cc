@@ -7,10 +7,6 @@
 namespace floorpose {
 namespace {
 
-double SegmentDistance(const Segment& s, const Eigen::Vector2d& p) {
-  return (ClosestPointOnSegment(s, p) - p).norm();
-}
-
 ClosestWall MakeHit(const FloorPlan& plan, uint32_t i, const Eigen::Vector2d& p) {
   const Segment& s = plan.segments[i];
   ClosestWall hit;
@@ -67,10 +63,14 @@ ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
   };
 
   // Pass 1: d* per cell, clipped at reach.
+  auto distance = [&](uint32_t k, const Eigen::Vector2d& c) {
+    return std::sqrt(data_[k].Distance2(c));
+  };
+  const auto segments = static_cast<uint32_t>(plan_.segments.size());
   std::vector<float> best(n, std::numeric_limits<float>::infinity());
-  for (const Segment& s : plan_.segments) {
-    for_cells_near(s, [&](size_t i, const Eigen::Vector2d& c) {
-      best[i] = std::min(best[i], static_cast<float>(SegmentDistance(s, c)));
+  for (uint32_t k = 0; k < segments; ++k) {
+    for_cells_near(plan_.segments[k], [&](size_t i, const Eigen::Vector2d& c) {
+      best[i] = std::min(best[i], static_cast<float>(distance(k, c)));
     });
   }
   // Pass 2: count, then fill the candidate lists (CSR).
@@ -78,19 +78,18 @@ ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
   auto is_candidate = [&](size_t i, double d) {
     return best[i] - r <= options_.max_distance_m && d <= best[i] + 2 * r + 1e-9;
   };
-  for (const Segment& s : plan_.segments) {
-    for_cells_near(s, [&](size_t i, const Eigen::Vector2d& c) {
-      if (is_candidate(i, SegmentDistance(s, c))) ++count[i + 1];
+  for (uint32_t k = 0; k < segments; ++k) {
+    for_cells_near(plan_.segments[k], [&](size_t i, const Eigen::Vector2d& c) {
+      if (is_candidate(i, distance(k, c))) ++count[i + 1];
     });
   }
   cell_begin_.assign(n + 1, 0);
   for (size_t i = 0; i < n; ++i) cell_begin_[i + 1] = cell_begin_[i] + count[i + 1];
   candidates_.resize(cell_begin_[n]);
   std::vector<uint32_t> fill(cell_begin_.begin(), cell_begin_.end() - 1);
-  for (uint32_t k = 0; k < plan_.segments.size(); ++k) {
-    const Segment& s = plan_.segments[k];
-    for_cells_near(s, [&](size_t i, const Eigen::Vector2d& c) {
-      if (is_candidate(i, SegmentDistance(s, c))) candidates_[fill[i]++] = k;
+  for (uint32_t k = 0; k < segments; ++k) {
+    for_cells_near(plan_.segments[k], [&](size_t i, const Eigen::Vector2d& c) {
+      if (is_candidate(i, distance(k, c))) candidates_[fill[i]++] = k;
     });
   }
   // Pass 3: each list nearest its cell's centre first (see Query), ties in segment order.
