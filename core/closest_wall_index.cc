@@ -97,9 +97,10 @@ ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
   for (int iy = 0; iy < ny_; ++iy) {
     for (int ix = 0; ix < nx_; ++ix) {
       const size_t i = static_cast<size_t>(iy) * nx_ + ix;
+      const Eigen::Vector2d c = CellCentre(ix, iy);
       sorted.clear();
       for (uint32_t j = cell_begin_[i]; j < cell_begin_[i + 1]; ++j)
-        sorted.emplace_back(data_[candidates_[j]].Distance2(CellCentre(ix, iy)), candidates_[j]);
+        sorted.emplace_back(data_[candidates_[j]].Distance2(c), candidates_[j]);
       std::sort(sorted.begin(), sorted.end());
       for (size_t j = 0; j < sorted.size(); ++j) candidates_[cell_begin_[i] + j] = sorted[j].second;
     }
