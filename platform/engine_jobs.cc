@@ -24,12 +24,13 @@ void Engine::OnRegistrationDone(Done done) {
   intake_.counters().set_registrations(intake_.counters().registrations() + 1);
   const size_t samples = done.mcl->belief.size(), places = done.mcl->places;
   const double fit = done.mcl->fit;
-  const bool polished = done.mcl->polished;
+  const bool polished = done.mcl->polished, offered = done.mcl->offered;
   const bool taken = tracker_.FinishUpdate(std::move(*done.mcl), done.job.stamp_ns);
   const Reliability r = tracker_.CurrentReliability();
   jobs_.SetLast({done.result, taken, taken ? r.reason : "a new prior came meanwhile"});
-  spdlog::info("belief: {} samples, {} place(s), fit {:.2f}, polished {}, {:.1f} ms: {:.0f}% {}",
-               samples, places, fit, polished, done.result.time_ms, 100 * r.probability, r.reason);
+  spdlog::info("belief: {} samples, {} place(s), fit {:.2f}, polished {}, {:.1f} ms: {:.0f}% {}{}",
+               samples, places, fit, polished, done.result.time_ms, 100 * r.probability, r.reason,
+               offered ? " (offered the place ICP reached)" : "");
   if (!taken) return;
   intake_.counters().set_registrations_accepted(intake_.counters().registrations_accepted() + 1);
   PublishAlignment();

@@ -39,6 +39,19 @@ void Belief::AddGaussian(const Se2& T, const Eigen::Matrix3d& P, const Eigen::Ve
   }
 }
 
+void Belief::Mix(const std::vector<Se2>& places, const Eigen::Matrix3d& P,
+                 const Eigen::Vector2d& wearer_slam, double share, size_t min_each,
+                 SplitMix64& rng) {
+  if (places.empty()) return;
+  Normalize();
+  for (Sample& s : samples_) s.log_weight += std::log(1.0 - share);
+  const size_t n =
+      std::max(min_each, static_cast<size_t>(share * static_cast<double>(size())) / places.size());
+  const double log_weight = std::log(share / static_cast<double>(places.size() * n));
+  for (const Se2& T : places) AddGaussian(T, P, T * wearer_slam, n, log_weight, rng);
+  Normalize();
+}
+
 std::vector<double> Belief::Weights() const {
   std::vector<double> w(samples_.size());
   double top = -std::numeric_limits<double>::infinity();
@@ -187,6 +200,10 @@ Eigen::Matrix3d Belief::Covariance(const Se2& mean, const Eigen::Vector2d& weare
     C += w[i] * d * d.transpose();
   }
   return C;
+}
+
+Eigen::Matrix3d PlaceCovariance(double sigma_m, double sigma_rad) {
+  return Eigen::Vector3d(sigma_rad * sigma_rad, sigma_m * sigma_m, sigma_m * sigma_m).asDiagonal();
 }
 
 }  // namespace floorpose::tracking

@@ -47,6 +47,12 @@ class Belief {
   void AddGaussian(const Se2& T, const Eigen::Matrix3d& P, const Eigen::Vector2d& pivot, size_t n,
                    double log_weight, SplitMix64& rng);
 
+  // Offers places the belief may have lost: `share` of the mass goes to Gaussians about
+  // them (covariance P about the wearer), shared evenly and at least min_each samples
+  // each; the belief keeps the rest.
+  void Mix(const std::vector<Se2>& places, const Eigen::Matrix3d& P,
+           const Eigen::Vector2d& wearer_slam, double share, size_t min_each, SplitMix64& rng);
+
   // Weights summing to 1 from the log weights (the largest made 0 first).
   std::vector<double> Weights() const;
   // Sets the log weights from normalized weights (after a resample: all equal).
@@ -77,6 +83,9 @@ class Belief {
  private:
   std::vector<Sample> samples_;
 };
+
+// The covariance of (heading, x, y) of a place known to sigma_rad and sigma_m.
+Eigen::Matrix3d PlaceCovariance(double sigma_m, double sigma_rad);
 
 // Whether two alignments put the wearer within radius_m of each other and differ by at
 // most radius_rad in heading: one place of the belief.

@@ -11,10 +11,6 @@ namespace {
 // search weighs the walk that led there; updates that stall keep the latest).
 constexpr size_t kMaxPath = 200;
 
-Eigen::Matrix3d PriorCovariance(double sigma_m, double sigma_rad) {
-  return Eigen::Vector3d(sigma_rad * sigma_rad, sigma_m * sigma_m, sigma_m * sigma_m).asDiagonal();
-}
-
 }  // namespace
 
 MclTracker::MclTracker(MclOptions options) : options_(std::move(options)) {}
@@ -68,7 +64,7 @@ std::string MclTracker::ApplyWallPick(const WallPick& pick, int64_t stamp_ns) {
   if (!T) return "wall pick needs finite points and non-zero normals";
   pick_plan_point_ = pick.plan_point;
   belief_.Clear();
-  belief_.AddGaussian(*T, PriorCovariance(options_.pick_sigma_m, options_.pick_sigma_rad),
+  belief_.AddGaussian(*T, PlaceCovariance(options_.pick_sigma_m, options_.pick_sigma_rad),
                       pick.plan_point, options_.samples.max_samples, 0.0, rng_);
   StartBelief(*T, AlignmentSource::kWallPick, stamp_ns);
   return {};
@@ -186,7 +182,7 @@ TrackerState MclTracker::SaveState() const {
   s.next_version = next_version_;
   const Eigen::Vector2d wearer = odometry_.position.value_or(Eigen::Vector2d::Zero());
   s.pivot = alignment_.T_plan_slam * wearer;
-  s.P = belief_.empty() ? PriorCovariance(options_.pick_sigma_m, options_.pick_sigma_rad)
+  s.P = belief_.empty() ? PlaceCovariance(options_.pick_sigma_m, options_.pick_sigma_rad)
                         : belief_.Covariance(alignment_.T_plan_slam, wearer);
   if (pick_plan_point_) s.pick_plan_point = *pick_plan_point_;
   s.samples = belief_.samples();
@@ -219,7 +215,7 @@ std::string MclTracker::RestoreState(const TrackerState& state) {
   } else {
     // At least the drift of a restart's few metres: the belief was at the wearer then.
     const Eigen::Matrix3d P =
-        sym + PriorCovariance(options_.place_sigma_m, options_.place_sigma_rad);
+        sym + PlaceCovariance(options_.place_sigma_m, options_.place_sigma_rad);
     belief_.AddGaussian(a.T_plan_slam, P, state.pivot, options_.samples.max_samples, 0.0, rng_);
   }
   next_version_ = state.next_version;
@@ -248,6 +244,7 @@ MclUpdate MclTracker::PrepareUpdate(int64_t now_ns) {
   u.dt_s =
       last_update_ns_ ? static_cast<double>(now_ns - *last_update_ns_) * 1e-9 : options_.window_s;
   u.evidence = std::clamp(u.dt_s / options_.window_s, 0.0, 1.0);
+  u.mid_fit = recovery_.MidFit();
   u.seed = rng_.Next();
   u.belief_version = belief_version_;
   // The place in use stays until another holds twice its mass; a search's seed is its
@@ -308,7 +305,7 @@ std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places, int64_
     if (p.rank < 2 && fit.size() < 8) fit.push_back(&p);
   if (fit.empty()) return "no place fits";
   const Eigen::Vector2d wearer = odometry_.position.value_or(Eigen::Vector2d::Zero());
-  const Eigen::Matrix3d P = PriorCovariance(options_.place_sigma_m, options_.place_sigma_rad);
+  const Eigen::Matrix3d P = PlaceCovariance(options_.place_sigma_m, options_.place_sigma_rad);
   const size_t k = fit.size();
   if (belief_.empty()) {
     const size_t n = std::max<size_t>(1, options_.samples.max_samples / k);
@@ -324,22 +321,14 @@ std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places, int64_
     return "seeded with " + std::to_string(k) + " place(s)";
   }
   // Recovery: the places the belief does not hold get the mass the belief may be missing.
-  const double share = std::max(0.05, recovery_.Elsewhere());
+  const double share = std::max(kOfferShare, recovery_.Elsewhere());
   const Mode lead = belief_.LeadingMode(wearer, options_.publish.within_m, kPlaceRad);
-  std::vector<const GlobalPlace*> fresh;
+  std::vector<Se2> fresh;
   for (const GlobalPlace* p : fit)
     if (!SamePlace(p->T_plan_slam, lead.T_plan_slam, wearer, options_.publish.within_m, kPlaceRad))
-      fresh.push_back(p);
+      fresh.push_back(p->T_plan_slam);
   if (fresh.empty()) return "the belief holds every place found";
-  belief_.Normalize();
-  for (Sample& s : belief_.samples()) s.log_weight += std::log(1.0 - share);
-  const size_t n = std::max<size_t>(
-      options_.samples.min_samples / 4,
-      static_cast<size_t>(share * static_cast<double>(belief_.size())) / fresh.size());
-  const double lw = std::log(share / static_cast<double>(fresh.size() * n));
-  for (const GlobalPlace* p : fresh)
-    belief_.AddGaussian(p->T_plan_slam, P, p->T_plan_slam * wearer, n, lw, rng_);
-  belief_.Normalize();
+  belief_.Mix(fresh, P, wearer, share, options_.samples.min_samples / 4, rng_);
   ++belief_version_;  // an update running on the belief without them is void
   return "mixed in " + std::to_string(fresh.size()) + " place(s) at " +
          std::to_string(static_cast<int>(100 * share)) + "%";

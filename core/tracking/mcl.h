@@ -30,6 +30,9 @@ namespace floorpose::tracking {
 
 // Samples within publish.within_m at the wearer and this in heading are one place.
 constexpr double kPlaceRad = 10.0 * M_PI / 180;
+// The least share of the belief a place offered to it gets: a search's place the belief
+// does not hold, or the place ICP reaches from the leading one (RunMclUpdate).
+constexpr double kOfferShare = 0.05;
 
 struct MclOptions {
   MotionModel motion;
@@ -79,6 +82,9 @@ struct MclUpdate {
   // (kMeshLatencyS): where plan walls in sight should show (SightLogLikelihood).
   std::vector<Eigen::Vector2d> sight_slam;
   double evidence = 0;  // the tempering exponent: the window's share that is new
+  // A fit per point above this is nearer a right place's than a random one's
+  // (Recovery::MidFit).
+  double mid_fit = 0;
   double dt_s = 0;
   uint64_t seed = 0;
   uint64_t belief_version = 0;
@@ -94,6 +100,7 @@ struct MclUpdateResult {
   size_t places = 0;       // places holding at least 5% of the belief
   RegistrationResult icp;  // the polish of the leading place
   bool polished = false;   // ...taken
+  bool offered = false;    // ...or the place it reached offered to the belief
   double dt_s = 0;
   uint64_t belief_version = 0;
 };

@@ -51,6 +51,8 @@ class Recovery {
   void Observe(double mean_log_likelihood, double exponent, double dt_s);
   // The probability that the wearer is at none of the belief's places.
   double Elsewhere() const;
+  // Halfway between the fit per point of a right alignment and of a random one.
+  double MidFit() const { return 0.5 * (expected_ + random_); }
   // The latest fit over the fit expected of a right alignment, as a likelihood ratio per
   // point (1: as expected).
   double FitRatio() const;

@@ -42,6 +42,18 @@ TEST(BeliefTest, ResamplingKeepsTheWeightAndShrinksWhenConverged) {
   EXPECT_NEAR(m.mass, 0.75, 0.1);
 }
 
+TEST(BeliefTest, MixingOffersTheShareAndKeepsTheRest) {
+  SplitMix64 rng(4);
+  Belief b;
+  const Se2 held{0, {0, 0}}, offered{0, {5, 0}}, other{0, {-5, 0}};
+  b.AddGaussian(held, Eigen::Vector3d(1e-6, 1e-4, 1e-4).asDiagonal(), held.t, 400, 0.0, rng);
+  b.Mix({offered, other}, PlaceCovariance(0.05, Deg(1)), {0, 0}, 0.2, 10, rng);
+  EXPECT_NEAR(b.MassWithin({0, 0}, held.t, 1.0), 0.8, 1e-9);
+  EXPECT_NEAR(b.MassWithin({0, 0}, offered.t, 1.0), 0.1, 1e-9) << "the share, split evenly";
+  EXPECT_NEAR(b.MassWithin({0, 0}, other.t, 1.0), 0.1, 1e-9);
+  EXPECT_EQ(b.size(), 400u + 2 * 40u) << "samples in proportion to the share";
+}
+
 TEST(MeasurementModelTest, NearWallsIsLikelierAndFarIsClutter) {
   MeasurementModel m;
   EXPECT_GT(m.PointLogLikelihood(0.0, 3.0), m.PointLogLikelihood(0.2, 3.0));
@@ -293,6 +305,39 @@ TEST(MclTrackerTest, ASearchedPlaceIsNotVouchedForByTheWallsItWasFoundWith) {
   Walk(mcl, room, &t);
   EXPECT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable)
       << mcl.CurrentReliability().reason;
+}
+
+// One update on a belief whose samples all sit `offset` from the truth, as a walk's price
+// for crossing a door drawn closed can pull them.
+MclUpdateResult UpdateOffBy(const RoomWalk& room, const Se2& offset) {
+  const MclOptions options;
+  const Eigen::Vector2d at{2, 5};
+  MclUpdate u;
+  u.wearer_slam = room.truth.Inverse() * at;
+  u.evidence = 1.0 / options.window_s;
+  u.mid_fit = Recovery({}, options.measurement, *room.index).MidFit();
+  const Se2 start = Se2{0, at} * offset * Se2{0, -at} * room.truth;
+  SplitMix64 rng(6);
+  u.belief.AddGaussian(start, PlaceCovariance(0.05, Deg(0.5)), at, 300, 0.0, rng);
+  u.belief.Normalize();
+  return RunMclUpdate(std::move(u), room.SeenFrom(at), *room.index, options);
+}
+
+TEST(MclUpdateTest, ThePlaceIcpReachesOutsideTheBeliefIsOfferedToIt) {
+  RoomWalk room;
+  const Eigen::Vector2d wearer = room.truth.Inverse() * Eigen::Vector2d(2, 5);
+  // 1.2 m off: beyond the leading place's radius, within ICP's correspondence reach.
+  const MclUpdateResult off = UpdateOffBy(room, Se2{0, {0, 1.2}});
+  ASSERT_TRUE(off.icp.converged);
+  EXPECT_LT((off.icp.T_plan_slam * wearer - room.truth * wearer).norm(), 0.1);
+  EXPECT_FALSE(off.polished) << "too far to be a polish of the leading place";
+  EXPECT_TRUE(off.offered);
+  EXPECT_NEAR(off.belief.MassWithin(wearer, room.truth * wearer, 1.0), kOfferShare, 0.005);
+  // Near the truth ICP polishes instead, and nothing is offered.
+  const MclUpdateResult near = UpdateOffBy(room, Se2{0, {0, 0.3}});
+  EXPECT_TRUE(near.polished);
+  EXPECT_FALSE(near.offered);
+  EXPECT_GT(near.belief.MassWithin(wearer, room.truth * wearer, 1.0), 0.99);
 }
 
 }  // namespace
