@@ -81,12 +81,6 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
   // The leading place, polished by ICP on the whole window when that fits the walls
   // better. The polish is published; the samples stay where the belief put them (moving
   // them with it collapses the belief onto whatever ICP settles on, right or not).
-  //
-  // ICP may instead reach another place, within its correspondence reach, that fits the
-  // window like a right place and better than the leading one by more than 1/kOfferShare
-  // in the window's likelihood. The belief may have lost its samples there (a walk through
-  // a door drawn closed is priced, and pulls them to the next opening), so the place is
-  // offered to the belief as a search's places are; the next updates weigh it.
   Mode mode = belief.LeadingMode(u.wearer_slam, radius_m, radius_rad);
   if (u.published) {
     // The published place stays until another holds kSwitchRatio times its mass: a belief
@@ -105,12 +99,18 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
         options.measurement.MeanLogLikelihood(points, out.icp.T_plan_slam, index, reach);
     const double mode_fit =
         options.measurement.MeanLogLikelihood(points, mode.T_plan_slam, index, reach);
+    // Beyond the leading place ICP may reach another, within its correspondence reach, that fits
+    // the window like a right place and better than the leading one by more than 1/kOfferShare in
+    // the window's likelihood. The belief may have lost its samples there (a walk through a door
+    // drawn closed is priced, and pulls them to the next opening), so the place is offered to the
+    // belief as a search's places are; the next updates weigh it.
+    const bool another_place =
+        moved_m <= options.icp.max_correspondence_m && icp_fit > u.mid_fit &&
+        options.measurement.independent_points * (icp_fit - mode_fit) > -std::log(kOfferShare);
     if (moved_m <= radius_m && std::abs(shift(0)) <= radius_rad) {
       out.polished = icp_fit >= mode_fit;
       if (out.polished) out.published = out.icp.T_plan_slam;
-    } else if (moved_m <= options.icp.max_correspondence_m && icp_fit > u.mid_fit &&
-               options.measurement.independent_points * (icp_fit - mode_fit) >
-                   -std::log(kOfferShare)) {
+    } else if (another_place) {
       belief.Mix({out.icp.T_plan_slam},
                  PlaceCovariance(options.place_sigma_m, options.place_sigma_rad), u.wearer_slam,
                  kOfferShare, options.samples.min_samples / 4, rng);
