@@ -5,6 +5,7 @@
 
 #include <sys/stat.h>
 
+#include <cmath>
 #include <cstdio>
 #include <functional>
 #include <iterator>
@@ -123,25 +124,40 @@ TEST_F(HostileTest, AHeadsetWhoseClockStartsAgainIsTrackedAsBefore) {
   const sim::DemoWalk walk = DaemonTest::Walk(/*pick_error_m=*/0.3, 6);
   const size_t half = walk.steps.size() / 2;
   const int64_t restart_ns = walk.steps[half].stamp_ns;
-  const double clean = Walk(walk, half, Same);
+  Walk(walk, half, Same);
+  const std::vector<v1::PlanPose> clean = link_->plan_poses;
 
   ASSERT_NO_FATAL_FAILURE(FreshDaemon());
-  uint64_t registrations_at_restart = 0;
-  const double restarted = Walk(
+  Walk(
       walk, half, [&](int64_t t) { return t < restart_ns ? t : t - restart_ns + 20'000'000; },
       [&](size_t k) {
         if (k != half) return;
         // An app restarts in seconds: the old clock's poses are all answered before the
         // new clock's come (a busy daemon would read both in one batch, sorted by stamp).
+        // The new clock follows at once: the daemon's timeline goes on by the time it saw
+        // pass, and a silence longer than motion.lost_after_s (1.5 s) is a loss of tracking.
         EXPECT_TRUE(
             link_->WaitUntil([&] { return link_->plan_poses.size() >= half; }, seconds(10)));
-        registrations_at_restart = Registrations();
       });
-  std::printf("RELIABLE after the restart: %.1f%% clean, %.1f%% restarted\n", clean, restarted);
-  EXPECT_NEAR(restarted, clean, 2.0);
-  EXPECT_GT(Registrations(), registrations_at_restart) << "no registration after the restart";
+  // Tracked as before: the same places, and the flag as sure at the end. Not update for
+  // update: the new clock's stamps sit on the timeline where the daemon's own clock put
+  // them, so its 1-s updates fall a little apart from the clean walk's.
+  ASSERT_EQ(link_->plan_poses.size(), clean.size());
+  for (size_t k = half; k < clean.size(); ++k)
+    EXPECT_LT(std::hypot(link_->plan_poses[k].x() - clean[k].x(),
+                         link_->plan_poses[k].y() - clean[k].y()),
+              0.1)
+        << "pose " << k;
+  EXPECT_EQ(link_->plan_poses.back().reliability().flag(), clean.back().reliability().flag());
+  EXPECT_EQ(clean.back().reliability().flag(), v1::Reliability::RELIABLE);
+  const std::string log = Log();
+  const size_t restart_line = log.find("the clock started again");
+  ASSERT_NE(restart_line, std::string::npos);
+  EXPECT_NE(log.find("belief: ", restart_line), std::string::npos)
+      << "no registration after the restart";
+  EXPECT_TRUE(WaitForStatus(
+      [](const v1::DaemonStatus& st) { return st.counters().clock_restarts() >= 1; }));
   EXPECT_EQ(link_->status->counters().clock_restarts(), 1u);
-  EXPECT_NE(Log().find("the clock started again"), std::string::npos);
   // The poses after the restart carry the headset's new stamps.
   EXPECT_EQ(link_->plan_poses.back().source_stamp_ns(),
             walk.steps.back().stamp_ns - restart_ns + 20'000'000);
