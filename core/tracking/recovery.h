@@ -23,8 +23,8 @@ namespace floorpose::tracking {
 struct RecoveryOptions {
   double lost_s = 600.0;     // mean time between losses of the wearer, seconds
   double start_doubt = 0.5;  // probability that a pick, place or restore is wrong
-  // Search the plan for other places while "elsewhere" is at least this likely, or the
-  // belief holds under half its mass near the published pose; every search_interval_s.
+  // Search the plan for other places while "elsewhere" is at least this likely (and once
+  // after every start, MclTracker::SearchDue); every search_interval_s.
   double search_share = 0.2;
   double search_interval_s = 3.0;
 };
