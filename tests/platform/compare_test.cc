@@ -61,12 +61,29 @@ TEST(CompareTest, OneWalkIsWithinNoiseAndEveryWalkIsNot) {
   EXPECT_NEAR(m.high, 0.05, 1e-9);
 }
 
+TEST(CompareTest, TheBrierScoreIsPooledOverPoses) {
+  RunFigures a, b;
+  a.key = "mcl p office 1";
+  a.scored_poses = 100;
+  a.brier = 0.01;
+  b.key = "mcl p hall 1";
+  b.scored_poses = 300;
+  b.brier = 0.05;
+  const SuiteFigures f = Figures({&a, &b});
+  EXPECT_NEAR(f.brier, (100 * 0.01 + 300 * 0.05) / 400, 1e-12) << "weighed by poses, not runs";
+  std::vector<RunFigures> next = {a, b};
+  next[1].brier = 0.03;
+  const Difference d = Row(Compare({a, b}, next, 200, 7), "Brier score of the probability");
+  EXPECT_NEAR(d.next - d.base, 300 * -0.02 / 400, 1e-12);
+}
+
 TEST(CompareTest, RunsArePairedByWalkAndBadLinesAreRefused) {
   const std::filesystem::path dir = std::filesystem::path(::testing::TempDir()) / "compare";
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "a.json")
       << R"({"method":"mcl","plan":"p","scenario":"office","seed":1,"poses":100,)"
-      << R"("reliable_fraction":0.5,"false_reliable_poses":5,"mean_error_m":0.2,"max_error_m":6})"
+      << R"("reliable_fraction":0.5,"false_reliable_poses":5,"mean_error_m":0.2,"max_error_m":6,)"
+      << R"("brier":0.04})"
       << "\n\n"
       << R"({"method":"mcl","plan":"p","scenario":"hall","seed":1,"poses":100,)"
       << R"("reliable_fraction":0.8,"false_reliable_poses":0,"mean_error_m":0.4,"max_error_m":1})"
@@ -76,6 +93,8 @@ TEST(CompareTest, RunsArePairedByWalkAndBadLinesAreRefused) {
   ASSERT_EQ(ReadRuns((dir / "a.json").string(), &a), "");
   ASSERT_EQ(a.size(), 2u);
   EXPECT_EQ(a[0].reliable_poses, 50);
+  EXPECT_EQ(a[0].brier, 0.04);
+  EXPECT_EQ(a[1].brier, 0.0) << "results.json of before the score: none";
   EXPECT_NE(ReadRuns((dir / "bad.json").string(), &bad), "");
   EXPECT_NE(ReadRuns((dir / "missing.json").string(), &bad), "");
   // Only the walk in both counts: the office run.

@@ -49,6 +49,13 @@ TEST_F(GlobalPlacementTest, AWalkWithoutAPickIsPlacedAndNeverReliablyWrong) {
   EXPECT_EQ(placed.divergences, 0u);
   EXPECT_GT(placed.time_to_first_reliable_s, 0.0);
   EXPECT_GT(placed.accepted, 0u);
+  // The probability's Brier score is the track's, and better than a coin's (0.25).
+  double brier = 0;
+  for (const EvalPose& p : placed.track)
+    brier += std::pow(p.probability - (p.error_m <= 1.0 ? 1.0 : 0.0), 2);
+  ASSERT_FALSE(placed.track.empty());
+  EXPECT_NEAR(placed.brier, brier / static_cast<double>(placed.track.size()), 1e-12);
+  EXPECT_LT(placed.brier, 0.25);
   std::printf(
       "placed after %zu of %zu poses, %zu searches; first reliable after %.1f s; error "
       "mean %.2f m, max %.2f m\n",

@@ -428,8 +428,16 @@ int RunSuite(const SuiteOptions& o) {
   if (o.no_pick) md << PlacementTable(reports, first, o.scenarios);
   if (o.kidnap) md << KidnapTable(reports, first, o.scenarios);
   const auto curve = CalibrationCurve(predicted, within);
+  double brier = 0;
+  for (size_t i = 0; i < predicted.size(); ++i)
+    brier += std::pow(predicted[i] - (within[i] ? 1.0 : 0.0), 2);
   md << "\nCalibration of the published probability (" << first << ", every pose):\n\n"
      << CalibrationTable(curve);
+  md.precision(4);
+  md << "\nBrier score (the mean squared difference of the probability and being within 1 m; "
+        "lower is better): "
+     << (predicted.empty() ? 0.0 : brier / static_cast<double>(predicted.size())) << "\n";
+  md.precision(2);
   std::ofstream(fs::path(o.out) / "svg" / "calibration.svg")
       << CalibrationSvg({{first + ": published probability, every pose of the suite", curve}});
   std::ofstream(fs::path(o.out) / "results.md") << md.str();

@@ -12,17 +12,19 @@ namespace floorpose::tools {
 
 SuiteFigures Figures(const std::vector<const RunFigures*>& runs) {
   SuiteFigures f;
-  double scored = 0, reliable = 0;
+  double scored = 0, reliable = 0, brier = 0;
   for (const RunFigures* r : runs) {
     f.mean_error_m += r->mean_error_m;
     f.runs_over_5m += r->max_error_m > 5.0;
     scored += r->scored_poses;
     reliable += r->reliable_poses;
     f.false_poses += r->false_poses;
+    brier += r->brier * r->scored_poses;
   }
   if (!runs.empty()) f.mean_error_m /= static_cast<double>(runs.size());
   f.reliable = scored > 0 ? reliable / scored : 0.0;
   f.precision = reliable > 0 ? 1.0 - f.false_poses / reliable : 1.0;
+  f.brier = scored > 0 ? brier / scored : 0.0;
   return f;
 }
 
@@ -47,7 +49,8 @@ std::vector<Difference> Compare(const std::vector<RunFigures>& base,
       {"runs more than 5 m off", &SuiteFigures::runs_over_5m, "", 0},
       {"RELIABLE share", &SuiteFigures::reliable, "%", 3},
       {"RELIABLE within 1 m", &SuiteFigures::precision, "%", 3},
-      {"RELIABLE more than 1 m off", &SuiteFigures::false_poses, "", 0}};
+      {"RELIABLE more than 1 m off", &SuiteFigures::false_poses, "", 0},
+      {"Brier score of the probability", &SuiteFigures::brier, "", 4}};
   const SuiteFigures fa = Figures(a), fb = Figures(b);
   std::vector<std::vector<double>> draws(fields.size());
   SplitMix64 rng(seed);
@@ -97,6 +100,7 @@ std::string ReadRuns(const std::string& path, std::vector<RunFigures>* runs) {
     r.scored_poses = j.value("poses", 0.0);
     r.reliable_poses = j.value("reliable_fraction", 0.0) * r.scored_poses;
     r.false_poses = j.value("false_reliable_poses", 0.0);
+    r.brier = j.value("brier", 0.0);
     runs->push_back(r);
   }
   return {};

@@ -19,6 +19,7 @@ struct RunFigures {
   double scored_poses = 0;  // poses after the first alignment
   double reliable_poses = 0;
   double false_poses = 0;  // RELIABLE more than 1 m off
+  double brier = 0;        // the run's Brier score (EvalReport::brier)
 };
 
 // The suite's figures over a set of runs.
@@ -28,6 +29,7 @@ struct SuiteFigures {
   double reliable = 0;      // share of scored poses flagged RELIABLE
   double precision = 1;     // share of RELIABLE poses within 1 m
   double false_poses = 0;
+  double brier = 0;  // over every scored pose of the runs
 };
 SuiteFigures Figures(const std::vector<const RunFigures*>& runs);
 

@@ -239,6 +239,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
   }
   std::vector<double> errors, marker_errors;
   size_t reliable = 0, reliable_ok = 0;
+  double brier = 0;
   for (const v1::PlanPose& p : plan_poses) {
     auto it = truth.find(p.source_stamp_ns());
     if (it == truth.end()) continue;
@@ -277,6 +278,8 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     if (e.marker) marker_errors.push_back(e.error_m);
     reliable += e.reliable;
     reliable_ok += e.reliable && e.error_m <= 1.0;
+    const double miss = e.probability - (e.error_m <= 1.0 ? 1.0 : 0.0);
+    brier += miss * miss;
     if (e.reliable && report->time_to_first_reliable_s < 0 && !plan_poses.empty()) {
       report->time_to_first_reliable_s =
           static_cast<double>(e.stamp_ns - plan_poses.front().source_stamp_ns()) * 1e-9;
@@ -298,6 +301,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     report->reliable_precision_1m =
         reliable ? static_cast<double>(reliable_ok) / static_cast<double>(reliable) : 0.0;
     report->false_reliable_poses = reliable - reliable_ok;
+    report->brier = brier / static_cast<double>(errors.size());
     const std::vector<EvalPose>& scored = report->track;
     const auto since_first = [&](auto it) {
       return it == scored.end()
@@ -382,6 +386,7 @@ std::string ToJson(const EvalReport& r) {
       {"reg_time_ms_max", r.reg_time_ms_max},
       {"reliable_fraction", r.reliable_fraction},
       {"reliable_precision_1m", r.reliable_precision_1m},
+      {"brier", r.brier},
       {"poses", r.poses},
       {"unaligned_poses", r.unaligned_poses},
       {"time_to_first_reliable_s", r.time_to_first_reliable_s},
@@ -417,6 +422,7 @@ std::string ToText(const EvalReport& r) {
     << " ms\n"
     << "  flagged reliable              " << 100 * r.reliable_fraction << "% of poses, "
     << 100 * r.reliable_precision_1m << "% of those within 1 m\n"
+    << "  Brier score (probability)     " << r.brier << "\n"
     << "  first reliable pose after     " << r.time_to_first_reliable_s << " s (-1: none)\n"
     << "  reliable but over 1 m off     " << r.false_reliable_poses << " poses\n"
     << "  first unreliable pose after   " << r.time_to_unreliable_s << " s (-1: none)\n"

@@ -66,6 +66,10 @@ struct EvalReport {
   double reg_time_ms_median = 0, reg_time_ms_max = 0;
   double reliable_fraction = 0;      // of poses flagged RELIABLE
   double reliable_precision_1m = 0;  // of those, the share within 1 m
+  // The published probability's Brier score: the mean over scored poses of (probability
+  // - 1 if within 1 m, else 0)^2. A proper scoring rule (Brier 1950): lowest for a
+  // probability that is both calibrated and sharp, so noise settings are tuned by it.
+  double brier = 0;
   // From the first plan pose to the first scored pose flagged RELIABLE (-1: never), and
   // the poses flagged RELIABLE while more than 1 m off.
   double time_to_first_reliable_s = -1;
