@@ -408,10 +408,12 @@ int RunSuite(const SuiteOptions& o) {
         "|\n|---|---|---|---|---|\n";
   std::vector<double> predicted;
   std::vector<bool> within;
+  double brier = 0;  // EvalReport::brier, pooled over the poses
   for (const std::string& scenario : o.scenarios) {
     size_t n = 0, reliable = 0, reliable_ok = 0, ok = 0;
     for (const EvalReport& r : reports) {
       if (r.method != first || r.scenario != scenario) continue;
+      brier += r.brier * static_cast<double>(r.track.size());
       for (const EvalPose& p : r.track) {
         ++n;
         ok += p.error_m <= 1.0;
@@ -428,9 +430,6 @@ int RunSuite(const SuiteOptions& o) {
   if (o.no_pick) md << PlacementTable(reports, first, o.scenarios);
   if (o.kidnap) md << KidnapTable(reports, first, o.scenarios);
   const auto curve = CalibrationCurve(predicted, within);
-  double brier = 0;
-  for (size_t i = 0; i < predicted.size(); ++i)
-    brier += std::pow(predicted[i] - (within[i] ? 1.0 : 0.0), 2);
   md << "\nCalibration of the published probability (" << first << ", every pose):\n\n"
      << CalibrationTable(curve);
   md.precision(4);
