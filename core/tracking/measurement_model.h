@@ -6,10 +6,10 @@
 // ruling it out.
 //
 // The points of one window share the SLAM's drift and the plan's errors: they are worth a
-// handful of independent measurements, not hundreds: a window of points is worth
-// `independent_points` times their mean log-likelihood (a tempered likelihood). Each
-// update weighs the points new since the last, as their share of the window: every wall
-// counts once, as it comes.
+// handful of independent measurements, not hundreds. The window's log-likelihood is the
+// mean over its points times `independent_points` (a tempered likelihood); each window
+// is taken in the share of it that is new since the last update, so overlapping windows
+// do not count the same walls twice.
 #pragma once
 
 #include <Eigen/Core>
@@ -28,7 +28,7 @@ struct MeasurementModel {
   // walls since removed, doors drawn closed).
   double clutter = 0.2;
   // What a whole window of wall points is worth in independent measurements.
-  double independent_points = 4.0;
+  double independent_points = 5.0;
 
   // The mean log-likelihood of the points (slam frame) under T_plan_slam, per point.
   double MeanLogLikelihood(const std::vector<Eigen::Vector2d>& points_slam, const Se2& T_plan_slam,

@@ -44,24 +44,27 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
   SplitMix64 rng(u.seed);
   Belief& belief = u.belief;
   const double reach = index.max_distance_m();
-  // Measurement: the walls new since the last update (at the first, the whole window), as
-  // their share of the window's evidence, and no more than one independent measurement per
-  // point of a sparse window. Each wall weighs the belief once, as it comes: the walls that
-  // shaped the belief fit it well wherever it settled, right or wrong, and a place a search
-  // found by fitting the window would be credited again for the walls it was chosen by.
-  // The same fit under the belief before this update is what the recovery filter weighs.
+  // Measurement: the window's new share of evidence, and no more than one independent
+  // measurement per point of a sparse window.
   const std::vector<Eigen::Vector2d> points = ThinCloud(cloud, 0.1, options.weigh_points);
-  const std::vector<Eigen::Vector2d> fresh =
-      u.fresh_slam.empty() ? points : ThinCloud(u.fresh_slam, 0.1, options.weigh_points);
   const double exponent = u.evidence * std::min(options.measurement.independent_points,
                                                 static_cast<double>(points.size()));
+  // The fit the recovery filter weighs is predictive: of the walls the belief has not
+  // been weighed on yet, under the belief before this update. The walls that shaped the
+  // belief fit it well wherever it settled, right or wrong.
+  const bool predictive = !u.fresh_slam.empty();
+  const std::vector<Eigen::Vector2d> fresh =
+      predictive ? ThinCloud(u.fresh_slam, 0.1, options.weigh_points)
+                 : std::vector<Eigen::Vector2d>{};
   const std::vector<double> prior = belief.Weights();
   const std::vector<double> nearest = NearestWallPoint(u.sight_slam, cloud);
   double fit = 0;
   for (size_t i = 0; i < belief.size(); ++i) {
     Sample& s = belief.samples()[i];
-    const double mll = options.measurement.MeanLogLikelihood(fresh, s.T_plan_slam, index, reach);
-    fit += prior[i] * mll;
+    const double mll = options.measurement.MeanLogLikelihood(points, s.T_plan_slam, index, reach);
+    fit += prior[i] *
+           (predictive ? options.measurement.MeanLogLikelihood(fresh, s.T_plan_slam, index, reach)
+                       : mll);
     const SightFit sight =
         SightLogLikelihood(options.measurement, u.sight_slam, nearest, s.T_plan_slam, index);
     s.log_weight += exponent * (mll + sight.Mean()) +
