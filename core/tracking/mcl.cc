@@ -3,7 +3,6 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 namespace floorpose::tracking {
 namespace {
@@ -283,13 +282,15 @@ bool MclTracker::FinishUpdate(MclUpdateResult result, int64_t stamp_ns) {
 
 bool MclTracker::SearchDue(int64_t now_ns, size_t window_points) const {
   if (!index_ || window_points < options_.search_min_points) return false;
-  const double since_s = last_search_ns_ ? static_cast<double>(now_ns - *last_search_ns_) * 1e-9
-                                         : std::numeric_limits<double>::infinity();
-  if (since_s < options_.recovery.search_interval_s) return false;
+  if (last_search_ns_ &&
+      static_cast<double>(now_ns - *last_search_ns_) * 1e-9 < options_.recovery.search_interval_s)
+    return false;
   if (belief_.empty()) return true;
   if (!checked_) return false;
   if (!recovery_.searched()) return true;  // a start is checked against the whole plan
-  return recovery_.SearchDue(since_s);
+  const BeliefSummary s =
+      Summary(odometry_.position.value_or(Eigen::Vector2d::Zero()), alignment_.T_plan_slam);
+  return s.elsewhere >= options_.recovery.search_share;
 }
 
 std::string MclTracker::OfferPlaces(const std::vector<GlobalPlace>& places, int64_t stamp_ns) {

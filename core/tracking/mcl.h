@@ -157,9 +157,8 @@ class MclTracker {
   bool FinishUpdate(MclUpdateResult result, int64_t stamp_ns);
 
   // A search of the whole plan is due without a belief, once after every start (pick,
-  // flip, place, restore) to check it, and then at a rate in proportion to the chance that
-  // the wearer is elsewhere (RecoveryOptions::search_share); at most every
-  // search_interval_s.
+  // flip, place, restore) to check it, or while the wearer may be elsewhere
+  // (RecoveryOptions::search_share); at most every search_interval_s.
   bool SearchDue(int64_t now_ns, size_t window_points) const;
   void MarkSearchStarted(int64_t now_ns) { last_search_ns_ = now_ns; }
   // Seeds the belief with a search's refined places (RefinePlaces' order), or mixes them

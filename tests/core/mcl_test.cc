@@ -137,27 +137,6 @@ TEST(RecoveryTest, AFitLikeARandomPlaceKeepsTheDoubtAndARightOneClearsIt) {
   EXPECT_LT(stale.Elsewhere(), 0.01);
 }
 
-TEST(RecoveryTest, SearchesComeAsOftenAsTheWearerMayBeElsewhere) {
-  MeasurementModel m;
-  const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
-  RecoveryOptions o;
-  o.search_share = 0.2;  // every 3 s at 20%
-  o.search_interval_s = 3.0;
-  Recovery r(o, m, index);
-  ASSERT_NEAR(r.Elsewhere(), 0.5, 1e-9);
-  EXPECT_FALSE(r.SearchDue(2.9)) << "never more often than search_interval_s";
-  EXPECT_TRUE(r.SearchDue(3.0));
-  // Fits halfway between a right place and a random one bring the doubt down to a few
-  // percent: a search is due after 0.2 * 3 / Elsewhere() seconds.
-  const double mid =
-      0.5 * (ExpectedLogLikelihood(m, index.max_distance_m()) + RandomLogLikelihood(m, index));
-  while (r.Elsewhere() > 0.02) r.Observe(mid, 0.5, 1.0);
-  const double due_s = o.search_share * o.search_interval_s / r.Elsewhere();
-  EXPECT_GT(due_s, 30.0);
-  EXPECT_FALSE(r.SearchDue(0.99 * due_s));
-  EXPECT_TRUE(r.SearchDue(1.01 * due_s));
-}
-
 // A walk in the asymmetric room: wall points seen from the wearer within 4 m (slam
 // frame, T_plan_slam = truth), stamped a second apart.
 struct RoomWalk {
