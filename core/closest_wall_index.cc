@@ -105,7 +105,6 @@ ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
       for (size_t j = 0; j < sorted.size(); ++j) candidates_[cell_begin_[i] + j] = sorted[j].second;
     }
   }
-  if (options_.field_cell_m > 0) field_ = DistanceField(*this, options_.field_cell_m);
 }
 
 std::optional<ClosestWall> ClosestWallIndex::Query(const Eigen::Vector2d& p) const {
@@ -183,7 +182,7 @@ bool ClosestWallIndex::StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Ve
 
 size_t ClosestWallIndex::MemoryBytes() const {
   return cell_begin_.size() * sizeof(uint32_t) + candidates_.size() * sizeof(uint32_t) +
-         plan_.segments.size() * (sizeof(Segment) + sizeof(SegmentData)) + field_.MemoryBytes();
+         plan_.segments.size() * (sizeof(Segment) + sizeof(SegmentData));
 }
 
 std::optional<ClosestWall> BruteForceClosestWall(const FloorPlan& plan, const Eigen::Vector2d& p,

@@ -14,7 +14,6 @@
 #include <optional>
 #include <vector>
 
-#include "core/distance_field.h"
 #include "core/floor_plan.h"
 
 namespace floorpose {
@@ -31,8 +30,6 @@ class ClosestWallIndex {
   struct Options {
     double cell_m = 0.25;         // grid resolution
     double max_distance_m = 3.0;  // beyond this, queries return nothing
-    // Nodes of the distance field this far apart (DistanceField); 0: Distance asks Query.
-    double field_cell_m = 0;
   };
 
   ClosestWallIndex(const FloorPlan& plan, Options options);
@@ -40,14 +37,6 @@ class ClosestWallIndex {
 
   // The closest wall within max_distance_m, or nothing.
   std::optional<ClosestWall> Query(const Eigen::Vector2d& p) const;
-
-  // The distance to the closest wall, at most max_distance_m: from the distance field
-  // when there is one (within half a field cell of the exact one), else exact.
-  double Distance(const Eigen::Vector2d& p) const {
-    if (!field_.empty()) return field_.Distance(p);
-    const auto hit = Query(p);
-    return hit ? hit->distance : options_.max_distance_m;
-  }
 
   // Whether the step p -> q properly crosses a wall (touching does not count), from the
   // candidate lists: exact, in pieces no longer than a cell (any wall across a piece is
@@ -88,7 +77,6 @@ class ClosestWallIndex {
   std::vector<uint32_t> cell_begin_;  // CSR layout: candidates of cell i are
   std::vector<uint32_t> candidates_;  // candidates_[cell_begin_[i] .. cell_begin_[i+1]),
                                       // nearest the cell's centre first
-  DistanceField field_;
 };
 
 // The same answer by trying every segment: the oracle for tests and the baseline for

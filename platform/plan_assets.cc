@@ -30,24 +30,19 @@ std::string PlanOutOfLimits(const FloorPlan& plan, const v1::LimitsConfig& limit
   return {};
 }
 
-// The closest-wall index's distance field (the belief's weighting): nodes this far apart,
-// metres: off by 3.5 cm at most (DistanceField), against 0.1 m of wall-point noise.
-constexpr double kFieldCellM = 0.05;
-
 // How many times coarser than configured a plan's grids must be to stay within
 // limits.max_plan_memory_mb. Bytes a cell, as measured on ILC F1 (240 x 176 m: 436 MB of
 // RSS at the default cells): routes 20 (passable, components, a search's distances and
-// parents), rooms and explored maps 8 each, the closest-wall index 8 (cells and lists)
-// and its distance field 2.
+// parents), rooms and explored maps 8 each, the closest-wall index 8 (cells and lists).
 double PlanGridScale(const FloorPlan& plan, const v1::FloorposedConfig& c) {
   const Eigen::Vector2d extent = (plan.max - plan.min).array() + 2.0;  // the grids' margins
   auto per_m2 = [](double bytes_per_cell, double cell_m) {
     return bytes_per_cell / (cell_m * cell_m);
   };
-  const double bytes = extent.x() * extent.y() *
-                       (per_m2(20, c.routes().cell_m()) + per_m2(8, RoomOptions{}.cell_m) +
-                        per_m2(8, c.explored().cell_m()) +
-                        per_m2(8, ClosestWallIndex::Options{}.cell_m) + per_m2(2, kFieldCellM));
+  const double bytes =
+      extent.x() * extent.y() *
+      (per_m2(20, c.routes().cell_m()) + per_m2(8, RoomOptions{}.cell_m) +
+       per_m2(8, c.explored().cell_m()) + per_m2(8, ClosestWallIndex::Options{}.cell_m));
   const double budget = static_cast<double>(c.limits().max_plan_memory_mb()) * (1 << 20);
   return std::max(1.0, std::sqrt(bytes / budget));
 }
@@ -101,7 +96,6 @@ PlanAssets BuildPlan(const v1::FloorposedConfig& config, const std::function<int
         file, scale, config.limits().max_plan_memory_mb());
   ClosestWallIndex::Options index_options;
   index_options.cell_m *= scale;
-  index_options.field_cell_m = kFieldCellM * scale;
   index_options.max_distance_m = std::max(3.0, config.icp().max_correspondence_m());
   a.index = std::make_shared<const ClosestWallIndex>(parsed.plan, index_options);
   spdlog::info("floor plan {}: {} segments ({} dropped), {:.1f} x {:.1f} m, index {:.1f} MB", file,

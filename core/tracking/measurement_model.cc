@@ -22,9 +22,12 @@ double MeasurementModel::MeanLogLikelihood(const std::vector<Eigen::Vector2d>& p
                                            double reach_m) const {
   if (points_slam.empty()) return 0.0;
   const Eigen::Matrix2d R = T.R();
+  const double far = PointLogLikelihood(2 * reach_m, reach_m);
   double sum = 0;
-  for (const Eigen::Vector2d& p : points_slam)
-    sum += PointLogLikelihood(index.Distance(R * p + T.t), reach_m);
+  for (const Eigen::Vector2d& p : points_slam) {
+    const auto hit = index.Query(R * p + T.t);
+    sum += hit ? PointLogLikelihood(hit->distance, reach_m) : far;
+  }
   return sum / static_cast<double>(points_slam.size());
 }
 
@@ -45,7 +48,8 @@ SightFit SightLogLikelihood(const MeasurementModel& model,
   const double missed = std::log(model.clutter), seen = std::log1p(-model.clutter);
   SightFit fit;
   for (size_t i = 0; i < positions_slam.size(); ++i) {
-    const double plan = std::min(index.Distance(T * positions_slam[i]), kSightM);
+    const auto hit = index.Query(T * positions_slam[i]);
+    const double plan = std::min(hit ? hit->distance : kSightM, kSightM);
     if (plan < kBodyM) continue;  // a walk through a plan line: the motion model's to price
     const double mesh = std::min(nearest_point[i], kSightM);
     fit.log_likelihood += std::abs(mesh - plan) > kSeenMarginM ? missed : seen;

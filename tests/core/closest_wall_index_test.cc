@@ -214,54 +214,5 @@ TEST(ClosestWallIndexTest, RealPlansAgreeWithBruteForce) {
   }
 }
 
-// The distance field interpolates exact distances at its nodes. Distance is 1-Lipschitz,
-// so a bilinear blend of the four nodes around a point is off by at most the mean
-// distance to them: 0.71 of a cell at the cell's centre. Beyond the reach, outside the
-// field and for NaN it answers the reach.
-TEST(DistanceFieldTest, WithinACellOfTheExactDistance) {
-  for (const double cell : {0.05, 0.2}) {
-    SCOPED_TRACE("cell " + std::to_string(cell));
-    const FloorPlan plan = RandomPlan(11, 60);
-    ClosestWallIndex::Options options;
-    options.field_cell_m = cell;
-    const ClosestWallIndex index(plan, options);
-    const ClosestWallIndex exact(plan);
-    EXPECT_GT(index.MemoryBytes(), exact.MemoryBytes());
-    SplitMix64 rng(12);
-    double worst = 0;
-    for (int i = 0; i < 5000; ++i) {
-      Eigen::Vector2d q = RandomVector2(rng, plan.min.array() - 5.0, plan.max.array() + 5.0);
-      if (i % 10 == 0) {  // on a wall
-        const Segment& s = plan.segments[rng.Next() % plan.segments.size()];
-        q = s.a + rng.Uniform() * (s.b - s.a);
-      }
-      const auto want = BruteForceClosestWall(plan, q, options.max_distance_m);
-      const double want_m = want ? want->distance : options.max_distance_m;
-      ASSERT_NEAR(exact.Distance(q), want_m, 1e-9) << "query (" << q.transpose() << ")";
-      worst = std::max(worst, std::abs(index.Distance(q) - want_m));
-    }
-    EXPECT_LE(worst, 0.71 * cell + 1e-4);
-    EXPECT_GT(worst, 0.0);  // it is a field, not the exact answer
-  }
-}
-
-TEST(DistanceFieldTest, ExactBesideAStraightWall) {
-  // Off its ends and out of the cells it passes through, a wall's distance is linear in
-  // each axis and the blend is exact, up to the 16-bit steps (reach / 65535).
-  const auto parse = MakeFloorPlan("one", {{{0, 0.013}, {10, 0.013}}});
-  ASSERT_TRUE(parse.ok());
-  ClosestWallIndex::Options options;
-  options.field_cell_m = 0.05;
-  const ClosestWallIndex index(parse.plan, options);
-  for (const double x : {1.0, 3.21, 7.777})
-    for (const double y : {-2.5, -0.61, 0.3, 1.04, 2.9})
-      EXPECT_NEAR(index.Distance({x, y}), std::abs(y - 0.013), 1e-4) << x << ", " << y;
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_EQ(index.Distance({nan, 1}), 3.0);
-  EXPECT_EQ(index.Distance({5, 3.5}), 3.0);
-  EXPECT_EQ(index.Distance({-100, 0}), 3.0);
-  EXPECT_EQ(index.Distance({1e300, -1e300}), 3.0);
-}
-
 }  // namespace
 }  // namespace floorpose
