@@ -14,7 +14,7 @@ std::optional<Job> Engine::TakeDueJob() {
 void Engine::OnRegistrationDone(Done done) {
   jobs_.Finished();
   if (done.job.global) {
-    const std::string what = tracker_.OfferPlaces(done.places, done.job.stamp_ns);
+    const std::string what = tracker_.OfferPlaces(done.places, done.job.cloud, done.job.stamp_ns);
     spdlog::info("global search: {} points, {} place(s), {:.1f} ms: {}", done.job.cloud.size(),
                  done.places.size(), done.result.time_ms, what);
     PublishAlignment();

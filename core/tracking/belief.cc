@@ -39,16 +39,22 @@ void Belief::AddGaussian(const Se2& T, const Eigen::Matrix3d& P, const Eigen::Ve
   }
 }
 
-void Belief::Mix(const std::vector<Se2>& places, const Eigen::Matrix3d& P,
-                 const Eigen::Vector2d& wearer_slam, double share, size_t min_each,
-                 SplitMix64& rng) {
-  if (places.empty()) return;
+void Belief::Mix(const std::vector<Se2>& places, const std::vector<double>& log_weights,
+                 const Eigen::Matrix3d& P, const Eigen::Vector2d& wearer_slam, double share,
+                 size_t min_each, SplitMix64& rng) {
+  if (places.empty() || log_weights.size() != places.size()) return;
   Normalize();
   for (Sample& s : samples_) s.log_weight += std::log(1.0 - share);
   const size_t n =
       std::max(min_each, static_cast<size_t>(share * static_cast<double>(size())) / places.size());
-  const double log_weight = std::log(share / static_cast<double>(places.size() * n));
-  for (const Se2& T : places) AddGaussian(T, P, T * wearer_slam, n, log_weight, rng);
+  const double top = *std::max_element(log_weights.begin(), log_weights.end());
+  double sum = 0;
+  for (double w : log_weights) sum += std::exp(w - top);
+  for (size_t i = 0; i < places.size(); ++i) {
+    const double place_share = share * std::exp(log_weights[i] - top) / sum;
+    AddGaussian(places[i], P, places[i] * wearer_slam, n,
+                std::log(place_share / static_cast<double>(n)), rng);
+  }
   Normalize();
 }
 

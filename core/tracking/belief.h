@@ -48,10 +48,11 @@ class Belief {
                    double log_weight, SplitMix64& rng);
 
   // Offers places the belief may have lost: `share` of the mass goes to Gaussians about
-  // them (covariance P about the wearer), shared evenly and at least min_each samples
-  // each; the belief keeps the rest.
-  void Mix(const std::vector<Se2>& places, const Eigen::Matrix3d& P,
-           const Eigen::Vector2d& wearer_slam, double share, size_t min_each, SplitMix64& rng);
+  // them (covariance P about the wearer), shared in proportion to exp(log_weights) (one a
+  // place), at least min_each samples each; the belief keeps the rest.
+  void Mix(const std::vector<Se2>& places, const std::vector<double>& log_weights,
+           const Eigen::Matrix3d& P, const Eigen::Vector2d& wearer_slam, double share,
+           size_t min_each, SplitMix64& rng);
 
   // Weights summing to 1 from the log weights (the largest made 0 first).
   std::vector<double> Weights() const;

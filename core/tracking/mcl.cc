@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace floorpose::tracking {
 namespace {
@@ -282,24 +283,43 @@ bool MclTracker::FinishUpdate(MclUpdateResult result, int64_t stamp_ns) {
 
 bool MclTracker::SearchDue(int64_t now_ns, size_t window_points) const {
   if (!index_ || window_points < options_.search_min_points) return false;
-  if (last_search_ns_ &&
-      static_cast<double>(now_ns - *last_search_ns_) * 1e-9 < options_.recovery.search_interval_s)
-    return false;
+  const double since_s = last_search_ns_ ? static_cast<double>(now_ns - *last_search_ns_) * 1e-9
+                                         : std::numeric_limits<double>::infinity();
+  if (since_s < options_.recovery.search_interval_s) return false;
   if (belief_.empty()) return true;
   if (!checked_) return false;
   if (!recovery_.searched()) return true;  // a start is checked against the whole plan
-  const BeliefSummary s =
-      Summary(odometry_.position.value_or(Eigen::Vector2d::Zero()), alignment_.T_plan_slam);
-  return s.elsewhere >= options_.recovery.search_share;
+  return recovery_.SearchDue(since_s);
 }
 
-std::string MclTracker::OfferPlaces(const std::vector<GlobalPlace>& places, int64_t stamp_ns) {
-  std::string what = MixPlaces(places, stamp_ns);
+std::string MclTracker::OfferPlaces(const std::vector<GlobalPlace>& places,
+                                    const std::vector<Eigen::Vector2d>& cloud_slam,
+                                    int64_t stamp_ns) {
+  std::string what = MixPlaces(places, cloud_slam, stamp_ns);
   recovery_.Searched();
   return what;
 }
 
-std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places, int64_t stamp_ns) {
+std::vector<double> MclTracker::PlaceLogWeights(
+    const std::vector<const GlobalPlace*>& places,
+    const std::vector<Eigen::Vector2d>& cloud_slam) const {
+  std::vector<double> log_weights(places.size(), 0.0);
+  const std::vector<Eigen::Vector2d> points = ThinCloud(cloud_slam, 0.1, options_.weigh_points);
+  if (points.empty() || !index_) return log_weights;
+  const MeasurementModel& model = options_.measurement;
+  const double exponent =
+      std::min(model.independent_points, static_cast<double>(points.size()));
+  for (size_t i = 0; i < places.size(); ++i)
+    log_weights[i] = exponent * model.MeanLogLikelihood(points, places[i]->T_plan_slam, *index_,
+                                                        index_->max_distance_m());
+  const double top = *std::max_element(log_weights.begin(), log_weights.end());
+  for (double& w : log_weights) w -= top;
+  return log_weights;
+}
+
+std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places,
+                                  const std::vector<Eigen::Vector2d>& cloud_slam,
+                                  int64_t stamp_ns) {
   std::vector<const GlobalPlace*> fit;
   for (const GlobalPlace& p : places)
     if (p.rank < 2 && fit.size() < 8) fit.push_back(&p);
@@ -309,13 +329,14 @@ std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places, int64_
   const size_t k = fit.size();
   if (belief_.empty()) {
     const size_t n = std::max<size_t>(1, options_.samples.max_samples / k);
-    for (const GlobalPlace* p : fit)
-      belief_.AddGaussian(p->T_plan_slam, P, p->T_plan_slam * wearer, n, 0.0, rng_);
+    const std::vector<double> log_weights = PlaceLogWeights(fit, cloud_slam);
+    for (size_t i = 0; i < k; ++i)
+      belief_.AddGaussian(fit[i]->T_plan_slam, P, fit[i]->T_plan_slam * wearer, n,
+                          log_weights[i], rng_);
     StartBelief(fit[0]->T_plan_slam, AlignmentSource::kGlobalSearch, stamp_ns);
-    // The search chose these places for fitting the window's walls: those walls say
-    // nothing more about them (the best of many random places fits them well too). Only
-    // walls that come after the search weigh the belief and its doubt, and until they
-    // have there is no place to publish: the first of k equal places is a guess.
+    // The search's walls weigh its places against one another, not the doubt. Only walls
+    // that come after the search weigh the belief against "elsewhere", and until they have
+    // there is no place to publish.
     alignment_.version = 0;
     last_update_ns_ = stamp_ns;
     return "seeded with " + std::to_string(k) + " place(s)";
@@ -323,12 +344,15 @@ std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places, int64_
   // Recovery: the places the belief does not hold get the mass the belief may be missing.
   const double share = std::max(kOfferShare, recovery_.Elsewhere());
   const Mode lead = belief_.LeadingMode(wearer, options_.publish.within_m, kPlaceRad);
-  std::vector<Se2> fresh;
+  std::vector<const GlobalPlace*> fresh;
   for (const GlobalPlace* p : fit)
     if (!SamePlace(p->T_plan_slam, lead.T_plan_slam, wearer, options_.publish.within_m, kPlaceRad))
-      fresh.push_back(p->T_plan_slam);
+      fresh.push_back(p);
   if (fresh.empty()) return "the belief holds every place found";
-  belief_.Mix(fresh, P, wearer, share, options_.samples.min_samples / 4, rng_);
+  std::vector<Se2> T;
+  for (const GlobalPlace* p : fresh) T.push_back(p->T_plan_slam);
+  belief_.Mix(T, PlaceLogWeights(fresh, cloud_slam), P, wearer, share,
+              options_.samples.min_samples / 4, rng_);
   ++belief_version_;  // an update running on the belief without them is void
   return "mixed in " + std::to_string(fresh.size()) + " place(s) at " +
          std::to_string(static_cast<int>(100 * share)) + "%";

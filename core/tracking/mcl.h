@@ -157,20 +157,31 @@ class MclTracker {
   bool FinishUpdate(MclUpdateResult result, int64_t stamp_ns);
 
   // A search of the whole plan is due without a belief, once after every start (pick,
-  // flip, place, restore) to check it, or while the wearer may be elsewhere
-  // (RecoveryOptions::search_share); at most every search_interval_s.
+  // flip, place, restore) to check it, and then at a rate in proportion to the chance that
+  // the wearer is elsewhere (RecoveryOptions::search_share); at most every
+  // search_interval_s.
   bool SearchDue(int64_t now_ns, size_t window_points) const;
   void MarkSearchStarted(int64_t now_ns) { last_search_ns_ = now_ns; }
   // Seeds the belief with a search's refined places (RefinePlaces' order), or mixes them
-  // into it as recovery does; returns what it did.
-  std::string OfferPlaces(const std::vector<GlobalPlace>& places, int64_t stamp_ns);
+  // into it as recovery does; returns what it did. `cloud_slam`, the walls the search ran
+  // on, weigh the places against one another (PlaceLogWeights).
+  std::string OfferPlaces(const std::vector<GlobalPlace>& places,
+                          const std::vector<Eigen::Vector2d>& cloud_slam, int64_t stamp_ns);
 
  private:
   // A new belief from a prior (pick, flip, place, restore): a new alignment version, and
   // nothing of the old belief's fit.
   void StartBelief(const Se2& published, AlignmentSource source, int64_t stamp_ns);
   BeliefSummary Summary(const Eigen::Vector2d& wearer_slam, const Se2& T) const;
-  std::string MixPlaces(const std::vector<GlobalPlace>& places, int64_t stamp_ns);
+  std::string MixPlaces(const std::vector<GlobalPlace>& places,
+                        const std::vector<Eigen::Vector2d>& cloud_slam, int64_t stamp_ns);
+  // The log-likelihood of the search's walls at each place, one window's worth
+  // (independent_points): those walls chose the places, so they tell nothing of whether
+  // the wearer is at any of them (the best of many random places fits them well too), but
+  // among the places found the right one fits them better than a look-alike. 0 each
+  // without walls.
+  std::vector<double> PlaceLogWeights(const std::vector<const GlobalPlace*>& places,
+                                      const std::vector<Eigen::Vector2d>& cloud_slam) const;
 
   MclOptions options_;
   std::shared_ptr<const ClosestWallIndex> index_;

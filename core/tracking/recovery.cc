@@ -75,6 +75,11 @@ void Recovery::Observe(double mean_log_likelihood, double exponent, double dt_s)
 
 double Recovery::Elsewhere() const { return Logistic(log_odds_); }
 
+bool Recovery::SearchDue(double since_s) const {
+  return since_s >= options_.search_interval_s &&
+         Elsewhere() * since_s >= options_.search_share * options_.search_interval_s;
+}
+
 double Recovery::FitRatio() const { return std::exp(fit_ - expected_); }
 
 }  // namespace floorpose::tracking

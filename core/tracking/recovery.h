@@ -23,8 +23,8 @@ namespace floorpose::tracking {
 struct RecoveryOptions {
   double lost_s = 600.0;     // mean time between losses of the wearer, seconds
   double start_doubt = 0.5;  // probability that a pick, place or restore is wrong
-  // Search the plan for other places while "elsewhere" is at least this likely (and once
-  // after every start, MclTracker::SearchDue); every search_interval_s.
+  // Search the plan for other places once after every start, then at a rate in proportion
+  // to "elsewhere": every search_interval_s at search_share (MclTracker::SearchDue).
   double search_share = 0.2;
   double search_interval_s = 3.0;
 };
@@ -51,6 +51,11 @@ class Recovery {
   void Observe(double mean_log_likelihood, double exponent, double dt_s);
   // The probability that the wearer is at none of the belief's places.
   double Elsewhere() const;
+  // Whether another search of the plan is due since_s after the last: searches come at a
+  // rate in proportion to Elsewhere(), every search_interval_s at search_share and ten
+  // times as seldom at a tenth of it. The searches cost CPU; the places they find are
+  // worth it only as often as the belief may have missed the wearer.
+  bool SearchDue(double since_s) const;
   // Halfway between the fit per point of a right alignment and of a random one.
   double MidFit() const { return 0.5 * (expected_ + random_); }
   // The latest fit over the fit expected of a right alignment, as a likelihood ratio per

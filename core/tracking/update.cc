@@ -111,7 +111,7 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
       out.polished = icp_fit >= mode_fit;
       if (out.polished) out.published = out.icp.T_plan_slam;
     } else if (another_place) {
-      belief.Mix({out.icp.T_plan_slam},
+      belief.Mix({out.icp.T_plan_slam}, {0.0},
                  PlaceCovariance(options.place_sigma_m, options.place_sigma_rad), u.wearer_slam,
                  kOfferShare, options.samples.min_samples / 4, rng);
       out.offered = true;

@@ -47,11 +47,19 @@ TEST(BeliefTest, MixingOffersTheShareAndKeepsTheRest) {
   Belief b;
   const Se2 held{0, {0, 0}}, offered{0, {5, 0}}, other{0, {-5, 0}};
   b.AddGaussian(held, Eigen::Vector3d(1e-6, 1e-4, 1e-4).asDiagonal(), held.t, 400, 0.0, rng);
-  b.Mix({offered, other}, PlaceCovariance(0.05, Deg(1)), {0, 0}, 0.2, 10, rng);
+  b.Mix({offered, other}, {0.0, 0.0}, PlaceCovariance(0.05, Deg(1)), {0, 0}, 0.2, 10, rng);
   EXPECT_NEAR(b.MassWithin({0, 0}, held.t, 1.0), 0.8, 1e-9);
   EXPECT_NEAR(b.MassWithin({0, 0}, offered.t, 1.0), 0.1, 1e-9) << "the share, split evenly";
   EXPECT_NEAR(b.MassWithin({0, 0}, other.t, 1.0), 0.1, 1e-9);
   EXPECT_EQ(b.size(), 400u + 2 * 40u) << "samples in proportion to the share";
+  // Weighted: three times the likelihood, three times the share.
+  Belief c;
+  c.AddGaussian(held, Eigen::Vector3d(1e-6, 1e-4, 1e-4).asDiagonal(), held.t, 400, 0.0, rng);
+  c.Mix({offered, other}, {std::log(3.0), 0.0}, PlaceCovariance(0.05, Deg(1)), {0, 0}, 0.2, 10,
+        rng);
+  EXPECT_NEAR(c.MassWithin({0, 0}, held.t, 1.0), 0.8, 1e-9);
+  EXPECT_NEAR(c.MassWithin({0, 0}, offered.t, 1.0), 0.15, 1e-9);
+  EXPECT_NEAR(c.MassWithin({0, 0}, other.t, 1.0), 0.05, 1e-9);
 }
 
 TEST(MeasurementModelTest, NearWallsIsLikelierAndFarIsClutter) {
@@ -137,6 +145,27 @@ TEST(RecoveryTest, AFitLikeARandomPlaceKeepsTheDoubtAndARightOneClearsIt) {
   EXPECT_LT(stale.Elsewhere(), 0.01);
 }
 
+TEST(RecoveryTest, SearchesComeAsOftenAsTheWearerMayBeElsewhere) {
+  MeasurementModel m;
+  const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
+  RecoveryOptions o;
+  o.search_share = 0.2;  // every 3 s at 20%
+  o.search_interval_s = 3.0;
+  Recovery r(o, m, index);
+  ASSERT_NEAR(r.Elsewhere(), 0.5, 1e-9);
+  EXPECT_FALSE(r.SearchDue(2.9)) << "never more often than search_interval_s";
+  EXPECT_TRUE(r.SearchDue(3.0));
+  // Fits halfway between a right place and a random one bring the doubt down to a few
+  // percent: a search is due after 0.2 * 3 / Elsewhere() seconds.
+  const double mid =
+      0.5 * (ExpectedLogLikelihood(m, index.max_distance_m()) + RandomLogLikelihood(m, index));
+  while (r.Elsewhere() > 0.02) r.Observe(mid, 0.5, 1.0);
+  const double due_s = o.search_share * o.search_interval_s / r.Elsewhere();
+  EXPECT_GT(due_s, 30.0);
+  EXPECT_FALSE(r.SearchDue(0.99 * due_s));
+  EXPECT_TRUE(r.SearchDue(1.01 * due_s));
+}
+
 // A walk in the asymmetric room: wall points seen from the wearer within 4 m (slam
 // frame, T_plan_slam = truth), stamped a second apart.
 struct RoomWalk {
@@ -182,7 +211,7 @@ void CheckStart(MclTracker& mcl, const RoomWalk& room, int64_t t_ns) {
   mcl.MarkSearchStarted(t_ns);
   GlobalPlace right;
   right.T_plan_slam = room.truth;
-  mcl.OfferPlaces({right}, t_ns);
+  mcl.OfferPlaces({right}, {}, t_ns);
   EXPECT_FALSE(mcl.SearchDue(t_ns + 10'000'000'000, 1000)) << "once";
 }
 
@@ -222,7 +251,7 @@ TEST(MclTrackerTest, APickOnTheWrongWallIsNotReliableAndTheSearchPlacesTheWearer
   // The search finds the truth; the belief takes it as the walk goes on.
   GlobalPlace found;
   found.T_plan_slam = room.truth;
-  EXPECT_THAT(mcl.OfferPlaces({found}, t), ::testing::HasSubstr("mixed in"));
+  EXPECT_THAT(mcl.OfferPlaces({found}, {}, t), ::testing::HasSubstr("mixed in"));
   Walk(mcl, room, &t);
   Walk(mcl, room, &t);
   EXPECT_THAT(mcl.alignment().T_plan_slam,
@@ -240,7 +269,7 @@ TEST(MclTrackerTest, WithoutAPickTheSearchSeedsTheBelief) {
   GlobalPlace right, twin;
   right.T_plan_slam = room.truth;
   twin.T_plan_slam = Se2{M_PI, {10, 7}} * room.truth;  // the room turned half round
-  EXPECT_THAT(mcl.OfferPlaces({twin, right}, 0), ::testing::HasSubstr("seeded with 2"));
+  EXPECT_THAT(mcl.OfferPlaces({twin, right}, {}, 0), ::testing::HasSubstr("seeded with 2"));
   int64_t t = 0;
   Walk(mcl, room, &t);
   Walk(mcl, room, &t);
@@ -248,6 +277,37 @@ TEST(MclTrackerTest, WithoutAPickTheSearchSeedsTheBelief) {
               floorpose::testing::IsNearlySe2(room.truth, Deg(0.5), 0.05));
   EXPECT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable)
       << mcl.CurrentReliability().reason;
+}
+
+TEST(MclTrackerTest, TheSearchsWallsWeighItsPlacesAgainstOneAnother) {
+  // Two places found, the truth and one 1.5 m off along the room: the walls the search
+  // ran on fit the truth far better, so it starts with nearly all the mass; without them
+  // the two start even. Neither is published before new walls weigh them.
+  RoomWalk room;
+  const Eigen::Vector2d at{2, 2};
+  const Eigen::Vector2d wearer_slam = room.truth.Inverse() * at;
+  GlobalPlace right, off;
+  right.T_plan_slam = room.truth;
+  off.T_plan_slam = Se2{0, {1.5, 0}} * room.truth;
+  std::vector<Eigen::Vector2d> walls = room.SeenFrom(at);
+  for (const Eigen::Vector2d& p : room.SeenFrom({8, 5})) walls.push_back(p);
+  for (const bool with_walls : {true, false}) {
+    SCOPED_TRACE(with_walls ? "with the search's walls" : "without");
+    MclTracker mcl({});
+    mcl.SetPlan(room.index);
+    const int64_t t = 20000000000;
+    mcl.Correct({wearer_slam, 0, 1.6}, t);
+    ASSERT_THAT(mcl.OfferPlaces({off, right}, with_walls ? walls : std::vector<Eigen::Vector2d>{},
+                                t),
+                ::testing::HasSubstr("seeded with 2"));
+    const double at_right = mcl.belief().MassWithin(wearer_slam, at, 0.7);
+    const double at_off = mcl.belief().MassWithin(wearer_slam, off.T_plan_slam * wearer_slam, 0.7);
+    if (with_walls)
+      EXPECT_GT(at_right, 100 * at_off);
+    else
+      EXPECT_NEAR(at_right, at_off, 0.1);
+    EXPECT_FALSE(mcl.has_alignment());
+  }
 }
 
 TEST(MclTrackerTest, AfterALossOfTrackingTheJumpedFrameIsNotTrustedUntilFoundAgain) {
@@ -287,7 +347,7 @@ TEST(MclTrackerTest, ASearchedPlaceIsNotVouchedForByTheWallsItWasFoundWith) {
   mcl.Correct({room.truth.Inverse() * Eigen::Vector2d(2, 2), 0, 1.6}, t);
   GlobalPlace right;
   right.T_plan_slam = room.truth;
-  ASSERT_THAT(mcl.OfferPlaces({right}, t), ::testing::HasSubstr("seeded with 1"));
+  ASSERT_THAT(mcl.OfferPlaces({right}, {}, t), ::testing::HasSubstr("seeded with 1"));
   EXPECT_FALSE(mcl.has_alignment()) << "no place to publish before new walls weigh the seed";
   EXPECT_EQ(mcl.Project({Eigen::Vector2d(2, 2), 0, 1.6}).alignment_version, 0u);
   EXPECT_FALSE(mcl.UpdateDue(t, 1000)) << "nothing new since the search";
