@@ -218,28 +218,46 @@ std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>
   }
   st.rotations = angles.size();
 
-  // Per heading, each point's cell offset from the cell of the cloud's centre.
+  // Per heading, each point's cell offset from the cell of the cloud's centre, and the
+  // same as an offset into the pyramid's arrays. A node whose points all land on the
+  // arrays (most of them) is summed without a bound check per point.
   const int n_points = static_cast<int>(cloud.size());
-  std::vector<std::vector<Eigen::Vector2i>> offsets(angles.size());
+  struct Offsets {
+    std::vector<Eigen::Vector2i> cell;
+    std::vector<ptrdiff_t> linear;
+    Eigen::Vector2i min{0, 0}, max{0, 0};
+  };
+  std::vector<Offsets> offsets(angles.size());
   for (size_t r = 0; r < angles.size(); ++r) {
     const Se2 rotate{angles[r], Eigen::Vector2d::Zero()};
+    Offsets& o = offsets[r];
     for (const Eigen::Vector2d& p : cloud) {
       const Eigen::Vector2d q = rotate * (p - centre) / cell;
-      offsets[r].emplace_back(static_cast<int>(std::floor(q.x() + 0.5)),
+      const Eigen::Vector2i c(static_cast<int>(std::floor(q.x() + 0.5)),
                               static_cast<int>(std::floor(q.y() + 0.5)));
+      o.min = o.cell.empty() ? c : o.min.cwiseMin(c);
+      o.max = o.cell.empty() ? c : o.max.cwiseMax(c);
+      o.cell.push_back(c);
+      o.linear.push_back(static_cast<ptrdiff_t>(c.y()) * stride_ + c.x());
     }
   }
   // A leaf's score, or a node's bound on the scores of the leaves under it.
+  const auto sum = [&](const Offsets& o, int x, int y, const auto* level, auto total) {
+    if (x + o.min.x() >= -pad_ && x + o.max.x() < grid_.nx && y + o.min.y() >= -pad_ &&
+        y + o.max.y() < grid_.ny) {
+      const auto* at = level + static_cast<ptrdiff_t>(y + pad_) * stride_ + (x + pad_);
+      for (const ptrdiff_t i : o.linear) total += at[i];
+      return total;
+    }
+    for (const Eigen::Vector2i& c : o.cell)
+      if (const size_t i = At(x + c.x(), y + c.y()); i != SIZE_MAX) total += level[i];
+    return total;
+  };
   auto bound = [&](int r, int h, int x, int y) {
     ++st.nodes;
-    const std::vector<Eigen::Vector2i>& offset = offsets[static_cast<size_t>(r)];
-    if (h == 0) {
-      float sum = 0;
-      for (const Eigen::Vector2i& o : offset) sum += Likelihood(x + o.x(), y + o.y());
-      return sum / static_cast<float>(n_points);
-    }
-    uint32_t steps = 0;
-    for (const Eigen::Vector2i& o : offset) steps += BoundSteps(h, x + o.x(), y + o.y());
+    const Offsets& o = offsets[static_cast<size_t>(r)];
+    if (h == 0) return sum(o, x, y, likelihood_.data(), 0.0f) / static_cast<float>(n_points);
+    const uint32_t steps = sum(o, x, y, bounds_[static_cast<size_t>(h - 1)].data(), uint32_t{0});
     return static_cast<float>(steps) / (static_cast<float>(kSteps) * static_cast<float>(n_points));
   };
 

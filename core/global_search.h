@@ -128,10 +128,6 @@ class GlobalSearch {
     const size_t i = At(x, y);
     return i == SIZE_MAX ? 0.0f : likelihood_[i];
   }
-  uint32_t BoundSteps(int h, int x, int y) const {
-    const size_t i = At(x, y);
-    return i == SIZE_MAX ? 0 : bounds_[static_cast<size_t>(h - 1)][i];
-  }
 
   GlobalSearchOptions options_;
   std::vector<double> plan_directions_;  // wall length per degree of direction, modulo pi
