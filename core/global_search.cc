@@ -243,14 +243,18 @@ std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>
   }
   // A leaf's score, or a node's bound on the scores of the leaves under it.
   const auto sum = [&](const Offsets& o, int x, int y, const auto* level, auto total) {
-    if (x + o.min.x() >= -pad_ && x + o.max.x() < grid_.nx && y + o.min.y() >= -pad_ &&
-        y + o.max.y() < grid_.ny) {
-      const auto* at = level + static_cast<ptrdiff_t>(y + pad_) * stride_ + (x + pad_);
+    const auto* at = level + static_cast<ptrdiff_t>(y + pad_) * stride_ + (x + pad_);
+    // The offsets that land on the arrays: [-pad_, nx) x [-pad_, ny) about the node.
+    const Eigen::Vector2i lo(-pad_ - x, -pad_ - y), hi(grid_.nx - x, grid_.ny - y);
+    if (o.min.x() >= lo.x() && o.max.x() < hi.x() && o.min.y() >= lo.y() && o.max.y() < hi.y()) {
       for (const ptrdiff_t i : o.linear) total += at[i];
       return total;
     }
-    for (const Eigen::Vector2i& c : o.cell)
-      if (const size_t i = At(x + c.x(), y + c.y()); i != SIZE_MAX) total += level[i];
+    for (size_t i = 0; i < o.cell.size(); ++i) {
+      const Eigen::Vector2i& c = o.cell[i];
+      if (c.x() >= lo.x() && c.x() < hi.x() && c.y() >= lo.y() && c.y() < hi.y())
+        total += at[o.linear[i]];
+    }
     return total;
   };
   auto bound = [&](int r, int h, int x, int y) {
