@@ -390,20 +390,11 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
   // the wearer through more walls than the fewest go last, so they can be the next place
   // but not the best. (A wrong place often walks the wearer outside the building, through
   // nothing; fitting comes first so that it cannot win on that.)
-  // The crossings cap excuses a place that fits the walls far better than any other: a
-  // drifting path clips walls under the true place too.
-  const auto clear_of_all = [&](const GlobalPlace& d) {
-    return std::all_of(distinct.begin(), distinct.end(), [&](const GlobalPlace& o) {
-      return &o == &d || d.fit_mse * options.excuse_crossings_ratio <= o.fit_mse;
-    });
-  };
   const auto fits = [&](const GlobalPlace& d) {
     const bool blind = options.unseen_reach_m > 0 &&
                        d.unseen_expected >= options.unseen_min_samples &&
                        d.unseen_ratio > options.unseen_max_ratio;
-    return d.inlier_ratio >= options.min_inliers && !blind &&
-           (d.path_crossings < options.max_crossings ||
-            (options.excuse_crossings_ratio > 0 && clear_of_all(d)));
+    return d.inlier_ratio >= options.min_inliers && !blind;
   };
   uint32_t fewest = UINT32_MAX;
   for (const GlobalPlace& d : distinct)

@@ -166,10 +166,7 @@ struct RefineOptions {
   // Places of rank 0 after the first are compared with it (PlanAlike) over the plan's
   // walls in sight within this reach of the path. 0: not compared.
   double alike_reach_m = 0;
-  double min_inliers = 0;               // places fitting a smaller share of the cloud go last...
-  uint32_t max_crossings = UINT32_MAX;  // ...and those whose path crosses this many walls,
-  double excuse_crossings_ratio = 0;    // ...unless every other place's error is this many
-                                        // times theirs or more (0: never)
+  double min_inliers = 0;  // places fitting a smaller share of the cloud go last
 };
 
 // The search's places polished: each refined by ICP on the plan's walls from where the

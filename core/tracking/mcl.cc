@@ -303,15 +303,20 @@ std::string MclTracker::OfferPlaces(const std::vector<GlobalPlace>& places,
 std::vector<double> MclTracker::PlaceLogWeights(
     const std::vector<const GlobalPlace*>& places,
     const std::vector<Eigen::Vector2d>& cloud_slam) const {
-  std::vector<double> log_weights(places.size(), 0.0);
+  // The wearer's walk before the search prices each place as the motion model prices
+  // every step after it: through_wall for each plan wall walked through.
+  std::vector<double> log_weights;
+  for (const GlobalPlace* p : places)
+    log_weights.push_back(std::log(options_.motion.through_wall) * p->path_crossings);
   const std::vector<Eigen::Vector2d> points = ThinCloud(cloud_slam, 0.1, options_.weigh_points);
-  if (points.empty() || !index_) return log_weights;
-  const MeasurementModel& model = options_.measurement;
-  const double exponent =
-      std::min(model.independent_points, static_cast<double>(points.size()));
-  for (size_t i = 0; i < places.size(); ++i)
-    log_weights[i] = exponent * model.MeanLogLikelihood(points, places[i]->T_plan_slam, *index_,
-                                                        index_->max_distance_m());
+  if (!points.empty() && index_) {
+    const MeasurementModel& model = options_.measurement;
+    const double exponent = std::min(model.independent_points, static_cast<double>(points.size()));
+    for (size_t i = 0; i < places.size(); ++i)
+      log_weights[i] += exponent * model.MeanLogLikelihood(points, places[i]->T_plan_slam, *index_,
+                                                           index_->max_distance_m());
+  }
+  if (log_weights.empty()) return log_weights;
   const double top = *std::max_element(log_weights.begin(), log_weights.end());
   for (double& w : log_weights) w -= top;
   return log_weights;
@@ -331,8 +336,8 @@ std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places,
     const size_t n = std::max<size_t>(1, options_.samples.max_samples / k);
     const std::vector<double> log_weights = PlaceLogWeights(fit, cloud_slam);
     for (size_t i = 0; i < k; ++i)
-      belief_.AddGaussian(fit[i]->T_plan_slam, P, fit[i]->T_plan_slam * wearer, n,
-                          log_weights[i], rng_);
+      belief_.AddGaussian(fit[i]->T_plan_slam, P, fit[i]->T_plan_slam * wearer, n, log_weights[i],
+                          rng_);
     StartBelief(fit[0]->T_plan_slam, AlignmentSource::kGlobalSearch, stamp_ns);
     // The search's walls weigh its places against one another, not the doubt. Only walls
     // that come after the search weigh the belief against "elsewhere", and until they have
@@ -341,18 +346,26 @@ std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places,
     last_update_ns_ = stamp_ns;
     return "seeded with " + std::to_string(k) + " place(s)";
   }
-  // Recovery: the places the belief does not hold get the mass the belief may be missing.
-  const double share = std::max(kOfferShare, recovery_.Elsewhere());
+  // Recovery: the places the belief does not hold get the mass the belief may be missing,
+  // less what the place it leads with takes of it where the search found that too: the
+  // search's walls and the walk weigh the places found against one another.
   const Mode lead = belief_.LeadingMode(wearer, options_.publish.within_m, kPlaceRad);
-  std::vector<const GlobalPlace*> fresh;
-  for (const GlobalPlace* p : fit)
-    if (!SamePlace(p->T_plan_slam, lead.T_plan_slam, wearer, options_.publish.within_m, kPlaceRad))
-      fresh.push_back(p);
+  const std::vector<double> log_weights = PlaceLogWeights(fit, cloud_slam);
+  std::vector<Se2> fresh;
+  std::vector<double> fresh_log_weights;
+  double all = 0, of_fresh = 0;
+  for (size_t i = 0; i < k; ++i) {
+    all += std::exp(log_weights[i]);
+    if (SamePlace(fit[i]->T_plan_slam, lead.T_plan_slam, wearer, options_.publish.within_m,
+                  kPlaceRad))
+      continue;
+    fresh.push_back(fit[i]->T_plan_slam);
+    fresh_log_weights.push_back(log_weights[i]);
+    of_fresh += std::exp(log_weights[i]);
+  }
   if (fresh.empty()) return "the belief holds every place found";
-  std::vector<Se2> T;
-  for (const GlobalPlace* p : fresh) T.push_back(p->T_plan_slam);
-  belief_.Mix(T, PlaceLogWeights(fresh, cloud_slam), P, wearer, share,
-              options_.samples.min_samples / 4, rng_);
+  const double share = std::max(kOfferShare, recovery_.Elsewhere()) * of_fresh / all;
+  belief_.Mix(fresh, fresh_log_weights, P, wearer, share, options_.samples.min_samples / 4, rng_);
   ++belief_version_;  // an update running on the belief without them is void
   return "mixed in " + std::to_string(fresh.size()) + " place(s) at " +
          std::to_string(static_cast<int>(100 * share)) + "%";

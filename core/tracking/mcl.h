@@ -52,16 +52,14 @@ struct MclOptions {
   double search_window_s = 60.0;              // ...over the walls of this many seconds
   // How a search's places are refined and ranked (RefinePlaces); the belief takes those of
   // rank 0 and 1. Wall points scored to 0.2 m; steps through plan walls 0.4 m clear of
-  // their ends count (2 or more: rank 1, unless it fits 3 times better than any other);
-  // points hidden from the path within 4.5 m and plan walls unseen within 2 m of it count
-  // as misses; places fitting under 45% of the walls rank last.
+  // their ends count (each costs a place motion.through_wall, PlaceLogWeights); points
+  // hidden from the path within 4.5 m and plan walls unseen within 2 m of it count as
+  // misses; places fitting under 45% of the walls rank last.
   RefineOptions refine = [] {
     RefineOptions r;
     r.cap_m = 0.2;
     r.path_margin_m = 0.4;
     r.min_inliers = 0.45;
-    r.max_crossings = 2;
-    r.excuse_crossings_ratio = 3.0;
     r.sight_reach_m = 4.5;
     r.unseen_reach_m = 2.0;
     r.unseen_allowance = 0.5;
@@ -178,8 +176,10 @@ class MclTracker {
   // The log-likelihood of the search's walls at each place, one window's worth
   // (independent_points): those walls chose the places, so they tell nothing of whether
   // the wearer is at any of them (the best of many random places fits them well too), but
-  // among the places found the right one fits them better than a look-alike. 0 each
-  // without walls.
+  // among the places found the right one fits them better than a look-alike. Plus the
+  // price of the wearer's walk there (motion.through_wall a plan wall walked through,
+  // GlobalPlace::path_crossings), as every step after the search pays it. Relative to
+  // the best place.
   std::vector<double> PlaceLogWeights(const std::vector<const GlobalPlace*>& places,
                                       const std::vector<Eigen::Vector2d>& cloud_slam) const;
 

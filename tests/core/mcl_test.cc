@@ -297,9 +297,9 @@ TEST(MclTrackerTest, TheSearchsWallsWeighItsPlacesAgainstOneAnother) {
     mcl.SetPlan(room.index);
     const int64_t t = 20000000000;
     mcl.Correct({wearer_slam, 0, 1.6}, t);
-    ASSERT_THAT(mcl.OfferPlaces({off, right}, with_walls ? walls : std::vector<Eigen::Vector2d>{},
-                                t),
-                ::testing::HasSubstr("seeded with 2"));
+    ASSERT_THAT(
+        mcl.OfferPlaces({off, right}, with_walls ? walls : std::vector<Eigen::Vector2d>{}, t),
+        ::testing::HasSubstr("seeded with 2"));
     const double at_right = mcl.belief().MassWithin(wearer_slam, at, 0.7);
     const double at_off = mcl.belief().MassWithin(wearer_slam, off.T_plan_slam * wearer_slam, 0.7);
     if (with_walls)
@@ -308,6 +308,59 @@ TEST(MclTrackerTest, TheSearchsWallsWeighItsPlacesAgainstOneAnother) {
       EXPECT_NEAR(at_right, at_off, 0.1);
     EXPECT_FALSE(mcl.has_alignment());
   }
+}
+
+TEST(MclTrackerTest, AWalkThroughPlanWallsCostsAPlaceThroughWallPerWall) {
+  // Two places that the walls cannot tell apart; under one the wearer's walk before the
+  // search went through a plan wall. It starts with through_wall of the other's mass: a
+  // price, as for every step after the search, not a veto.
+  RoomWalk room;
+  const Eigen::Vector2d at{2, 2};
+  const Eigen::Vector2d wearer_slam = room.truth.Inverse() * at;
+  GlobalPlace right, through;
+  right.T_plan_slam = room.truth;
+  through.T_plan_slam = Se2{0, {3, 0}} * room.truth;
+  through.path_crossings = 1;
+  MclTracker mcl({});
+  mcl.SetPlan(room.index);
+  const int64_t t = 20000000000;
+  mcl.Correct({wearer_slam, 0, 1.6}, t);
+  ASSERT_THAT(mcl.OfferPlaces({through, right}, {}, t), ::testing::HasSubstr("seeded with 2"));
+  const double at_right = mcl.belief().MassWithin(wearer_slam, at, 0.7);
+  const double at_through =
+      mcl.belief().MassWithin(wearer_slam, through.T_plan_slam * wearer_slam, 0.7);
+  ASSERT_GT(at_right, 0.5);
+  EXPECT_NEAR(at_through / at_right, mcl.options().motion.through_wall, 0.03);
+}
+
+TEST(MclTrackerTest, ASearchThatFindsTheBeliefsOwnPlaceBetterGivesTheOthersLess) {
+  // A belief placed by a pick and walked; a search then finds its place and another 1.5 m
+  // off, which the search's walls fit far worse. The other gets the doubt's share only when
+  // it is all the search found; beside the belief's own place it gets a sliver of it.
+  RoomWalk room;
+  const Eigen::Vector2d at{8, 5};
+  GlobalPlace right, off;
+  right.T_plan_slam = room.truth;
+  off.T_plan_slam = Se2{0, {1.5, 0}} * room.truth;
+  std::vector<Eigen::Vector2d> walls = room.SeenFrom({2, 2});
+  for (const Eigen::Vector2d& p : room.SeenFrom(at)) walls.push_back(p);
+  std::vector<double> mass_off;
+  for (const bool with_right : {false, true}) {
+    SCOPED_TRACE(with_right ? "the belief's place found too" : "the other place alone");
+    MclTracker mcl({});
+    mcl.SetPlan(room.index);
+    ASSERT_EQ(mcl.ApplyWallPick(RoomWalk::PickOn(room.truth, {4, 2}), 0), "");
+    int64_t t = 0;
+    Walk(mcl, room, &t);
+    const Eigen::Vector2d wearer_slam = room.truth.Inverse() * at;
+    mcl.Correct({wearer_slam, 0, 1.6}, t);
+    const std::vector<GlobalPlace> found =
+        with_right ? std::vector<GlobalPlace>{right, off} : std::vector<GlobalPlace>{off};
+    ASSERT_THAT(mcl.OfferPlaces(found, walls, t), ::testing::HasSubstr("mixed in 1"));
+    mass_off.push_back(mcl.belief().MassWithin(wearer_slam, off.T_plan_slam * wearer_slam, 0.7));
+  }
+  EXPECT_GE(mass_off[0], 0.04) << "at least the offer's 5%";
+  EXPECT_LT(mass_off[1], 0.01 * mass_off[0]);
 }
 
 TEST(MclTrackerTest, AfterALossOfTrackingTheJumpedFrameIsNotTrustedUntilFoundAgain) {
