@@ -211,9 +211,7 @@ std::string MclTracker::RestoreState(const TrackerState& state) {
   if (state.samples.size() > 10 * options_.samples.max_samples)
     return "more belief samples than samples.max_samples allows";
   belief_.Clear();
-  if (!state.samples.empty()) {
-    belief_.samples() = state.samples;
-  } else {
+  if (state.samples.empty()) {
     // At least the drift of a restart's few metres: the belief was at the wearer then.
     const Eigen::Matrix3d P =
         sym + PlaceCovariance(options_.place_sigma_m, options_.place_sigma_rad);
@@ -222,6 +220,9 @@ std::string MclTracker::RestoreState(const TrackerState& state) {
   next_version_ = state.next_version;
   pick_plan_point_ = state.pick_plan_point;
   StartBelief(a.T_plan_slam, a.source, a.stamp_ns);
+  // The samples as saved, bit for bit: normalizing them again (StartBelief) moves the last
+  // bits of unequal weights, and the restored daemon would not go on exactly as before.
+  if (!state.samples.empty()) belief_.samples() = state.samples;
   if (state.checked && state.elsewhere >= 0 && state.elsewhere <= 1) {
     // A belief the walls and a search had checked resumes as it was, under its version.
     alignment_.version = a.version;
