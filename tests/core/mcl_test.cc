@@ -279,13 +279,25 @@ TEST(MclTrackerTest, WithoutAPickTheSearchSeedsTheBelief) {
       << mcl.CurrentReliability().reason;
 }
 
+// The wearer at plan point `at` at 20 s, seen by a tracker on the room's plan that has
+// no belief yet: what a search's places seed.
+struct Unplaced {
+  Unplaced(const RoomWalk& room, const Eigen::Vector2d& at)
+      : wearer_slam(room.truth.Inverse() * at) {
+    mcl.SetPlan(room.index);
+    mcl.Correct({wearer_slam, 0, 1.6}, t);
+  }
+  MclTracker mcl{{}};
+  Eigen::Vector2d wearer_slam;
+  int64_t t = 20000000000;
+};
+
 TEST(MclTrackerTest, TheSearchsWallsWeighItsPlacesAgainstOneAnother) {
   // Two places found, the truth and one 1.5 m off along the room: the walls the search
   // ran on fit the truth far better, so it starts with nearly all the mass; without them
   // the two start even. Neither is published before new walls weigh them.
   RoomWalk room;
   const Eigen::Vector2d at{2, 2};
-  const Eigen::Vector2d wearer_slam = room.truth.Inverse() * at;
   GlobalPlace right, off;
   right.T_plan_slam = room.truth;
   off.T_plan_slam = Se2{0, {1.5, 0}} * room.truth;
@@ -293,20 +305,18 @@ TEST(MclTrackerTest, TheSearchsWallsWeighItsPlacesAgainstOneAnother) {
   for (const Eigen::Vector2d& p : room.SeenFrom({8, 5})) walls.push_back(p);
   for (const bool with_walls : {true, false}) {
     SCOPED_TRACE(with_walls ? "with the search's walls" : "without");
-    MclTracker mcl({});
-    mcl.SetPlan(room.index);
-    const int64_t t = 20000000000;
-    mcl.Correct({wearer_slam, 0, 1.6}, t);
+    Unplaced u(room, at);
     ASSERT_THAT(
-        mcl.OfferPlaces({off, right}, with_walls ? walls : std::vector<Eigen::Vector2d>{}, t),
+        u.mcl.OfferPlaces({off, right}, with_walls ? walls : std::vector<Eigen::Vector2d>{}, u.t),
         ::testing::HasSubstr("seeded with 2"));
-    const double at_right = mcl.belief().MassWithin(wearer_slam, at, 0.7);
-    const double at_off = mcl.belief().MassWithin(wearer_slam, off.T_plan_slam * wearer_slam, 0.7);
+    const double at_right = u.mcl.belief().MassWithin(u.wearer_slam, at, 0.7);
+    const double at_off =
+        u.mcl.belief().MassWithin(u.wearer_slam, off.T_plan_slam * u.wearer_slam, 0.7);
     if (with_walls)
       EXPECT_GT(at_right, 100 * at_off);
     else
       EXPECT_NEAR(at_right, at_off, 0.1);
-    EXPECT_FALSE(mcl.has_alignment());
+    EXPECT_FALSE(u.mcl.has_alignment());
   }
 }
 
@@ -316,21 +326,17 @@ TEST(MclTrackerTest, AWalkThroughPlanWallsCostsAPlaceThroughWallPerWall) {
   // price, as for every step after the search, not a veto.
   RoomWalk room;
   const Eigen::Vector2d at{2, 2};
-  const Eigen::Vector2d wearer_slam = room.truth.Inverse() * at;
   GlobalPlace right, through;
   right.T_plan_slam = room.truth;
   through.T_plan_slam = Se2{0, {3, 0}} * room.truth;
   through.path_crossings = 1;
-  MclTracker mcl({});
-  mcl.SetPlan(room.index);
-  const int64_t t = 20000000000;
-  mcl.Correct({wearer_slam, 0, 1.6}, t);
-  ASSERT_THAT(mcl.OfferPlaces({through, right}, {}, t), ::testing::HasSubstr("seeded with 2"));
-  const double at_right = mcl.belief().MassWithin(wearer_slam, at, 0.7);
+  Unplaced u(room, at);
+  ASSERT_THAT(u.mcl.OfferPlaces({through, right}, {}, u.t), ::testing::HasSubstr("seeded with 2"));
+  const double at_right = u.mcl.belief().MassWithin(u.wearer_slam, at, 0.7);
   const double at_through =
-      mcl.belief().MassWithin(wearer_slam, through.T_plan_slam * wearer_slam, 0.7);
+      u.mcl.belief().MassWithin(u.wearer_slam, through.T_plan_slam * u.wearer_slam, 0.7);
   ASSERT_GT(at_right, 0.5);
-  EXPECT_NEAR(at_through / at_right, mcl.options().motion.through_wall, 0.03);
+  EXPECT_NEAR(at_through / at_right, u.mcl.options().motion.through_wall, 0.03);
 }
 
 TEST(MclTrackerTest, ASearchThatFindsTheBeliefsOwnPlaceBetterGivesTheOthersLess) {
