@@ -1,14 +1,55 @@
 #include "platform/wgs84.h"
 
+#include <dlfcn.h>
 #include <proj.h>
 
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <string>
 
 namespace floorpose::platform {
 
 namespace {
+
+// The few PROJ calls used here, from libproj opened on first use: a daemon whose plans are
+// in metres never maps PROJ and what it links (curl, TLS, sqlite, TIFF: 6 MB of memory).
+struct Proj {
+  decltype(&proj_context_create) context_create = nullptr;
+  decltype(&proj_context_destroy) context_destroy = nullptr;
+  decltype(&proj_create) create = nullptr;
+  decltype(&proj_destroy) destroy = nullptr;
+  decltype(&proj_trans) trans = nullptr;
+  decltype(&proj_errno) errno_of = nullptr;
+  std::string error;  // why PROJ could not be opened; empty when it was
+};
+
+template <typename F>
+bool Bind(void* library, const char* name, F* function) {
+  *function = reinterpret_cast<F>(dlsym(library, name));
+  return *function != nullptr;
+}
+
+const Proj& OpenProj() {
+  static const Proj proj = [] {
+    Proj p;
+    // Never closed: PROJ keeps its own state for the life of the process.
+    void* library = dlopen(FLOORPOSE_PROJ_SONAME, RTLD_NOW | RTLD_LOCAL);
+    if (!library) {
+      const char* why = dlerror();
+      p.error = std::string("PROJ (" FLOORPOSE_PROJ_SONAME ") could not be opened: ") +
+                (why ? why : "unknown error");
+      return p;
+    }
+    if (!Bind(library, "proj_context_create", &p.context_create) ||
+        !Bind(library, "proj_context_destroy", &p.context_destroy) ||
+        !Bind(library, "proj_create", &p.create) || !Bind(library, "proj_destroy", &p.destroy) ||
+        !Bind(library, "proj_trans", &p.trans) || !Bind(library, "proj_errno", &p.errno_of))
+      p.error = "PROJ (" FLOORPOSE_PROJ_SONAME ") lacks a function this build calls";
+    return p;
+  }();
+  return proj;
+}
 
 // Runs the degrees <-> local metres pipeline about `origin` over `points`, in place.
 bool Transform(const Eigen::Vector2d& origin, PJ_DIRECTION direction,
@@ -20,18 +61,26 @@ bool Transform(const Eigen::Vector2d& origin, PJ_DIRECTION direction,
                 "+proj=pipeline +step +proj=unitconvert +xy_in=deg +xy_out=rad "
                 "+step +proj=aeqd +lat_0=%.12f +lon_0=%.12f +x_0=0 +y_0=0 +ellps=WGS84",
                 origin.y(), origin.x());
-  const std::unique_ptr<PJ_CONTEXT, decltype(&proj_context_destroy)> context(proj_context_create(),
-                                                                             &proj_context_destroy);
-  const std::unique_ptr<PJ, decltype(&proj_destroy)> transform(
-      context ? proj_create(context.get(), definition) : nullptr, &proj_destroy);
+  const Proj& proj = OpenProj();
+  if (!proj.error.empty()) {
+    *error = proj.error;
+    return false;
+  }
+  const std::unique_ptr<PJ_CONTEXT, decltype(proj.context_destroy)> context(proj.context_create(),
+                                                                            proj.context_destroy);
+  const std::unique_ptr<PJ, decltype(proj.destroy)> transform(
+      context ? proj.create(context.get(), definition) : nullptr, proj.destroy);
   if (!transform) {
     *error = "PROJ could not build the WGS84 to local metres transformation";
     return false;
   }
   for (Eigen::Vector2d& p : *points) {
-    const PJ_COORD out = proj_trans(transform.get(), direction, proj_coord(p.x(), p.y(), 0, 0));
-    if (proj_errno(transform.get()) != 0 || !std::isfinite(out.xy.x) || !std::isfinite(out.xy.y) ||
-        out.xy.x == HUGE_VAL) {
+    PJ_COORD in{};
+    in.v[0] = p.x();
+    in.v[1] = p.y();
+    const PJ_COORD out = proj.trans(transform.get(), direction, in);
+    if (proj.errno_of(transform.get()) != 0 || !std::isfinite(out.xy.x) ||
+        !std::isfinite(out.xy.y) || out.xy.x == HUGE_VAL) {
       *error = "PROJ could not project a coordinate of the plan";
       return false;
     }

@@ -36,6 +36,8 @@ dpkg-deb -x "${deb[0]}" "$out/root"
 dpkg-deb -e "${deb[0]}" "$out/control"
 grep -qxF /etc/floorpose/floorposed.conf "$out/control/conffiles" || { echo "not a conffile: floorposed.conf" >&2; fail=1; }
 grep -q '^Depends: .*libc6' "$out/control/control" || { echo "no Depends from dpkg-shlibdeps" >&2; fail=1; }
+# floorposed opens PROJ at run time (platform/wgs84.cc): no soname of it for shlibdeps.
+grep -q '^Depends: .*libproj[0-9]' "$out/control/control" || { echo "no Depends on PROJ" >&2; fail=1; }
 for unit in floorposed floorpose-dashboard; do
   exec_start="$(grep '^ExecStart=' "$out/root/lib/systemd/system/$unit.service")"
   grep -q '^ExecStart=/usr/bin/floorpose' <<<"$exec_start" || { echo "$unit: $exec_start" >&2; fail=1; }
