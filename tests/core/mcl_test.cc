@@ -279,18 +279,26 @@ TEST(MclTrackerTest, WithoutAPickTheSearchSeedsTheBelief) {
       << mcl.CurrentReliability().reason;
 }
 
-// The wearer at plan point `at` at 20 s, seen by a tracker on the room's plan that has
-// no belief yet: what a search's places seed.
-struct Unplaced {
-  Unplaced(const RoomWalk& room, const Eigen::Vector2d& at)
-      : wearer_slam(room.truth.Inverse() * at) {
-    mcl.SetPlan(room.index);
-    mcl.Correct({wearer_slam, 0, 1.6}, t);
-  }
-  MclTracker mcl{{}};
-  Eigen::Vector2d wearer_slam;
-  int64_t t = 20000000000;
+// A tracker without a belief, the wearer at plan point `at` at 20 s, seeded by a search
+// that found `other` and the truth on `walls`: the belief's mass within 0.7 m of each.
+struct Seeded {
+  double at_right = 0, at_other = 0;
+  bool published = false;  // whether a place is published before new walls weighed them
 };
+Seeded SeedWithTruthAnd(const RoomWalk& room, const Eigen::Vector2d& at, const GlobalPlace& other,
+                        const std::vector<Eigen::Vector2d>& walls) {
+  MclTracker mcl({});
+  mcl.SetPlan(room.index);
+  const int64_t t = 20000000000;
+  const Eigen::Vector2d wearer_slam = room.truth.Inverse() * at;
+  mcl.Correct({wearer_slam, 0, 1.6}, t);
+  GlobalPlace right;
+  right.T_plan_slam = room.truth;
+  EXPECT_THAT(mcl.OfferPlaces({other, right}, walls, t), ::testing::HasSubstr("seeded with 2"));
+  return {mcl.belief().MassWithin(wearer_slam, at, 0.7),
+          mcl.belief().MassWithin(wearer_slam, other.T_plan_slam * wearer_slam, 0.7),
+          mcl.has_alignment()};
+}
 
 TEST(MclTrackerTest, TheSearchsWallsWeighItsPlacesAgainstOneAnother) {
   // Two places found, the truth and one 1.5 m off along the room: the walls the search
@@ -298,25 +306,19 @@ TEST(MclTrackerTest, TheSearchsWallsWeighItsPlacesAgainstOneAnother) {
   // the two start even. Neither is published before new walls weigh them.
   RoomWalk room;
   const Eigen::Vector2d at{2, 2};
-  GlobalPlace right, off;
-  right.T_plan_slam = room.truth;
+  GlobalPlace off;
   off.T_plan_slam = Se2{0, {1.5, 0}} * room.truth;
   std::vector<Eigen::Vector2d> walls = room.SeenFrom(at);
   for (const Eigen::Vector2d& p : room.SeenFrom({8, 5})) walls.push_back(p);
   for (const bool with_walls : {true, false}) {
     SCOPED_TRACE(with_walls ? "with the search's walls" : "without");
-    Unplaced u(room, at);
-    ASSERT_THAT(
-        u.mcl.OfferPlaces({off, right}, with_walls ? walls : std::vector<Eigen::Vector2d>{}, u.t),
-        ::testing::HasSubstr("seeded with 2"));
-    const double at_right = u.mcl.belief().MassWithin(u.wearer_slam, at, 0.7);
-    const double at_off =
-        u.mcl.belief().MassWithin(u.wearer_slam, off.T_plan_slam * u.wearer_slam, 0.7);
+    const Seeded seeded =
+        SeedWithTruthAnd(room, at, off, with_walls ? walls : std::vector<Eigen::Vector2d>{});
     if (with_walls)
-      EXPECT_GT(at_right, 100 * at_off);
+      EXPECT_GT(seeded.at_right, 100 * seeded.at_other);
     else
-      EXPECT_NEAR(at_right, at_off, 0.1);
-    EXPECT_FALSE(u.mcl.has_alignment());
+      EXPECT_NEAR(seeded.at_right, seeded.at_other, 0.1);
+    EXPECT_FALSE(seeded.published);
   }
 }
 
@@ -325,18 +327,12 @@ TEST(MclTrackerTest, AWalkThroughPlanWallsCostsAPlaceThroughWallPerWall) {
   // search went through a plan wall. It starts with through_wall of the other's mass: a
   // price, as for every step after the search, not a veto.
   RoomWalk room;
-  const Eigen::Vector2d at{2, 2};
-  GlobalPlace right, through;
-  right.T_plan_slam = room.truth;
+  GlobalPlace through;
   through.T_plan_slam = Se2{0, {3, 0}} * room.truth;
   through.path_crossings = 1;
-  Unplaced u(room, at);
-  ASSERT_THAT(u.mcl.OfferPlaces({through, right}, {}, u.t), ::testing::HasSubstr("seeded with 2"));
-  const double at_right = u.mcl.belief().MassWithin(u.wearer_slam, at, 0.7);
-  const double at_through =
-      u.mcl.belief().MassWithin(u.wearer_slam, through.T_plan_slam * u.wearer_slam, 0.7);
-  ASSERT_GT(at_right, 0.5);
-  EXPECT_NEAR(at_through / at_right, u.mcl.options().motion.through_wall, 0.03);
+  const Seeded seeded = SeedWithTruthAnd(room, {2, 2}, through, {});
+  ASSERT_GT(seeded.at_right, 0.5);
+  EXPECT_NEAR(seeded.at_other / seeded.at_right, MclOptions{}.motion.through_wall, 0.03);
 }
 
 TEST(MclTrackerTest, ASearchThatFindsTheBeliefsOwnPlaceBetterGivesTheOthersLess) {
