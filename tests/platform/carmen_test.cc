@@ -29,9 +29,11 @@ struct SyntheticLog {
   std::string log, gt, odom;
 };
 
-// Scans every second, odometry at 10 Hz; with line_numbers, the timestamps in the TUM
-// files are the messages' line numbers (as in the csail and orebro logs).
-SyntheticLog MakeLog(const FloorPlan& plan, bool line_numbers) {
+// Scans every second, odometry at 10 Hz (none from silent_from_s for silent_s); with
+// line_numbers, the timestamps in the TUM files are the messages' line numbers (as in the
+// csail and orebro logs).
+SyntheticLog MakeLog(const FloorPlan& plan, bool line_numbers, double silent_from_s = 0,
+                     double silent_s = 0) {
   const std::vector<Eigen::Vector2d> corners = {{1.5, 1.5}, {1.5, 6.0}, {6.0, 6.0},
                                                 {6.0, 2.0}, {9.0, 2.0}, {9.0, 6.2}};
   SplitMix64 rng(7);
@@ -44,6 +46,7 @@ SyntheticLog MakeLog(const FloorPlan& plan, bool line_numbers) {
   Pose2 truth{corners[0], M_PI / 2, 0}, odo{{0, 0}, 0, 0};
   double t = 10.0;
   auto write_odom = [&] {
+    if (t >= silent_from_s && t < silent_from_s + silent_s) return;
     const double stamp = line_numbers ? line : t;
     log << "ODOM 0 0 0 0 0 0 " << t << " host " << t << "\n";
     odom << stamp << " " << odo.position.x() << " " << odo.position.y() << " 0 0 0 "
@@ -92,8 +95,8 @@ SyntheticLog MakeLog(const FloorPlan& plan, bool line_numbers) {
 class CarmenTest : public testing::TempDirTest {
  protected:
   bool Import(bool line_numbers, sim::Simulation* walk, CarmenImportReport* report,
-              std::string* error) {
-    const SyntheticLog s = MakeLog(plan_, line_numbers);
+              std::string* error, double silent_from_s = 0, double silent_s = 0) {
+    const SyntheticLog s = MakeLog(plan_, line_numbers, silent_from_s, silent_s);
     CarmenLog log;
     std::vector<sim::TimedPose> gt, odom;
     EXPECT_TRUE(ParseCarmenLog(s.log, &log, error)) << *error;
@@ -148,6 +151,36 @@ TEST_F(CarmenTest, LineNumberClocksArePaced) {
   // 20 m at 0.5 m/s, plus the turns at 45 deg/s.
   EXPECT_NEAR(report.duration_s, report.length_m / 0.5, 6.0);
   EXPECT_EQ(walk.steps.size(), static_cast<size_t>(std::ceil(report.duration_s / 0.3)) + 1);
+}
+
+TEST_F(CarmenTest, WhileTheOdometryIsSilentNothingIsSent) {
+  // No odometry from 20 s to 23 s of the walk (which starts at 10 s): the robot's motion
+  // then is unknown, as a headset's is while it has lost tracking.
+  sim::Simulation walk;
+  CarmenImportReport report;
+  std::string error;
+  ASSERT_TRUE(Import(false, &walk, &report, &error, 20.0, 3.0)) << error;
+  EXPECT_EQ(report.odometry_gaps, 1u);
+  EXPECT_NEAR(report.silent_s, 3.0, 0.7);
+  EXPECT_GE(report.silent_scans, 2u);
+  EXPECT_THAT(walk.description, ::testing::HasSubstr("odometry silent 1 time"));
+  size_t before = 0, after = 0;
+  for (const sim::SimulatedStep& step : walk.steps) {
+    const double t = static_cast<double>(step.stamp_ns) * 1e-9;
+    EXPECT_FALSE(t > 20.05 && t < 22.95) << "a pose at " << t << " s, in the silence";
+    before += t <= 20.05;
+    after += t >= 22.95;
+  }
+  EXPECT_GT(before, 30u);
+  EXPECT_GT(after, 30u);
+  EXPECT_GT(report.scans, 30u);
+  // A silence is what the daemon reads as a loss of tracking.
+  EXPECT_EQ(CarmenImportOptions{}.max_odometry_gap_s,
+            v1::FloorposedConfig().tracking().motion().lost_after_s());
+
+  // A line-number clock says nothing of time: its walk is paced, never silent.
+  ASSERT_TRUE(Import(true, &walk, &report, &error, 20.0, 3.0)) << error;
+  EXPECT_EQ(report.odometry_gaps, 0u);
 }
 
 TEST_F(CarmenTest, RegistrationKeepsTheRobotOnThePlan) {
@@ -265,7 +298,10 @@ TEST(CarmenDataTest, TheDataSetsLogsImport) {
     sim::Simulation walk;
     CarmenImportReport report;
     ASSERT_TRUE(CarmenToSimulation(log, odom, gt, {}, &walk, &report, &error)) << error;
-    EXPECT_EQ(report.scans, log.scans.size()) << name;
+    EXPECT_EQ(report.scans + report.silent_scans, log.scans.size()) << name;
+    // aces' odometry is silent once, for 3 s: its scans then are not sent.
+    EXPECT_EQ(report.odometry_gaps, std::string(name) == "aces" ? 1u : 0u) << name;
+    EXPECT_LT(report.silent_scans, log.scans.size() / 100) << name;
     // The data set's README: csail's timestamps are line numbers, the others' seconds.
     EXPECT_EQ(report.line_clock, std::string(name) == "csail") << name;
     EXPECT_GT(report.length_m, 200.0) << name;

@@ -55,6 +55,14 @@ class Track {
     const sim::TimedPose& b = *it;
     return Lerp(ToSe2(a), ToSe2(b), (t - a.t_s) / (b.t_s - a.t_s));
   }
+  // How long the odometry is silent about t: the time between the readings around it (0
+  // before the first and after the last).
+  double Gap(double t) const {
+    auto it = std::upper_bound(poses_.begin(), poses_.end(), t,
+                               [](double v, const sim::TimedPose& p) { return v < p.t_s; });
+    if (it == poses_.begin() || it == poses_.end()) return 0.0;
+    return it->t_s - (it - 1)->t_s;
+  }
   // The last entry at or before t (the reading a scan was paired with), else the first.
   Se2 LastAt(double t) const {
     auto it = std::upper_bound(poses_.begin(), poses_.end(), t,
@@ -290,10 +298,20 @@ bool CarmenToSimulation(const CarmenLog& log, const std::vector<sim::TimedPose>&
   out->T_slam_plan_initial = T_plan_slam[0].Inverse();
 
   size_t next_scan = 0;
+  bool silent = false;
   const auto steps = static_cast<size_t>(std::ceil((walk.back() - walk.front()) / o.pose_period_s));
   for (size_t k = 0; k <= steps; ++k) {
     const double t_walk = walk.front() + static_cast<double>(k) * o.pose_period_s;
     const double t = report->line_clock ? MapClock(walk, clock, t_walk) : t_walk;
+    const double gap = report->line_clock ? 0.0 : odom.Gap(t);
+    if (gap > o.max_odometry_gap_s) {  // the motion is unknown: nothing is sent
+      report->silent_s += o.pose_period_s;
+      if (!silent) ++report->odometry_gaps;
+      silent = true;
+      for (; next_scan < n && walk[next_scan] <= t_walk + 1e-9; ++next_scan) ++report->silent_scans;
+      continue;
+    }
+    silent = false;
     sim::SimulatedStep step;
     step.stamp_ns = static_cast<int64_t>(std::llround(t_walk * 1e9));
     const Se2 slam = odom.At(t);
@@ -319,7 +337,7 @@ bool CarmenToSimulation(const CarmenLog& log, const std::vector<sim::TimedPose>&
     }
     out->steps.push_back(std::move(step));
   }
-  report->scans = next_scan;
+  report->scans = next_scan - report->silent_scans;
 
   if (!ExactPick(log.scans[0], EndPoints(log.scans[0], odom_at_scan[0], max_range, o),
                  T_plan_slam[0], o, &out->pick)) {
@@ -347,8 +365,12 @@ bool CarmenToSimulation(const CarmenLog& log, const std::vector<sim::TimedPose>&
   d << o.name << ": " << n << " scans, " << report->triangles << " wall triangles ("
     << report->dropped_readings << " of " << report->readings << " readings dropped: at or over "
     << max_range << " m or under " << o.min_range_m << " m), walls 0.." << o.wall_height_m
-    << " m, poses every " << o.pose_period_s << " s"
-    << (report->line_clock
+    << " m, poses every " << o.pose_period_s << " s";
+  if (report->odometry_gaps > 0)
+    d << ", odometry silent " << report->odometry_gaps << " time(s) over " << o.max_odometry_gap_s
+      << " s (" << report->silent_s << " s, " << report->silent_scans
+      << " scans): no pose and no scan then";
+  d << (report->line_clock
             ? ", clock: line numbers, paced at " + std::to_string(o.pace_mps) + " m/s"
             : ", clock: seconds");
   out->description = d.str();

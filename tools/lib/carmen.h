@@ -59,7 +59,13 @@ struct CarmenImportOptions {
   double pace_mps = 0.5;          // line-number logs: walking speed...
   double turn_rad_s = M_PI / 4;   // ...and turning in place
   double pick_max_range_m = 8.0;  // the wall pick is on a scan point this near
-  std::string name = "carmen";    // scenario name in the recording
+  // Where the odometry says nothing for longer than this (a log with a clock in seconds),
+  // the robot's motion is unknown, as a headset's is while it has lost tracking: no pose
+  // and no scan is sent then, and the daemon reads the silence as a loss of tracking
+  // (tracking.motion.lost_after_s). Interpolating across it would report a robot that
+  // stands still while it turns. Seconds.
+  double max_odometry_gap_s = 1.5;
+  std::string name = "carmen";  // scenario name in the recording
 };
 
 struct CarmenImportReport {
@@ -67,6 +73,9 @@ struct CarmenImportReport {
   bool line_clock = false;  // timestamps were line numbers: paced walk
   double length_m = 0, duration_s = 0;
   double odom_final_error_m = 0, odom_max_error_m = 0;  // odometry alone, from the exact start
+  size_t odometry_gaps = 0;  // silences over max_odometry_gap_s within the walk...
+  double silent_s = 0;       // ...their time, with no pose and no scan
+  size_t silent_scans = 0;
 };
 
 // Builds the walk as a Simulation (steps, meshes, ground truth, the exact wall pick), so
