@@ -148,7 +148,22 @@ Mode Belief::LeadingMode(const Eigen::Vector2d& wearer_slam, double radius_m,
            std::abs(WrapAngle(samples_[i].T_plan_slam.theta - samples_[j].T_plan_slam.theta)) <=
                radius_rad;
   };
-  // Candidates: the heaviest samples and an even spread of the rest, at most 64.
+  const std::vector<size_t> candidates = Candidates(w);
+  size_t centre = candidates[0];
+  for (size_t c : candidates) {
+    double mass = 0;
+    for (size_t j = 0; j < samples_.size(); ++j)
+      if (near(c, j)) mass += w[j];
+    if (mass > best.mass) {
+      best.mass = mass;
+      centre = c;
+    }
+  }
+  return ModeAt(samples_[centre].T_plan_slam, wearer_slam, radius_m, radius_rad);
+}
+
+std::vector<size_t> Belief::Candidates(const std::vector<double>& w) const {
+  // At most 64: the 32 heaviest and 32 spread evenly over the rest.
   std::vector<size_t> order(samples_.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
   const size_t heavy = std::min<size_t>(32, order.size());
@@ -157,13 +172,22 @@ Mode Belief::LeadingMode(const Eigen::Vector2d& wearer_slam, double radius_m,
   std::vector<size_t> candidates(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(heavy));
   const size_t stride = std::max<size_t>(1, samples_.size() / 32);
   for (size_t i = 0; i < samples_.size(); i += stride) candidates.push_back(i);
-  size_t centre = candidates[0];
-  for (size_t c : candidates) {
-    double mass = 0;
-    for (size_t j = 0; j < samples_.size(); ++j)
-      if (near(c, j)) mass += w[j];
-    if (mass > best.mass) {
-      best.mass = mass;
+  return candidates;
+}
+
+Mode Belief::Estimate(const Eigen::Vector2d& wearer_slam, double radius_m,
+                      double radius_rad) const {
+  if (samples_.empty()) return {};
+  const std::vector<double> w = Weights();
+  std::vector<Eigen::Vector2d> at(samples_.size());
+  for (size_t i = 0; i < at.size(); ++i) at[i] = samples_[i].T_plan_slam * wearer_slam;
+  size_t centre = 0;
+  double least = std::numeric_limits<double>::infinity();
+  for (size_t c : Candidates(w)) {
+    double expected = 0;
+    for (size_t j = 0; j < samples_.size(); ++j) expected += w[j] * (at[j] - at[c]).norm();
+    if (expected < least) {
+      least = expected;
       centre = c;
     }
   }

@@ -72,6 +72,12 @@ class Belief {
   // The place with the most weight within radius_m (at the wearer) and radius_rad of one
   // of its samples, and the weighted mean of the samples there.
   Mode LeadingMode(const Eigen::Vector2d& wearer_slam, double radius_m, double radius_rad) const;
+  // The place that puts the wearer nearest, on average over the belief, to where it puts
+  // the wearer: the sample with the least expected distance at the wearer (the estimate
+  // that minimizes the expected error), and the weighted mean of the samples within
+  // radius_m and radius_rad of it. With one place it is that place; between a spread
+  // cloud (a pick's prior) and a tight far place of less weight, it stays in the cloud.
+  Mode Estimate(const Eigen::Vector2d& wearer_slam, double radius_m, double radius_rad) const;
   // The same about a given alignment: the weighted mean of the samples near it.
   Mode ModeAt(const Se2& T, const Eigen::Vector2d& wearer_slam, double radius_m,
               double radius_rad) const;
@@ -82,6 +88,9 @@ class Belief {
   Eigen::Matrix3d Covariance(const Se2& mean, const Eigen::Vector2d& wearer_slam) const;
 
  private:
+  // The samples a place is looked for at: the heaviest and an even spread of the rest.
+  std::vector<size_t> Candidates(const std::vector<double>& weights) const;
+
   std::vector<Sample> samples_;
 };
 

@@ -2,9 +2,9 @@
 // hold several places, moved by the SLAM's drift (MotionModel), weighted by how the recent wall
 // points fit the plan (MeasurementModel), resampled to as many samples as it needs (Belief),
 // reseeded from searches of the whole plan when the walls stop fitting (Recovery), and published
-// with the share of its mass near the published pose (Assess). ICP polishes the leading place to
-// centimetres. A wall pick and a flip are priors for the belief; without one, a search of the plan
-// seeds it.
+// with the share of its mass near the published pose (Assess). ICP polishes the published place
+// to centimetres. A wall pick and a flip are priors for the belief; without one, a search of the
+// plan seeds it.
 //
 // The daemon and the tools drive it: poses on the io thread, updates prepared there, run
 // on a worker (RunMclUpdate, update.cc), and finished back there.
@@ -94,9 +94,9 @@ struct MclUpdateResult {
   Se2 published;
   double fit = 0;          // the belief's mean log-likelihood per point (before weighing)
   double exponent = 0;     // ...and the tempering exponent it was weighed with
-  double mode_mass = 0;    // of the leading place
+  double mode_mass = 0;    // of the published place
   size_t places = 0;       // places holding at least 5% of the belief
-  RegistrationResult icp;  // the polish of the leading place
+  RegistrationResult icp;  // the polish of the published place
   bool polished = false;   // ...taken
   bool offered = false;    // ...or the place it reached offered to the belief
   double dt_s = 0;

@@ -78,10 +78,11 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
   if (belief.EffectiveSize() < 0.5 * static_cast<double>(belief.size()) ||
       belief.size() > options.samples.max_samples)
     belief.Resample(options.samples, u.wearer_slam, rng);
-  // The leading place, polished by ICP on the whole window when that fits the walls
-  // better. The polish is published; the samples stay where the belief put them (moving
-  // them with it collapses the belief onto whatever ICP settles on, right or not).
-  Mode mode = belief.LeadingMode(u.wearer_slam, radius_m, radius_rad);
+  // The place with the least expected error at the wearer, polished by ICP on the whole
+  // window when that fits the walls better. The polish is published; the samples stay where the
+  // belief put them (moving them with it collapses the belief onto whatever ICP settles on, right
+  // or not).
+  Mode mode = belief.Estimate(u.wearer_slam, radius_m, radius_rad);
   if (u.published) {
     // The published place stays until another holds kSwitchRatio times its mass: a belief
     // split about evenly must not make the published pose jump between its places.

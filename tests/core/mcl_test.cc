@@ -42,6 +42,28 @@ TEST(BeliefTest, ResamplingKeepsTheWeightAndShrinksWhenConverged) {
   EXPECT_NEAR(m.mass, 0.75, 0.1);
 }
 
+TEST(BeliefTest, TheEstimateMinimizesTheExpectedErrorAtTheWearer) {
+  SplitMix64 rng(5);
+  Belief b;
+  // A pick's prior, spread by 1.5 m (60% of the mass), and a tight place 20 m off (40%).
+  const Se2 pick{0, {0, 0}}, far{0, {20, 0}};
+  b.AddGaussian(pick, Eigen::Vector3d(1e-4, 2.25, 2.25).asDiagonal(), pick.t, 600, 0.0, rng);
+  b.AddGaussian(far, Eigen::Vector3d(1e-6, 1e-4, 1e-4).asDiagonal(), far.t, 400, 0.0, rng);
+  b.Normalize();
+  // Within 1 m the tight place holds the most...
+  EXPECT_NEAR(b.LeadingMode({0, 0}, 1.0, Deg(10)).T_plan_slam.t.x(), 20.0, 0.1);
+  // ...but the wearer is on average nearest a point of the cloud: its median towards the
+  // far place, where 50% of the mass lies on either side (1.45 m along, 0.97 sigma).
+  const Mode m = b.Estimate({0, 0}, 1.0, Deg(10));
+  EXPECT_LT(m.T_plan_slam.t.norm(), 2.0);
+  EXPECT_GT(m.mass, 0.05);
+  // One place: the estimate is that place.
+  Belief one;
+  one.AddGaussian(far, Eigen::Vector3d(1e-6, 1e-4, 1e-4).asDiagonal(), far.t, 100, 0.0, rng);
+  EXPECT_NEAR((one.Estimate({0, 0}, 1.0, Deg(10)).T_plan_slam.t - far.t).norm(), 0.0, 0.05);
+  EXPECT_EQ(Belief().Estimate({0, 0}, 1.0, Deg(10)).mass, 0.0);
+}
+
 TEST(BeliefTest, MixingOffersTheShareAndKeepsTheRest) {
   SplitMix64 rng(4);
   Belief b;
