@@ -141,8 +141,7 @@ Mode Belief::LeadingMode(const Eigen::Vector2d& wearer_slam, double radius_m,
   Mode best;
   if (samples_.empty()) return best;
   const std::vector<double> w = Weights();
-  std::vector<Eigen::Vector2d> at(samples_.size());
-  for (size_t i = 0; i < at.size(); ++i) at[i] = samples_[i].T_plan_slam * wearer_slam;
+  const std::vector<Eigen::Vector2d> at = WearerOnPlan(wearer_slam);
   auto near = [&](size_t i, size_t j) {
     return (at[i] - at[j]).squaredNorm() <= radius_m * radius_m &&
            std::abs(WrapAngle(samples_[i].T_plan_slam.theta - samples_[j].T_plan_slam.theta)) <=
@@ -162,6 +161,12 @@ Mode Belief::LeadingMode(const Eigen::Vector2d& wearer_slam, double radius_m,
   return ModeAt(samples_[centre].T_plan_slam, wearer_slam, radius_m, radius_rad);
 }
 
+std::vector<Eigen::Vector2d> Belief::WearerOnPlan(const Eigen::Vector2d& wearer_slam) const {
+  std::vector<Eigen::Vector2d> at(samples_.size());
+  for (size_t i = 0; i < at.size(); ++i) at[i] = samples_[i].T_plan_slam * wearer_slam;
+  return at;
+}
+
 std::vector<size_t> Belief::Candidates(const std::vector<double>& w) const {
   // At most 64: the 32 heaviest and 32 spread evenly over the rest.
   std::vector<size_t> order(samples_.size());
@@ -179,8 +184,7 @@ Mode Belief::Estimate(const Eigen::Vector2d& wearer_slam, double radius_m,
                       double radius_rad) const {
   if (samples_.empty()) return {};
   const std::vector<double> w = Weights();
-  std::vector<Eigen::Vector2d> at(samples_.size());
-  for (size_t i = 0; i < at.size(); ++i) at[i] = samples_[i].T_plan_slam * wearer_slam;
+  const std::vector<Eigen::Vector2d> at = WearerOnPlan(wearer_slam);
   size_t centre = 0;
   double least = std::numeric_limits<double>::infinity();
   for (size_t c : Candidates(w)) {

@@ -88,6 +88,8 @@ class Belief {
   Eigen::Matrix3d Covariance(const Se2& mean, const Eigen::Vector2d& wearer_slam) const;
 
  private:
+  // Where each sample puts the wearer on the plan.
+  std::vector<Eigen::Vector2d> WearerOnPlan(const Eigen::Vector2d& wearer_slam) const;
   // The samples a place is looked for at: the heaviest and an even spread of the rest.
   std::vector<size_t> Candidates(const std::vector<double>& weights) const;
 

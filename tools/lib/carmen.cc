@@ -47,8 +47,7 @@ class Track {
  public:
   explicit Track(const std::vector<sim::TimedPose>& poses) : poses_(poses) {}
   Se2 At(double t) const {
-    auto it = std::upper_bound(poses_.begin(), poses_.end(), t,
-                               [](double v, const sim::TimedPose& p) { return v < p.t_s; });
+    const auto it = After(t);
     if (it == poses_.begin()) return ToSe2(poses_.front());
     if (it == poses_.end()) return ToSe2(poses_.back());
     const sim::TimedPose& a = *(it - 1);
@@ -58,19 +57,23 @@ class Track {
   // How long the odometry is silent about t: the time between the readings around it (0
   // before the first and after the last).
   double Gap(double t) const {
-    auto it = std::upper_bound(poses_.begin(), poses_.end(), t,
-                               [](double v, const sim::TimedPose& p) { return v < p.t_s; });
+    const auto it = After(t);
     if (it == poses_.begin() || it == poses_.end()) return 0.0;
     return it->t_s - (it - 1)->t_s;
   }
   // The last entry at or before t (the reading a scan was paired with), else the first.
   Se2 LastAt(double t) const {
-    auto it = std::upper_bound(poses_.begin(), poses_.end(), t,
-                               [](double v, const sim::TimedPose& p) { return v < p.t_s; });
+    const auto it = After(t);
     return ToSe2(it == poses_.begin() ? poses_.front() : *(it - 1));
   }
 
  private:
+  // The first entry after t.
+  std::vector<sim::TimedPose>::const_iterator After(double t) const {
+    return std::upper_bound(poses_.begin(), poses_.end(), t,
+                            [](double v, const sim::TimedPose& p) { return v < p.t_s; });
+  }
+
   const std::vector<sim::TimedPose>& poses_;
 };
 
