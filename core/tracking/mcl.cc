@@ -347,9 +347,7 @@ std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places,
     last_update_ns_ = stamp_ns;
     return "seeded with " + std::to_string(k) + " place(s)";
   }
-  // Recovery: the chance that the wearer is at none of the belief's places moves to the
-  // places found, save the chance that they are wrong too (start_doubt, as for the places
-  // of a search that seeds the belief). The places the belief does not hold get that mass,
+  // Recovery: the places the belief does not hold get the mass the belief may be missing,
   // less what the place it leads with takes of it where the search found that too: the
   // search's walls and the walk weigh the places found against one another.
   const Mode lead = belief_.LeadingMode(wearer, options_.publish.within_m, kPlaceRad);
@@ -367,11 +365,8 @@ std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places,
     of_fresh += std::exp(log_weights[i]);
   }
   if (fresh.empty()) return "the belief holds every place found";
-  const double elsewhere = recovery_.Elsewhere();
-  const double found = elsewhere * (1 - options_.recovery.start_doubt);
-  const double share = std::max(kOfferShare, found / (1 - elsewhere + found)) * of_fresh / all;
+  const double share = std::max(kOfferShare, recovery_.Elsewhere()) * of_fresh / all;
   belief_.Mix(fresh, fresh_log_weights, P, wearer, share, options_.samples.min_samples / 4, rng_);
-  recovery_.Found(found);
   ++belief_version_;  // an update running on the belief without them is void
   return "mixed in " + std::to_string(fresh.size()) + " place(s) at " +
          std::to_string(static_cast<int>(100 * share)) + "%";

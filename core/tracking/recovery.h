@@ -46,9 +46,6 @@ class Recovery {
   // (a restart of the daemon: the SLAM frame and the wearer went on).
   void Resume(double elsewhere);
   bool searched() const { return searched_; }
-  // A search's places the belief did not hold were mixed into it: `found` of the chance
-  // that the wearer is elsewhere is the belief's now.
-  void Found(double found);
   // One update: the belief's mean log-likelihood per wall point, the tempering exponent
   // it was weighed with, dt_s after the last.
   void Observe(double mean_log_likelihood, double exponent, double dt_s);

@@ -167,20 +167,6 @@ TEST(RecoveryTest, AFitLikeARandomPlaceKeepsTheDoubtAndARightOneClearsIt) {
   EXPECT_LT(stale.Elsewhere(), 0.01);
 }
 
-TEST(RecoveryTest, PlacesFoundTakeTheirShareOfTheDoubt) {
-  MeasurementModel m;
-  const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
-  Recovery r({}, m, index);
-  ASSERT_NEAR(r.Elsewhere(), 0.5, 1e-9);
-  r.Found(0.2);
-  EXPECT_NEAR(r.Elsewhere(), 0.3, 1e-9);
-  r.Found(0.0);
-  EXPECT_NEAR(r.Elsewhere(), 0.3, 1e-9) << "nothing found, nothing moved";
-  r.Found(1.0);
-  EXPECT_GT(r.Elsewhere(), 0.0) << "a probability, never below 0";
-  EXPECT_LT(r.Elsewhere(), 1e-6);
-}
-
 TEST(RecoveryTest, SearchesComeAsOftenAsTheWearerMayBeElsewhere) {
   MeasurementModel m;
   const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
@@ -294,35 +280,6 @@ TEST(MclTrackerTest, APickOnTheWrongWallIsNotReliableAndTheSearchPlacesTheWearer
               floorpose::testing::IsNearlySe2(room.truth, Deg(0.5), 0.05));
   EXPECT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable)
       << mcl.CurrentReliability().reason;
-}
-
-// The doubt that the wearer is at none of the belief's places moves, with a search's new
-// places, into the belief: what stays elsewhere is the doubt that those are wrong too
-// (start_doubt, as for a search that seeds the belief), not the whole doubt again.
-TEST(MclTrackerTest, ASearchsNewPlacesTakeTheDoubtSaveTheirOwn) {
-  RoomWalk room;
-  MclTracker mcl({});
-  mcl.SetPlan(room.index);
-  const Se2 wrong = Se2{Deg(90), {4, 0}} * room.truth;
-  ASSERT_EQ(mcl.ApplyWallPick(RoomWalk::PickOn(wrong, {10, 3}), 0), "");
-  int64_t t = 0;
-  Walk(mcl, room, &t);
-  const double before = mcl.SaveState().elsewhere;
-  ASSERT_GT(before, 0.5) << "the walls do not fit the pick";
-  GlobalPlace found;
-  found.T_plan_slam = room.truth;
-  ASSERT_THAT(mcl.OfferPlaces({found}, {}, t), ::testing::HasSubstr("mixed in 1"));
-  const double doubt = mcl.options().recovery.start_doubt;
-  EXPECT_NEAR(mcl.SaveState().elsewhere, before * doubt, 1e-6);
-  // The belief holds the place found at the doubt it took, among what the belief holds now.
-  const double taken = before * (1 - doubt);
-  const Eigen::Vector2d wearer_slam = room.truth.Inverse() * Eigen::Vector2d(8, 2);
-  EXPECT_NEAR(mcl.belief().MassWithin(wearer_slam, {8, 2}, 1.0), taken / (1 - before + taken),
-              0.02);
-  // A second search that finds nothing the belief lacks leaves the doubt as it was.
-  const double after = mcl.SaveState().elsewhere;
-  EXPECT_THAT(mcl.OfferPlaces({found}, {}, t), ::testing::HasSubstr("holds every place"));
-  EXPECT_EQ(mcl.SaveState().elsewhere, after);
 }
 
 TEST(MclTrackerTest, WithoutAPickTheSearchSeedsTheBelief) {
