@@ -77,13 +77,34 @@ TEST(CompareTest, TheBrierScoreIsPooledOverPoses) {
   EXPECT_NEAR(d.next - d.base, 300 * -0.02 / 400, 1e-12);
 }
 
+TEST(CompareTest, RunsAreCountedByWhenTheyAreFirstReliableWithinAMetre) {
+  std::vector<RunFigures> base(4);
+  const double seconds[] = {12.0, 30.0, 31.0, -1.0};  // -1: never
+  for (size_t i = 0; i < base.size(); ++i) {
+    base[i].key = "mcl p office " + std::to_string(i);
+    base[i].time_to_recovered_s = seconds[i];
+  }
+  std::vector<const RunFigures*> all;
+  for (const RunFigures& r : base) all.push_back(&r);
+  const SuiteFigures f = Figures(all);
+  EXPECT_DOUBLE_EQ(f.recovered, 0.5) << "12 s and 30 s: within 30 s";
+  EXPECT_EQ(f.never_recovered, 1);
+  // The slow run back in 20 s, the lost one in 40 s: one more by 30 s, none never.
+  std::vector<RunFigures> next = base;
+  next[2].time_to_recovered_s = 20.0;
+  next[3].time_to_recovered_s = 40.0;
+  const std::vector<Difference> d = Compare(base, next, 500, 7);
+  EXPECT_DOUBLE_EQ(Row(d, "runs RELIABLE within 1 m 30 s after the first alignment").next, 0.75);
+  EXPECT_EQ(Row(d, "runs never RELIABLE within 1 m").next, 0);
+}
+
 TEST(CompareTest, RunsArePairedByWalkAndBadLinesAreRefused) {
   const std::filesystem::path dir = std::filesystem::path(::testing::TempDir()) / "compare";
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "a.json")
       << R"({"method":"mcl","plan":"p","scenario":"office","seed":1,"poses":100,)"
       << R"("reliable_fraction":0.5,"false_reliable_poses":5,"mean_error_m":0.2,"max_error_m":6,)"
-      << R"("brier":0.04})"
+      << R"("brier":0.04,"time_to_recovered_s":7.5})"
       << "\n\n"
       << R"({"method":"mcl","plan":"p","scenario":"hall","seed":1,"poses":100,)"
       << R"("reliable_fraction":0.8,"false_reliable_poses":0,"mean_error_m":0.4,"max_error_m":1})"
@@ -95,6 +116,8 @@ TEST(CompareTest, RunsArePairedByWalkAndBadLinesAreRefused) {
   EXPECT_EQ(a[0].reliable_poses, 50);
   EXPECT_EQ(a[0].brier, 0.04);
   EXPECT_EQ(a[1].brier, 0.0) << "results.json of before the score: none";
+  EXPECT_EQ(a[0].time_to_recovered_s, 7.5);
+  EXPECT_LT(a[1].time_to_recovered_s, 0) << "none written: never";
   EXPECT_NE(ReadRuns((dir / "bad.json").string(), &bad), "");
   EXPECT_NE(ReadRuns((dir / "missing.json").string(), &bad), "");
   // Only the walk in both counts: the office run.

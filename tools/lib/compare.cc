@@ -20,8 +20,13 @@ SuiteFigures Figures(const std::vector<const RunFigures*>& runs) {
     reliable += r->reliable_poses;
     f.false_poses += r->false_poses;
     brier += r->brier * r->scored_poses;
+    f.recovered += r->time_to_recovered_s >= 0 && r->time_to_recovered_s <= kRecoveredS;
+    f.never_recovered += r->time_to_recovered_s < 0;
   }
-  if (!runs.empty()) f.mean_error_m /= static_cast<double>(runs.size());
+  if (!runs.empty()) {
+    f.mean_error_m /= static_cast<double>(runs.size());
+    f.recovered /= static_cast<double>(runs.size());
+  }
   f.reliable = scored > 0 ? reliable / scored : 0.0;
   f.precision = reliable > 0 ? 1.0 - f.false_poses / reliable : 1.0;
   f.brier = scored > 0 ? brier / scored : 0.0;
@@ -50,7 +55,9 @@ std::vector<Difference> Compare(const std::vector<RunFigures>& base,
       {"RELIABLE share", &SuiteFigures::reliable, "%", 3},
       {"RELIABLE within 1 m", &SuiteFigures::precision, "%", 3},
       {"RELIABLE more than 1 m off", &SuiteFigures::false_poses, "", 0},
-      {"Brier score of the probability", &SuiteFigures::brier, "", 4}};
+      {"Brier score of the probability", &SuiteFigures::brier, "", 4},
+      {"runs RELIABLE within 1 m 30 s after the first alignment", &SuiteFigures::recovered, "%", 1},
+      {"runs never RELIABLE within 1 m", &SuiteFigures::never_recovered, "", 0}};
   const SuiteFigures fa = Figures(a), fb = Figures(b);
   std::vector<std::vector<double>> draws(fields.size());
   SplitMix64 rng(seed);
@@ -101,6 +108,7 @@ std::string ReadRuns(const std::string& path, std::vector<RunFigures>* runs) {
     r.reliable_poses = j.value("reliable_fraction", 0.0) * r.scored_poses;
     r.false_poses = j.value("false_reliable_poses", 0.0);
     r.brier = j.value("brier", 0.0);
+    r.time_to_recovered_s = j.value("time_to_recovered_s", -1.0);
     runs->push_back(r);
   }
   return {};

@@ -20,6 +20,9 @@ struct RunFigures {
   double reliable_poses = 0;
   double false_poses = 0;  // RELIABLE more than 1 m off
   double brier = 0;        // the run's Brier score (EvalReport::brier)
+  // Seconds from the first alignment to the first pose RELIABLE and within 1 m (a wrong
+  // pick's recovery, a search's placement); negative: never.
+  double time_to_recovered_s = -1;
 };
 
 // The suite's figures over a set of runs.
@@ -30,7 +33,12 @@ struct SuiteFigures {
   double precision = 1;     // share of RELIABLE poses within 1 m
   double false_poses = 0;
   double brier = 0;  // over every scored pose of the runs
+  // Share of runs RELIABLE within 1 m within kRecoveredS of the first alignment (issue
+  // 43's kidnap target), and runs never so.
+  double recovered = 0;
+  double never_recovered = 0;
 };
+constexpr double kRecoveredS = 30.0;
 SuiteFigures Figures(const std::vector<const RunFigures*>& runs);
 
 struct Difference {
