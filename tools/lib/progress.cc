@@ -28,7 +28,7 @@ bool Progress::OnTerminal() { return isatty(STDERR_FILENO) == 1; }
 Progress::Progress(std::string label, size_t total, std::string unit)
     : label_(std::move(label)),
       total_(total),
-      unit_(unit.empty() ? std::string() : " " + std::move(unit)),
+      unit_(unit.empty() ? std::string() : std::string(" ").append(unit)),
       terminal_(OnTerminal()),
       start_(std::chrono::steady_clock::now()),
       last_(start_) {}
