@@ -236,6 +236,21 @@ Eigen::Matrix3d Belief::Covariance(const Se2& mean, const Eigen::Vector2d& weare
   return C;
 }
 
+Eigen::Matrix3d Belief::CovarianceNear(const Se2& mean, const Eigen::Vector2d& wearer_slam,
+                                       double radius_m, double radius_rad) const {
+  const std::vector<double> w = Weights();
+  const Eigen::Vector2d pivot = mean * wearer_slam;
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  double near = 0;
+  for (size_t i = 0; i < w.size(); ++i) {
+    if (!SamePlace(samples_[i].T_plan_slam, mean, wearer_slam, radius_m, radius_rad)) continue;
+    const Eigen::Vector3d d = Difference(samples_[i].T_plan_slam, mean, pivot);
+    C += w[i] * d * d.transpose();
+    near += w[i];
+  }
+  return near > 0 ? Eigen::Matrix3d(C / near) : C;
+}
+
 Eigen::Matrix3d PlaceCovariance(double sigma_m, double sigma_rad) {
   return Eigen::Vector3d(sigma_rad * sigma_rad, sigma_m * sigma_m, sigma_m * sigma_m).asDiagonal();
 }

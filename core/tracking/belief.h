@@ -86,6 +86,9 @@ class Belief {
                     double radius_m) const;
   // The weighted covariance of (heading, x, y) about `mean` at the wearer.
   Eigen::Matrix3d Covariance(const Se2& mean, const Eigen::Vector2d& wearer_slam) const;
+  // ...of the samples within radius_m (at the wearer) and radius_rad of `mean` alone.
+  Eigen::Matrix3d CovarianceNear(const Se2& mean, const Eigen::Vector2d& wearer_slam,
+                                 double radius_m, double radius_rad) const;
 
  private:
   // Where each sample puts the wearer on the plan.

@@ -1,6 +1,7 @@
 #include "core/tracking/mcl.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -28,7 +29,7 @@ void MclTracker::ChangeFloor(std::shared_ptr<const ClosestWallIndex> index) {
   if (!index_) return Reset();
   alignment_.version = next_version_++;
   ++belief_version_;
-  checked_ = false;
+  start_.checked = false;
   last_update_ns_.reset();
   recovery_ = Recovery(options_.recovery, options_.measurement, *index_);  // this floor's walls
 }
@@ -40,7 +41,7 @@ void MclTracker::Reset() {
   pick_plan_point_.reset();
   last_update_ns_.reset();
   last_search_ns_.reset();
-  checked_ = false;
+  start_.checked = false;
   places_ = 0;
   recovery_.Reset();
 }
@@ -53,7 +54,8 @@ void MclTracker::StartBelief(const Se2& published, AlignmentSource source, int64
   alignment_.stamp_ns = stamp_ns;
   alignment_.registration.reset();
   last_update_ns_.reset();
-  checked_ = false;
+  start_.checked = start_.settled = false;
+  start_.stamp_ns = stamp_ns;
   places_ = 1;
   recovery_.Reset();
   belief_.Normalize();
@@ -128,7 +130,9 @@ void MclTracker::Relocalize(const Eigen::Vector2d& wearer_slam, int64_t stamp_ns
         options_.motion.Sample(s.T_plan_slam, s.T_plan_slam * wearer_slam, sigmas, rng_);
   ++belief_version_;  // an update running on the belief from before is void
   last_update_ns_.reset();
-  checked_ = false;
+  start_.checked = start_.settled = false;
+  start_.stamp_ns = stamp_ns;
+  recovery_.Relocalized();
 }
 
 BeliefSummary MclTracker::Summary(const Eigen::Vector2d& wearer_slam, const Se2& T) const {
@@ -137,7 +141,7 @@ BeliefSummary MclTracker::Summary(const Eigen::Vector2d& wearer_slam, const Se2&
   s.elsewhere = recovery_.Elsewhere();
   s.fit_ratio = recovery_.FitRatio();
   s.places = places_;
-  s.checked = checked_;
+  s.checked = start_.checked;
   return s;
 }
 
@@ -188,7 +192,7 @@ TrackerState MclTracker::SaveState() const {
   if (pick_plan_point_) s.pick_plan_point = *pick_plan_point_;
   s.samples = belief_.samples();
   s.elsewhere = recovery_.Elsewhere();
-  s.checked = checked_ && recovery_.searched();
+  s.checked = start_.checked && recovery_.searched();
   return s;
 }
 
@@ -227,7 +231,7 @@ std::string MclTracker::RestoreState(const TrackerState& state) {
     // A belief the walls and a search had checked resumes as it was, under its version.
     alignment_.version = a.version;
     next_version_ = state.next_version;
-    checked_ = true;
+    start_.checked = true;
     recovery_.Resume(state.elsewhere);
   }
   return {};
@@ -273,7 +277,13 @@ bool MclTracker::FinishUpdate(MclUpdateResult result, int64_t stamp_ns) {
           sigmas, rng_);
   recovery_.Observe(result.fit, result.exponent, result.dt_s);
   places_ = result.places;
-  checked_ = true;
+  start_.checked = true;
+  // The published place's spread, out to twice a place's extent, against a searched place's.
+  const Eigen::Matrix3d spread =
+      belief_.CovarianceNear(result.published, odometry_.position.value_or(Eigen::Vector2d::Zero()),
+                             2 * options_.publish.within_m, 2 * kPlaceRad);
+  start_.settled = spread.determinant() <=
+                   PlaceCovariance(options_.place_sigma_m, options_.place_sigma_rad).determinant();
   alignment_.T_plan_slam = result.published;
   alignment_.version = next_version_++;
   alignment_.source = AlignmentSource::kRegistration;
@@ -288,8 +298,15 @@ bool MclTracker::SearchDue(int64_t now_ns, size_t window_points) const {
                                          : std::numeric_limits<double>::infinity();
   if (since_s < options_.recovery.search_interval_s) return false;
   if (belief_.empty()) return true;
-  if (!checked_) return false;
-  if (!recovery_.searched()) return true;  // a start is checked against the whole plan
+  if (!start_.checked) return false;
+  if (!recovery_.searched()) {
+    // A start is checked against the whole plan: a pick or a place at once (it is doubted
+    // at start_doubt), a relocalized frame once the walls have settled the belief in it, or
+    // as soon as the doubt since the loss asks.
+    if (!recovery_.relocalized() || start_.settled) return true;
+    const double since_start_s = static_cast<double>(now_ns - start_.stamp_ns) * 1e-9;
+    return recovery_.SearchDue(std::min(since_s, since_start_s));
+  }
   return recovery_.SearchDue(since_s);
 }
 

@@ -155,9 +155,11 @@ class MclTracker {
   bool FinishUpdate(MclUpdateResult result, int64_t stamp_ns);
 
   // A search of the whole plan is due without a belief, once after every start (pick,
-  // flip, place, restore) to check it, and then at a rate in proportion to the chance that
-  // the wearer is elsewhere (RecoveryOptions::search_share); at most every
-  // search_interval_s.
+  // flip, place, restore, relocalization) to check it, and then at a rate in proportion to
+  // the chance that the wearer is elsewhere (RecoveryOptions::search_share); at most every
+  // search_interval_s. A relocalized frame is checked once the walls have settled the
+  // belief in it, or as soon as the doubt since the loss asks: a place a search finds is
+  // drawn compact, and outweighs a spread belief of the same fit on its spread alone.
   bool SearchDue(int64_t now_ns, size_t window_points) const;
   void MarkSearchStarted(int64_t now_ns) { last_search_ns_ = now_ns; }
   // Seeds the belief with a search's refined places (RefinePlaces' order), or mixes them
@@ -205,8 +207,14 @@ class MclTracker {
   int64_t frame_since_ns_ = INT64_MIN;
   std::optional<Eigen::Vector2d> pick_plan_point_;
   std::optional<int64_t> last_update_ns_, last_search_ns_;
-  size_t places_ = 0;     // of the latest update
-  bool checked_ = false;  // an update weighed the belief since it was started
+  size_t places_ = 0;  // of the latest update
+  struct Start {       // the last start (pick, flip, place, restore) or relocalization
+    int64_t stamp_ns = 0;
+    bool checked = false;  // an update weighed the belief since
+    // Its leading place is no more spread than a searched place is drawn (by the volume
+    // of its covariance): a search's places and the belief's own are weighed alike.
+    bool settled = false;
+  } start_;
 };
 
 }  // namespace floorpose::tracking

@@ -54,7 +54,7 @@ Recovery::Recovery(const RecoveryOptions& options, const MeasurementModel& model
 void Recovery::Reset() {
   log_odds_ = Logit(std::clamp(options_.start_doubt, 1e-6, 1 - 1e-6));
   fit_ = expected_;
-  searched_ = false;
+  searched_ = relocalized_ = false;
 }
 
 void Recovery::Resume(double elsewhere) {

@@ -42,6 +42,16 @@ class Recovery {
   // right one does: only the other places that fit tell the two apart, so every start is
   // checked by one search.
   void Searched() { searched_ = true; }
+  // A relocalization starts a new SLAM frame: the belief spreads about where it was, and
+  // the start is checked by one search as any other is (a frame that jumped further than
+  // the spread fits the walls better than a random place does, too).
+  void Relocalized() {
+    searched_ = false;
+    relocalized_ = true;
+  }
+  // Since the last start, a relocalization: the belief went on from the old frame, spread
+  // by the relocalization model, and is not doubted for it.
+  bool relocalized() const { return relocalized_; }
   // Resumes at a saved probability of "elsewhere", the start already checked by a search
   // (a restart of the daemon: the SLAM frame and the wearer went on).
   void Resume(double elsewhere);
@@ -69,6 +79,7 @@ class Recovery {
   double log_odds_ = 0;  // of elsewhere against here
   double fit_ = 0;       // the latest
   bool searched_ = false;
+  bool relocalized_ = false;
 };
 
 // The mean log-likelihood per point the model expects of a right alignment: points at the

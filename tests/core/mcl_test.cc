@@ -237,6 +237,33 @@ void CheckStart(MclTracker& mcl, const RoomWalk& room, int64_t t_ns) {
   EXPECT_FALSE(mcl.SearchDue(t_ns + 10'000'000'000, 1000)) << "once";
 }
 
+// Two more walks through the room end on the truth, RELIABLE.
+void WalkOntoTheTruth(MclTracker& mcl, const RoomWalk& room, int64_t* t_ns) {
+  Walk(mcl, room, t_ns);
+  Walk(mcl, room, t_ns);
+  EXPECT_THAT(mcl.alignment().T_plan_slam,
+              floorpose::testing::IsNearlySe2(room.truth, Deg(0.5), 0.05));
+  EXPECT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable)
+      << mcl.CurrentReliability().reason;
+}
+
+// A right pick on the room's inner wall, walked and checked: the belief is sure of its place.
+void PickAndCheck(MclTracker& mcl, const RoomWalk& room, int64_t* t_ns) {
+  mcl.SetPlan(room.index);
+  ASSERT_EQ(mcl.ApplyWallPick(RoomWalk::PickOn(room.truth, {4, 2}), 0), "");
+  Walk(mcl, room, t_ns);
+  CheckStart(mcl, room, *t_ns);
+}
+
+// One update at t_ns on these wall points (slam), run inline.
+void UpdateOn(MclTracker& mcl, const RoomWalk& room, const std::vector<Eigen::Vector2d>& walls,
+              int64_t t_ns) {
+  ASSERT_TRUE(mcl.UpdateDue(t_ns, 1000));
+  MclUpdate u = mcl.PrepareUpdate(t_ns);
+  ASSERT_TRUE(
+      mcl.FinishUpdate(RunMclUpdate(std::move(u), walls, *room.index, mcl.options()), t_ns));
+}
+
 TEST(MclTrackerTest, AWallPickOffByAMetreEndsOnTheTruthAndReliable) {
   RoomWalk room;
   MclTracker mcl({});
@@ -274,12 +301,7 @@ TEST(MclTrackerTest, APickOnTheWrongWallIsNotReliableAndTheSearchPlacesTheWearer
   GlobalPlace found;
   found.T_plan_slam = room.truth;
   EXPECT_THAT(mcl.OfferPlaces({found}, {}, t), ::testing::HasSubstr("mixed in"));
-  Walk(mcl, room, &t);
-  Walk(mcl, room, &t);
-  EXPECT_THAT(mcl.alignment().T_plan_slam,
-              floorpose::testing::IsNearlySe2(room.truth, Deg(0.5), 0.05));
-  EXPECT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable)
-      << mcl.CurrentReliability().reason;
+  WalkOntoTheTruth(mcl, room, &t);
 }
 
 TEST(MclTrackerTest, WithoutAPickTheSearchSeedsTheBelief) {
@@ -293,12 +315,7 @@ TEST(MclTrackerTest, WithoutAPickTheSearchSeedsTheBelief) {
   twin.T_plan_slam = Se2{M_PI, {10, 7}} * room.truth;  // the room turned half round
   EXPECT_THAT(mcl.OfferPlaces({twin, right}, {}, 0), ::testing::HasSubstr("seeded with 2"));
   int64_t t = 0;
-  Walk(mcl, room, &t);
-  Walk(mcl, room, &t);
-  EXPECT_THAT(mcl.alignment().T_plan_slam,
-              floorpose::testing::IsNearlySe2(room.truth, Deg(0.5), 0.05));
-  EXPECT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable)
-      << mcl.CurrentReliability().reason;
+  WalkOntoTheTruth(mcl, room, &t);
 }
 
 // A tracker without a belief, the wearer at plan point `at` at 20 s, seeded by a search
@@ -390,12 +407,8 @@ TEST(MclTrackerTest, ASearchThatFindsTheBeliefsOwnPlaceBetterGivesTheOthersLess)
 TEST(MclTrackerTest, AfterALossOfTrackingTheJumpedFrameIsNotTrustedUntilFoundAgain) {
   RoomWalk room;
   MclTracker mcl({});
-  mcl.SetPlan(room.index);
-  const Eigen::Vector2d plan_point{4, 2};
-  ASSERT_EQ(mcl.ApplyWallPick(RoomWalk::PickOn(room.truth, plan_point), 0), "");
   int64_t t = 0;
-  Walk(mcl, room, &t);
-  CheckStart(mcl, room, t);
+  PickAndCheck(mcl, room, &t);
   ASSERT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable);
   EXPECT_EQ(mcl.frame_since_ns(), INT64_MIN) << "no loss yet: every wall point counts";
   // Five seconds without a pose, then the headset's frame has jumped 1.5 m and 15 degrees
@@ -408,12 +421,49 @@ TEST(MclTrackerTest, AfterALossOfTrackingTheJumpedFrameIsNotTrustedUntilFoundAga
   EXPECT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kUnreliable)
       << "the frame may have jumped: " << mcl.CurrentReliability().reason;
   EXPECT_EQ(mcl.belief().size(), mcl.options().samples.max_samples);
+  WalkOntoTheTruth(mcl, room, &t);
+}
+
+TEST(MclTrackerTest, AFrameThatJumpedBeyondTheSpreadIsFoundByTheSearchThatChecksIt) {
+  RoomWalk room;
+  MclTracker mcl({});
+  int64_t t = 0;
+  PickAndCheck(mcl, room, &t);
+  ASSERT_FALSE(mcl.SearchDue(t + 3'000'000'000, 1000)) << "the belief is sure of its place";
+  // The headset turned 90 degrees while no pose came: nine times the spread.
+  const Eigen::Vector2d wearer{8, 2};
+  room.truth = Se2{0, wearer} * Se2{Deg(90), {0.5, 0.5}} * Se2{0, -wearer} * room.truth;
+  t += 5000000000;
+  mcl.Correct({room.truth.Inverse() * wearer, 0, 1.6}, t);
+  EXPECT_FALSE(mcl.SearchDue(t, 1000)) << "not before an update has weighed the new frame";
+  UpdateOn(mcl, room, room.SeenFrom(wearer), t);
+  ASSERT_TRUE(mcl.SearchDue(t, 1000)) << "the new frame is checked against the whole plan";
+  mcl.MarkSearchStarted(t);
+  GlobalPlace right;
+  right.T_plan_slam = room.truth;
+  mcl.OfferPlaces({right}, {}, t);
+  WalkOntoTheTruth(mcl, room, &t);
+}
+
+// After a loss of tracking the belief is spread by the relocalization model, and a compact
+// place a search finds outweighs a spread one of the same fit on its spread alone: the new
+// frame is checked once the walls have settled the belief in it.
+TEST(MclTrackerTest, ARelocalizedFrameIsCheckedOnceTheWallsHaveSettledTheBelief) {
+  RoomWalk room;
+  MclTracker mcl({});
+  int64_t t = 0;
+  PickAndCheck(mcl, room, &t);
+  mcl.LoseTracking();
+  t += 5000000000;
+  mcl.Correct({room.truth.Inverse() * Eigen::Vector2d(8, 2), 0, 1.6}, t);
+  // Points far from every plan wall: the update leaves the belief as spread as it was.
+  std::vector<Eigen::Vector2d> far;
+  for (int i = 0; i < 100; ++i)
+    far.push_back(room.truth.Inverse() * Eigen::Vector2d(100 + 0.1 * i, 100));
+  UpdateOn(mcl, room, far, t);
+  EXPECT_FALSE(mcl.SearchDue(t, 1000)) << "spread by the loss: not yet";
   Walk(mcl, room, &t);
-  Walk(mcl, room, &t);
-  EXPECT_THAT(mcl.alignment().T_plan_slam,
-              floorpose::testing::IsNearlySe2(room.truth, Deg(0.5), 0.05));
-  EXPECT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable)
-      << mcl.CurrentReliability().reason;
+  EXPECT_TRUE(mcl.SearchDue(t, 1000)) << "settled by the walls: checked";
 }
 
 TEST(MclTrackerTest, ASearchedPlaceIsNotVouchedForByTheWallsItWasFoundWith) {
