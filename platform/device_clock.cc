@@ -21,7 +21,7 @@ int64_t Clamp(Wide v) {
 DeviceClock::Mapped DeviceClock::Rebase(int64_t stamp_ns, int64_t now_ns, Verdict verdict) {
   // The timeline goes on by the time the daemon saw pass (at least 1 ns).
   const int64_t timeline =
-      Clamp(Wide{newest_->timeline_ns} + std::max<int64_t>(1, now_ns - newest_->taken_at_ns));
+      Clamp(Wide{newest_->timeline_ns} + std::max<Wide>(1, Wide{now_ns} - newest_->taken_at_ns));
   const int64_t fell_back = Clamp(Wide{newest_->timeline_ns} - offset_ns_ - stamp_ns);
   offset_ns_ = Clamp(Wide{timeline} - stamp_ns);
   newest_ = Newest{timeline, now_ns};
@@ -38,7 +38,7 @@ DeviceClock::Mapped DeviceClock::Take(int64_t stamp_ns, int64_t now_ns) {
   if (forgotten_) return Rebase(stamp_ns, now_ns, Verdict::kTaken);
   const Wide ahead = Wide{stamp_ns} + offset_ns_ - newest_->timeline_ns;
   // A headset that went quiet comes back as far ahead as the daemon's clock went on.
-  const int64_t quiet_ns = std::max<int64_t>(0, now_ns - newest_->taken_at_ns);
+  const Wide quiet_ns = std::max<Wide>(0, Wide{now_ns} - newest_->taken_at_ns);
   if (ahead > Wide{options_.max_future_ns} + quiet_ns) {
     const Wide from_refused = refused_future_ns_ ? Wide{stamp_ns} - *refused_future_ns_ : 0;
     if (!refused_future_ns_ || from_refused > options_.max_future_ns ||

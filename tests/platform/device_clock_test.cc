@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <limits>
 
 namespace floorpose::platform {
 namespace {
@@ -69,6 +70,13 @@ TEST(DeviceClockTest, ExtremeStampsNeverOverflow) {
   EXPECT_EQ(c.Take(kPoison, kS).verdict, V::kFuture);
   EXPECT_EQ(c.Take(kPoison, kS).verdict, V::kRestarted);
   EXPECT_GE(c.newest_ns(), kPoison);
+  // The daemon's clock at its extremes too (a fuzzed replay): the time since the newest
+  // stamp is taken wide, and the timeline still goes forward.
+  const int64_t newest = c.newest_ns();
+  EXPECT_EQ(c.Take(-kPoison, std::numeric_limits<int64_t>::min() + 1).verdict, V::kRestarted);
+  EXPECT_GT(c.newest_ns(), newest);
+  c.Take(kPoison, std::numeric_limits<int64_t>::max());
+  EXPECT_GT(c.newest_ns(), newest);
 }
 
 TEST(DeviceClockTest, ResetTakesTheNextStampWhateverItIsAndNeverGoesBack) {
