@@ -278,12 +278,15 @@ bool MclTracker::FinishUpdate(MclUpdateResult result, int64_t stamp_ns) {
   recovery_.Observe(result.fit, result.exponent, result.dt_s);
   places_ = result.places;
   start_.checked = true;
-  // The published place's spread, out to twice a place's extent, against a searched place's.
-  const Eigen::Matrix3d spread =
-      belief_.CovarianceNear(result.published, odometry_.position.value_or(Eigen::Vector2d::Zero()),
-                             2 * options_.publish.within_m, 2 * kPlaceRad);
-  start_.settled = spread.determinant() <=
-                   PlaceCovariance(options_.place_sigma_m, options_.place_sigma_rad).determinant();
+  if (recovery_.relocalized() && !recovery_.searched()) {  // only SearchDue's check reads it
+    // The published place's spread, out to twice a place's extent, against a searched place's.
+    const Eigen::Matrix3d spread = belief_.CovarianceNear(
+        result.published, odometry_.position.value_or(Eigen::Vector2d::Zero()),
+        2 * options_.publish.within_m, 2 * kPlaceRad);
+    start_.settled =
+        spread.determinant() <=
+        PlaceCovariance(options_.place_sigma_m, options_.place_sigma_rad).determinant();
+  }
   alignment_.T_plan_slam = result.published;
   alignment_.version = next_version_++;
   alignment_.source = AlignmentSource::kRegistration;
