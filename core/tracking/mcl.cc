@@ -4,6 +4,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 namespace floorpose::tracking {
@@ -168,7 +169,14 @@ Reliability MclTracker::CurrentReliability() const {
     return r;
   }
   if (!has_alignment()) {
-    r.reason = "no alignment: searching the plan";
+    if (belief_.empty()) {
+      r.reason = "no alignment: searching the plan";
+    } else {
+      char text[96];
+      std::snprintf(text, sizeof text, "no alignment: %zu place(s) fit, none yet at %.0f%%",
+                    places_, 100 * options_.publish.degraded);
+      r.reason = text;
+    }
     return r;
   }
   return Assess(
@@ -288,6 +296,14 @@ bool MclTracker::FinishUpdate(MclUpdateResult result, int64_t stamp_ns) {
         PlaceCovariance(options_.place_sigma_m, options_.place_sigma_rad).determinant();
   }
   alignment_.T_plan_slam = result.published;
+  // A search's seed is published once its place is at least DEGRADED: before, the belief
+  // is a guess among places, and a minimap that shows the wearer at one misleads.
+  if (alignment_.version == 0) {
+    const Eigen::Vector2d wearer = odometry_.position.value_or(Eigen::Vector2d::Zero());
+    if (Assess(Summary(wearer, result.published), options_.publish).probability <
+        options_.publish.degraded)
+      return true;
+  }
   alignment_.version = next_version_++;
   alignment_.source = AlignmentSource::kRegistration;
   alignment_.stamp_ns = stamp_ns;

@@ -318,6 +318,56 @@ TEST(MclTrackerTest, WithoutAPickTheSearchSeedsTheBelief) {
   WalkOntoTheTruth(mcl, room, &t);
 }
 
+// A plain 10 x 7 m room looks the same turned half round its centre: a search's two
+// places fit every wall alike, and the belief holds each at about half. Neither is
+// published (the poses stay in the SLAM frame, UNRELIABLE) until one is at least
+// DEGRADED; a pick is published at once.
+TEST(MclTrackerTest, ASearchsPlacesArePublishedOnceOneIsDegraded) {
+  const auto parse = MakeFloorPlan(
+      "box", {{{0, 0}, {10, 0}}, {{10, 0}, {10, 7}}, {{10, 7}, {0, 7}}, {{0, 7}, {0, 0}}});
+  ASSERT_TRUE(parse.ok()) << parse.error;
+  const auto index = std::make_shared<ClosestWallIndex>(parse.plan);
+  const Se2 truth{Deg(30), {3, -2}};
+  std::vector<Eigen::Vector2d> walls_slam;
+  for (const Eigen::Vector2d& p : floorpose::testing::SampleWalls(parse.plan, 0.05))
+    walls_slam.push_back(truth.Inverse() * p);
+  MclTracker mcl({});
+  mcl.SetPlan(index);
+  int64_t t = 0;
+  const Pose2 wearer{truth.Inverse() * Eigen::Vector2d(2, 2), 0, 1.6};
+  mcl.Correct(wearer, t);
+  GlobalPlace right, turned;
+  right.T_plan_slam = truth;
+  turned.T_plan_slam = Se2{M_PI, {10, 7}} * truth;
+  ASSERT_THAT(mcl.OfferPlaces({right, turned}, walls_slam, t),
+              ::testing::HasSubstr("seeded with 2"));
+  for (int k = 0; k < 20 && !mcl.has_alignment(); ++k) {
+    t += 1000000000;
+    const PlanPoseEstimate e = mcl.Correct(wearer, t);
+    EXPECT_EQ(e.alignment_version, 0u);
+    EXPECT_EQ(e.reliability.flag, ReliabilityFlag::kUnreliable);
+    if (k > 0) {
+      EXPECT_THAT(e.reliability.reason, ::testing::HasSubstr("none yet at 50%"));
+    }
+    ASSERT_TRUE(mcl.UpdateDue(t, 1000)) << k;
+    MclUpdate u = mcl.PrepareUpdate(t);
+    ASSERT_TRUE(mcl.FinishUpdate(RunMclUpdate(std::move(u), walls_slam, *index, mcl.options()), t));
+    if (k == 0) {
+      // Both places hold about half, and the doubt of a start is still about a half.
+      EXPECT_FALSE(mcl.has_alignment()) << "a guess between two places is not published";
+      EXPECT_NEAR(mcl.belief().MassWithin(wearer.position, truth * wearer.position, 1.0), 0.5,
+                  0.15);
+    }
+  }
+  // Once published (as the walls lower the doubt and the split drifts), at least DEGRADED.
+  if (mcl.has_alignment()) {
+    EXPECT_GE(mcl.CurrentReliability().probability, 0.5);
+  }
+  // The wearer picks a wall: that place is published at once.
+  ASSERT_EQ(mcl.ApplyWallPick(RoomWalk::PickOn(truth, {10, 3}), t), "");
+  EXPECT_TRUE(mcl.has_alignment());
+}
+
 // A tracker without a belief, the wearer at plan point `at` at 20 s, seeded by a search
 // that found `other` and the truth on `walls`: the belief's mass within 0.7 m of each.
 struct Seeded {
