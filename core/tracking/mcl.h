@@ -151,7 +151,8 @@ class MclTracker {
   std::optional<int64_t> last_update_ns() const { return last_update_ns_; }
   MclUpdate PrepareUpdate(int64_t now_ns);
   // Takes an update's belief when no pick, flip, place or reset came since it was
-  // prepared; returns whether it did.
+  // prepared; returns whether it did. A search's seed publishes no place until its place
+  // is at least DEGRADED (publish.degraded).
   bool FinishUpdate(MclUpdateResult result, int64_t stamp_ns);
 
   // A search of the whole plan is due without a belief, once after every start (pick,
