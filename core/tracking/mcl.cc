@@ -179,6 +179,10 @@ Reliability MclTracker::CurrentReliability() const {
     }
     return r;
   }
+  return AssessAtWearer();
+}
+
+Reliability MclTracker::AssessAtWearer() const {
   return Assess(
       Summary(odometry_.position.value_or(Eigen::Vector2d::Zero()), alignment_.T_plan_slam),
       options_.publish);
@@ -298,12 +302,8 @@ bool MclTracker::FinishUpdate(MclUpdateResult result, int64_t stamp_ns) {
   alignment_.T_plan_slam = result.published;
   // A search's seed is published once its place is at least DEGRADED: before, the belief
   // is a guess among places, and a minimap that shows the wearer at one misleads.
-  if (alignment_.version == 0) {
-    const Eigen::Vector2d wearer = odometry_.position.value_or(Eigen::Vector2d::Zero());
-    if (Assess(Summary(wearer, result.published), options_.publish).probability <
-        options_.publish.degraded)
-      return true;
-  }
+  if (alignment_.version == 0 && AssessAtWearer().probability < options_.publish.degraded)
+    return true;
   alignment_.version = next_version_++;
   alignment_.source = AlignmentSource::kRegistration;
   alignment_.stamp_ns = stamp_ns;

@@ -174,6 +174,8 @@ class MclTracker {
   // nothing of the old belief's fit.
   void StartBelief(const Se2& published, AlignmentSource source, int64_t stamp_ns);
   BeliefSummary Summary(const Eigen::Vector2d& wearer_slam, const Se2& T) const;
+  // The alignment in use, assessed where the wearer is now.
+  Reliability AssessAtWearer() const;
   std::string MixPlaces(const std::vector<GlobalPlace>& places,
                         const std::vector<Eigen::Vector2d>& cloud_slam, int64_t stamp_ns);
   // The log-likelihood of the search's walls at each place, one window's worth
