@@ -16,9 +16,10 @@ TEST(SearchMemoryTest, KeepsAPositionPerQuarterMetreForTheWindow) {
   for (int i = 0; i <= 100; ++i) memory.AddPosition(i * kSecond, {0.1 * i, 0}, 60.0);
   const std::vector<Eigen::Vector2d> path = memory.PathSince(INT64_MIN);
   ASSERT_FALSE(path.empty());
-  for (size_t i = 1; i < path.size(); ++i) EXPECT_GE((path[i] - path[i - 1]).norm(), 0.25 - 1e-9);
-  EXPECT_GE(path.front().x(), 4.0 - 1e-9) << "older than 60 s before the last: dropped";
-  EXPECT_NEAR(path.back().x(), 9.9, 0.31);
+  // Every third is kept (0.3 m apart), from the first at 40 s or later.
+  for (size_t i = 1; i < path.size(); ++i) EXPECT_NEAR((path[i] - path[i - 1]).norm(), 0.3, 1e-9);
+  EXPECT_NEAR(path.front().x(), 4.2, 1e-9) << "older than 60 s before the last: dropped";
+  EXPECT_NEAR(path.back().x(), 9.9, 1e-9);
   // ...and by stamp: from 90 s on, and between 50 and 70 s.
   for (const Eigen::Vector2d& p : memory.PathSince(90 * kSecond)) EXPECT_GE(p.x(), 9.0 - 1e-9);
   for (const Eigen::Vector2d& p : memory.PathBetween(50 * kSecond, 70 * kSecond)) {
@@ -36,8 +37,9 @@ TEST(SearchMemoryTest, APositionThatIsNotFiniteIsNotKept) {
   EXPECT_TRUE(memory.PathSince(INT64_MIN).empty());
   memory.AddPosition(2 * kSecond, {1, 1}, 60.0);
   memory.AddPosition(3 * kSecond, {nan, nan}, 60.0);
-  ASSERT_EQ(memory.PathSince(INT64_MIN).size(), 1u);
-  EXPECT_TRUE(memory.PathSince(INT64_MIN).front().isApprox(Eigen::Vector2d(1, 1)));
+  const std::vector<Eigen::Vector2d> path = memory.PathSince(INT64_MIN);
+  ASSERT_EQ(path.size(), 1u);
+  EXPECT_TRUE(path.front().isApprox(Eigen::Vector2d(1, 1)));
 }
 
 TEST(SearchMemoryTest, TheSameWallsForTheSameAlignmentAreNoNewSearch) {
