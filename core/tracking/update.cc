@@ -58,13 +58,14 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
                  : std::vector<Eigen::Vector2d>{};
   const std::vector<double> prior = belief.Weights();
   const std::vector<double> nearest = NearestWallPoint(u.sight_slam, cloud);
+  // The walls new since the last update weigh the belief, at the window's new share of
+  // evidence: a wall counts as it comes in, not spread over the window's length.
+  const std::vector<Eigen::Vector2d>& weighed = predictive ? fresh : points;
   double fit = 0;
   for (size_t i = 0; i < belief.size(); ++i) {
     Sample& s = belief.samples()[i];
-    const double mll = options.measurement.MeanLogLikelihood(points, s.T_plan_slam, index, reach);
-    fit += prior[i] *
-           (predictive ? options.measurement.MeanLogLikelihood(fresh, s.T_plan_slam, index, reach)
-                       : mll);
+    const double mll = options.measurement.MeanLogLikelihood(weighed, s.T_plan_slam, index, reach);
+    fit += prior[i] * mll;
     const SightFit sight =
         SightLogLikelihood(options.measurement, u.sight_slam, nearest, s.T_plan_slam, index);
     s.log_weight += exponent * (mll + sight.Mean()) +
