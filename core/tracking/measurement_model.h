@@ -7,9 +7,9 @@
 //
 // The points of one window share the SLAM's drift and the plan's errors: they are worth a
 // handful of independent measurements, not hundreds. The window's log-likelihood is the
-// mean over its points times `independent_points` (a tempered likelihood); each window
-// is taken in the share of it that is new since the last update, so overlapping windows
-// do not count the same walls twice.
+// mean over its points times `independent_points` (a tempered likelihood); each update
+// takes the window's share that is new since the last (RunMclUpdate), on the walls new
+// since then, so overlapping windows do not count the same walls twice.
 #pragma once
 
 #include <Eigen/Core>
