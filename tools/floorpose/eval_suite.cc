@@ -179,6 +179,53 @@ std::string KidnapTable(const std::vector<EvalReport>& reports, const std::strin
   return md.str();
 }
 
+// Issue 43's figures after a loss of tracking (`relocalize`, a pick's runs or none), per
+// scenario that has losses: RELIABLE within 1 m again within kBackAfterLossS of the first
+// pose after each loss (of the losses followed that long or back before), the median and
+// slowest time to it, and RELIABLE poses more than 1 m off before it.
+std::string LossTable(const std::vector<EvalReport>& reports, const std::string& method,
+                      const std::vector<std::string>& scenarios) {
+  std::ostringstream md;
+  md.setf(std::ios::fixed);
+  md.precision(1);
+  md << "\nAfter a loss of tracking (" << method << "; times from the first pose after it):\n\n"
+     << "| scenario | runs | losses | followed " << static_cast<int>(kBackAfterLossS)
+     << " s or back before | back within 1 m and RELIABLE within "
+     << static_cast<int>(kBackAfterLossS)
+     << " s | seconds to back, median | slowest | RELIABLE poses > 1 m off before back "
+        "(losses) |\n|---|---|---|---|---|---|---|---|\n";
+  bool any = false;
+  auto row = [&](const std::string& name, const std::string& scenario) {
+    size_t runs = 0, losses = 0, timed = 0, back = 0, false_poses = 0, false_losses = 0;
+    std::vector<double> times;
+    for (const EvalReport& r : reports) {
+      if (r.method != method || (!scenario.empty() && r.scenario != scenario)) continue;
+      if (r.losses.empty()) continue;
+      ++runs;
+      for (const LossScore& l : r.losses) {
+        ++losses;
+        false_poses += l.false_reliable;
+        false_losses += l.false_reliable > 0;
+        if (!l.timed()) continue;
+        ++timed;
+        back += l.back_in_time();
+        times.push_back(l.back_s >= 0 ? l.back_s : std::numeric_limits<double>::infinity());
+      }
+    }
+    if (!losses) return;
+    any = true;
+    std::sort(times.begin(), times.end());
+    md << "| " << name << " | " << runs << " | " << losses << " | " << timed << " | " << back
+       << " (" << (timed ? 100.0 * back / timed : 0.0) << "%) | "
+       << (times.empty() ? "-" : Seconds(times[(times.size() - 1) / 2])) << " | "
+       << (times.empty() ? "-" : Seconds(times.back())) << " | " << false_poses << " ("
+       << false_losses << ") |\n";
+  };
+  for (const std::string& scenario : scenarios) row(scenario, scenario);
+  row("all", "");
+  return any ? md.str() : std::string();
+}
+
 int RunSuite(const SuiteOptions& o) {
   spdlog::set_level(spdlog::level::warn);  // thousands of registrations: only problems
   v1::FloorposedConfig base_config;
@@ -429,6 +476,7 @@ int RunSuite(const SuiteOptions& o) {
   }
   if (o.no_pick) md << PlacementTable(reports, first, o.scenarios);
   if (o.kidnap) md << KidnapTable(reports, first, o.scenarios);
+  md << LossTable(reports, first, o.scenarios);
   const auto curve = CalibrationCurve(predicted, within);
   md << "\nCalibration of the published probability (" << first << ", every pose):\n\n"
      << CalibrationTable(curve);

@@ -126,6 +126,11 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     Se2 T_plan_slam;  // the true alignment at this pose
   };
   std::optional<Latest> latest;  // the newest pose with ground truth
+  // Losses of tracking, as the tracker takes them: the stamp of the first pose after each.
+  const auto lost_after_ns = static_cast<int64_t>(config.tracking().motion().lost_after_s() * 1e9);
+  std::optional<int64_t> last_pose_ns;
+  bool said_lost = false;
+  std::vector<int64_t> resumed;
   for (const Input& in : inputs) {
     virtual_now = in.stamp_ns;
     if (session) session->Append(virtual_now, in.topic, in.envelope);
@@ -150,6 +155,14 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
         platform::DecodedPose pose;
         if (platform::DecodeHeadsetPose(in.envelope.payload, frame, config.limits(), &pose)
                 .empty()) {
+          if (pose.tracking == v1::HeadsetPose::TRACKING_LOST) {
+            said_lost = true;
+          } else {
+            if (last_pose_ns && (said_lost || pose.stamp_ns - *last_pose_ns > lost_after_ns))
+              resumed.push_back(pose.stamp_ns);
+            said_lost = false;
+          }
+          last_pose_ns = pose.stamp_ns;
           if (baseline == Baseline::kBestFit) slam_poses[pose.stamp_ns] = pose.pose_slam;
           if (auto it = truth.find(pose.stamp_ns); it != truth.end())
             latest = {pose.pose_slam.position,
@@ -318,6 +331,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
         static_cast<size_t>(std::count_if(scored.begin(), recovered, [](const EvalPose& p) {
           return p.reliable && p.error_m > 1.0;
         }));
+    report->losses = ScoreLosses(scored, resumed);
     const std::vector<EvalPose>& t = report->track;
     report->pick_error_m = t.front().error_m;
     // The first pose under a registered alignment (turning the pick onto the walls'
@@ -347,6 +361,30 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
   return true;
 }
 
+std::vector<LossScore> ScoreLosses(const std::vector<EvalPose>& track,
+                                   const std::vector<int64_t>& resumed) {
+  std::vector<LossScore> out;
+  if (track.empty()) return out;
+  const auto seconds = [](int64_t ns) { return static_cast<double>(ns) * 1e-9; };
+  for (size_t k = 0; k < resumed.size(); ++k) {
+    const int64_t from = resumed[k];
+    const int64_t to = k + 1 < resumed.size() ? resumed[k + 1] : INT64_MAX;
+    LossScore loss;
+    loss.resumed_s = seconds(from - track.front().stamp_ns);
+    for (const EvalPose& p : track) {
+      if (p.stamp_ns < from || p.stamp_ns >= to) continue;
+      loss.followed_s = seconds(p.stamp_ns - from);
+      if (loss.back_s >= 0 || !p.reliable) continue;
+      if (p.error_m <= 1.0)
+        loss.back_s = seconds(p.stamp_ns - from);
+      else
+        ++loss.false_reliable;
+    }
+    out.push_back(loss);
+  }
+  return out;
+}
+
 const char* SimulatedSplit(uint64_t seed) { return seed >= 11 ? "development" : "validation"; }
 
 const char* CarmenSplit(const std::string& log) {
@@ -359,6 +397,12 @@ const char* IlcSplit(const std::string& floor) {
   for (const char* dev : {"B1", "F1", "F2"})
     if (floor == dev) return "development";
   return "validation";
+}
+
+size_t FalseAfterLosses(const EvalReport& r) {
+  size_t n = 0;
+  for (const LossScore& l : r.losses) n += l.false_reliable;
+  return n;
 }
 
 std::string ToJson(const EvalReport& r) {
@@ -395,6 +439,12 @@ std::string ToJson(const EvalReport& r) {
       {"time_to_unreliable_s", r.time_to_unreliable_s},
       {"time_to_recovered_s", r.time_to_recovered_s},
       {"false_reliable_before_recovered", r.false_reliable_before_recovered},
+      {"losses", r.losses.size()},
+      {"losses_timed", std::count_if(r.losses.begin(), r.losses.end(),
+                                     [](const LossScore& l) { return l.timed(); })},
+      {"losses_back_in_time", std::count_if(r.losses.begin(), r.losses.end(),
+                                            [](const LossScore& l) { return l.back_in_time(); })},
+      {"false_reliable_after_losses", FalseAfterLosses(r)},
       {"global_searches", r.global_searches},
       {"wrong_floor_poses", r.wrong_floor_poses},
       {"floor_changes", r.floor_changes}};
@@ -429,6 +479,10 @@ std::string ToText(const EvalReport& r) {
     << "  first reliable within 1 m     " << r.time_to_recovered_s << " s (-1: none)\n"
     << "  ...and before it              " << r.false_reliable_before_recovered
     << " poses reliable but over 1 m off\n";
+  for (const LossScore& l : r.losses)
+    s << "  loss of tracking, resumed at " << l.resumed_s << " s: reliable within 1 m " << l.back_s
+      << " s later (-1: not in the " << l.followed_s << " s followed), " << l.false_reliable
+      << " poses reliable but over 1 m off before\n";
   if (r.global_searches) s << "  whole-plan searches           " << r.global_searches << "\n";
   if (r.floor_changes || r.wrong_floor_poses)
     s << "  floor changes                 " << r.floor_changes << ", " << r.wrong_floor_poses

@@ -46,6 +46,28 @@ const char* SimulatedSplit(uint64_t seed);
 const char* CarmenSplit(const std::string& log);
 const char* IlcSplit(const std::string& floor);
 
+// The seconds within which a loss of tracking should be RELIABLE within 1 m again (issue
+// 43's target for `relocalize`).
+constexpr double kBackAfterLossS = 20.0;
+
+// The scored poses after one loss of tracking: a pose after more than
+// tracking.motion.lost_after_s of none, or after one saying TRACKING_LOST, as the tracker
+// takes it. Up to the next loss or the end of the walk.
+struct LossScore {
+  double resumed_s = 0;       // the first pose after the loss, from the first scored pose
+  double back_s = -1;         // from it to the first RELIABLE pose within 1 m (-1: none)
+  double followed_s = 0;      // scored walk after it (to the last pose before the next loss)
+  size_t false_reliable = 0;  // RELIABLE poses more than 1 m off before back
+  // Followed long enough to tell: back within kBackAfterLossS, or walked that long.
+  bool back_in_time() const { return back_s >= 0 && back_s <= kBackAfterLossS; }
+  bool timed() const { return back_in_time() || followed_s >= kBackAfterLossS; }
+};
+
+// Scores the track after each loss: `resumed` holds the stamp of the first pose after each,
+// in order.
+std::vector<LossScore> ScoreLosses(const std::vector<EvalPose>& track,
+                                   const std::vector<int64_t>& resumed);
+
 struct EvalReport {
   std::string method;
   std::string scenario, plan_id;
@@ -81,6 +103,10 @@ struct EvalReport {
   // The poses flagged RELIABLE while more than 1 m off before that first RELIABLE pose
   // within 1 m (all of them when there is none): a wrong place trusted, not drift.
   size_t false_reliable_before_recovered = 0;
+  // Every loss of tracking (the SLAM frame may have jumped), in order; issue 43 asks each
+  // to be RELIABLE within 1 m again within kBackAfterLossS with no RELIABLE pose more
+  // than 1 m off before.
+  std::vector<LossScore> losses;
   size_t global_searches = 0;  // whole-plan searches run (placements and checks)
   // A .floors plan set: floors the daemon changed to, and poses published with another
   // floor than the truth's.
@@ -104,6 +130,9 @@ bool Evaluate(const v1::FloorposedConfig& config, const std::string& recording, 
 
 // The q-quantile (0..1) of v, nearest rank; 0 for an empty v.
 double Percentile(std::vector<double> v, double q);
+
+// The poses RELIABLE more than 1 m off after the report's losses, before each was back.
+size_t FalseAfterLosses(const EvalReport& report);
 
 // The report as one JSON object (the keys of the issue) and as readable text.
 std::string ToJson(const EvalReport& report);
