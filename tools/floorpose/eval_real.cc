@@ -128,8 +128,7 @@ bool EvaluateCarmen(const v1::FloorposedConfig& base, const fs::path& recordings
 std::string CarmenRow(const CarmenRun& r) {
   const EvalReport& e = r.report;
   const double reliable = e.reliable_fraction * static_cast<double>(e.poses);
-  const size_t back = static_cast<size_t>(std::count_if(
-      e.losses.begin(), e.losses.end(), [](const LossScore& l) { return l.back_in_time(); }));
+  const size_t back = CountLosses(e.losses).back;
   char text[512];
   std::snprintf(text, sizeof(text),
                 "| %s | %s | %.0f m, %.0f s%s | %.3f | %.3f | %.2f | %zu | %s | %s | %zu | %zu | "

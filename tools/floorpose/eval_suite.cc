@@ -202,14 +202,15 @@ std::string LossTable(const std::vector<EvalReport>& reports, const std::string&
       if (r.method != method || (!scenario.empty() && r.scenario != scenario)) continue;
       if (r.losses.empty()) continue;
       ++runs;
+      losses += r.losses.size();
+      const LossCounts c = CountLosses(r.losses);
+      timed += c.timed;
+      back += c.back;
+      false_poses += c.false_reliable;
       for (const LossScore& l : r.losses) {
-        ++losses;
-        false_poses += l.false_reliable;
         false_losses += l.false_reliable > 0;
-        if (!l.timed()) continue;
-        ++timed;
-        back += l.back_in_time();
-        times.push_back(l.back_s >= 0 ? l.back_s : std::numeric_limits<double>::infinity());
+        if (l.timed())
+          times.push_back(l.back_s >= 0 ? l.back_s : std::numeric_limits<double>::infinity());
       }
     }
     if (!losses) return;

@@ -399,14 +399,19 @@ const char* IlcSplit(const std::string& floor) {
   return "validation";
 }
 
-size_t FalseAfterLosses(const EvalReport& r) {
-  size_t n = 0;
-  for (const LossScore& l : r.losses) n += l.false_reliable;
-  return n;
+LossCounts CountLosses(const std::vector<LossScore>& losses) {
+  LossCounts c;
+  for (const LossScore& l : losses) {
+    c.timed += l.timed();
+    c.back += l.back_in_time();
+    c.false_reliable += l.false_reliable;
+  }
+  return c;
 }
 
 std::string ToJson(const EvalReport& r) {
   // Through the library, so that any plan name is valid JSON and a NaN is null.
+  const LossCounts losses = CountLosses(r.losses);
   const nlohmann::ordered_json j = {
       {"method", r.method},
       {"scenario", r.scenario},
@@ -440,11 +445,9 @@ std::string ToJson(const EvalReport& r) {
       {"time_to_recovered_s", r.time_to_recovered_s},
       {"false_reliable_before_recovered", r.false_reliable_before_recovered},
       {"losses", r.losses.size()},
-      {"losses_timed", std::count_if(r.losses.begin(), r.losses.end(),
-                                     [](const LossScore& l) { return l.timed(); })},
-      {"losses_back_in_time", std::count_if(r.losses.begin(), r.losses.end(),
-                                            [](const LossScore& l) { return l.back_in_time(); })},
-      {"false_reliable_after_losses", FalseAfterLosses(r)},
+      {"losses_timed", losses.timed},
+      {"losses_back_in_time", losses.back},
+      {"false_reliable_after_losses", losses.false_reliable},
       {"global_searches", r.global_searches},
       {"wrong_floor_poses", r.wrong_floor_poses},
       {"floor_changes", r.floor_changes}};

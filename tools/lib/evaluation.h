@@ -131,8 +131,12 @@ bool Evaluate(const v1::FloorposedConfig& config, const std::string& recording, 
 // The q-quantile (0..1) of v, nearest rank; 0 for an empty v.
 double Percentile(std::vector<double> v, double q);
 
-// The poses RELIABLE more than 1 m off after the report's losses, before each was back.
-size_t FalseAfterLosses(const EvalReport& report);
+// A run's losses of tracking counted: followed long enough to tell (LossScore::timed),
+// back within kBackAfterLossS, and the poses RELIABLE more than 1 m off before back.
+struct LossCounts {
+  size_t timed = 0, back = 0, false_reliable = 0;
+};
+LossCounts CountLosses(const std::vector<LossScore>& losses);
 
 // The report as one JSON object (the keys of the issue) and as readable text.
 std::string ToJson(const EvalReport& report);
