@@ -105,6 +105,9 @@ ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
       for (size_t j = 0; j < sorted.size(); ++j) candidates_[cell_begin_[i] + j] = sorted[j].second;
     }
   }
+  if (options_.grid_cell_m > 0)
+    grid_ = DistanceGrid(plan_.segments, plan_.min, plan_.max, options_.grid_cell_m,
+                         std::min(kGridNearM, options_.max_distance_m), kMaxCells);
 }
 
 std::optional<ClosestWall> ClosestWallIndex::Query(const Eigen::Vector2d& p) const {
@@ -182,7 +185,7 @@ bool ClosestWallIndex::StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Ve
 
 size_t ClosestWallIndex::MemoryBytes() const {
   return cell_begin_.size() * sizeof(uint32_t) + candidates_.size() * sizeof(uint32_t) +
-         plan_.segments.size() * (sizeof(Segment) + sizeof(SegmentData));
+         plan_.segments.size() * (sizeof(Segment) + sizeof(SegmentData)) + grid_.MemoryBytes();
 }
 
 std::optional<ClosestWall> BruteForceClosestWall(const FloorPlan& plan, const Eigen::Vector2d& p,

@@ -11,9 +11,11 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <vector>
 
+#include "core/distance_grid.h"
 #include "core/floor_plan.h"
 
 namespace floorpose {
@@ -33,13 +35,27 @@ class ClosestWallIndex {
     // plan's pixel edges), at 8 bytes a cell.
     double cell_m = 0.1;
     double max_distance_m = 3.0;  // beyond this, queries return nothing
+    // The distance grid's cells (Distance; 2 bytes a cell), 0 for none.
+    double grid_cell_m = 0.05;
   };
+  // How near a wall the distance grid answers: a wall point 1 m off its wall is
+  // clutter to the measurement model (e^-50 of the hit density at its 0.1 m noise).
+  static constexpr double kGridNearM = 1.0;
 
   ClosestWallIndex(const FloorPlan& plan, Options options);
   explicit ClosestWallIndex(const FloorPlan& plan) : ClosestWallIndex(plan, Options{}) {}
 
   // The closest wall within max_distance_m, or nothing.
   std::optional<ClosestWall> Query(const Eigen::Vector2d& p) const;
+
+  // The distance from p to the closest wall: from the distance grid within kGridNearM of a
+  // wall (within a few millimetres, see core/distance_grid.h), otherwise as Query
+  // answers it; infinity beyond max_distance_m.
+  double Distance(const Eigen::Vector2d& p) const {
+    if (const std::optional<double> d = grid_.Near(p)) return *d;
+    const std::optional<ClosestWall> hit = Query(p);
+    return hit ? hit->distance : std::numeric_limits<double>::infinity();
+  }
 
   // Whether the step p -> q properly crosses a wall (touching does not count), from the
   // candidate lists: exact, in pieces no longer than a cell (any wall across a piece is
@@ -80,6 +96,7 @@ class ClosestWallIndex {
   std::vector<uint32_t> cell_begin_;  // CSR layout: candidates of cell i are
   std::vector<uint32_t> candidates_;  // candidates_[cell_begin_[i] .. cell_begin_[i+1]),
                                       // nearest the cell's centre first
+  DistanceGrid grid_;
 };
 
 // The same answer by trying every segment: the oracle for tests and the baseline for

@@ -34,6 +34,7 @@ GlobalSearch::GlobalSearch(const FloorPlan& plan, GlobalSearchOptions options) :
   const double sigma = std::max(options_.sigma_m, 0.5 * grid_.cell_m);
   ClosestWallIndex::Options index_options;
   index_options.max_distance_m = 4.0 * sigma;
+  index_options.grid_cell_m = 0;  // asked once a cell
   const ClosestWallIndex index(plan, index_options);
 
   pad_ = 1 << (options_.depth - 1);

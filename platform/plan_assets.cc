@@ -42,7 +42,8 @@ double PlanGridScale(const FloorPlan& plan, const v1::FloorposedConfig& c) {
   const double bytes =
       extent.x() * extent.y() *
       (per_m2(20, c.routes().cell_m()) + per_m2(8, RoomOptions{}.cell_m) +
-       per_m2(8, c.explored().cell_m()) + per_m2(8, ClosestWallIndex::Options{}.cell_m));
+       per_m2(8, c.explored().cell_m()) + per_m2(8, ClosestWallIndex::Options{}.cell_m) +
+       per_m2(2, ClosestWallIndex::Options{}.grid_cell_m));
   const double budget = static_cast<double>(c.limits().max_plan_memory_mb()) * (1 << 20);
   return std::max(1.0, std::sqrt(bytes / budget));
 }
@@ -96,12 +97,16 @@ PlanAssets BuildPlan(const v1::FloorposedConfig& config, const std::function<int
         file, scale, config.limits().max_plan_memory_mb());
   ClosestWallIndex::Options index_options;
   index_options.cell_m *= scale;
+  index_options.grid_cell_m *= scale;
   index_options.max_distance_m = std::max(3.0, config.icp().max_correspondence_m());
+  const int64_t t_index = now_ns();
   a.index = std::make_shared<const ClosestWallIndex>(parsed.plan, index_options);
-  spdlog::info("floor plan {}: {} segments ({} dropped), {:.1f} x {:.1f} m, index {:.1f} MB", file,
-               parsed.plan.segments.size(), parsed.dropped_segments,
-               parsed.plan.max.x() - parsed.plan.min.x(), parsed.plan.max.y() - parsed.plan.min.y(),
-               static_cast<double>(a.index->MemoryBytes()) / 1e6);
+  spdlog::info(
+      "floor plan {}: {} segments ({} dropped), {:.1f} x {:.1f} m, index {:.1f} MB in {:.0f} ms",
+      file, parsed.plan.segments.size(), parsed.dropped_segments,
+      parsed.plan.max.x() - parsed.plan.min.x(), parsed.plan.max.y() - parsed.plan.min.y(),
+      static_cast<double>(a.index->MemoryBytes()) / 1e6,
+      static_cast<double>(now_ns() - t_index) * 1e-6);
   if (!parsed.frame.empty()) spdlog::info("floor plan {}: {}", file, parsed.frame);
   {
     // Up to 12 places while they score 98% of the best (a hall of repeated bays).

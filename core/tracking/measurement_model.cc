@@ -25,8 +25,8 @@ double MeasurementModel::MeanLogLikelihood(const std::vector<Eigen::Vector2d>& p
   const double far = PointLogLikelihood(2 * reach_m, reach_m);
   double sum = 0;
   for (const Eigen::Vector2d& p : points_slam) {
-    const auto hit = index.Query(R * p + T.t);
-    sum += hit ? PointLogLikelihood(hit->distance, reach_m) : far;
+    const double d = index.Distance(R * p + T.t);
+    sum += d <= reach_m ? PointLogLikelihood(d, reach_m) : far;
   }
   return sum / static_cast<double>(points_slam.size());
 }
@@ -48,8 +48,7 @@ SightFit SightLogLikelihood(const MeasurementModel& model,
   const double missed = std::log(model.clutter), seen = std::log1p(-model.clutter);
   SightFit fit;
   for (size_t i = 0; i < positions_slam.size(); ++i) {
-    const auto hit = index.Query(T * positions_slam[i]);
-    const double plan = std::min(hit ? hit->distance : kSightM, kSightM);
+    const double plan = std::min(index.Distance(T * positions_slam[i]), kSightM);
     if (plan < kBodyM) continue;  // a walk through a plan line: the motion model's to price
     const double mesh = std::min(nearest_point[i], kSightM);
     fit.log_likelihood += std::abs(mesh - plan) > kSeenMarginM ? missed : seen;

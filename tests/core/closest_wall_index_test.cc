@@ -143,6 +143,49 @@ INSTANTIATE_TEST_SUITE_P(Grids, ClosestWallIndexRandomTest,
                                   cm(c.param.max_distance_m) + "cm";
                          });
 
+// Distance reads the distance grid near the walls and Query beyond: within the grid's
+// interpolation error of the oracle (core/distance_grid.h) near a wall, exact farther out,
+// infinite beyond max_distance_m.
+TEST(ClosestWallIndexTest, DistanceAgreesWithBruteForce) {
+  ClosestWallIndex::Options options;
+  const double h = options.grid_cell_m, near = ClosestWallIndex::kGridNearM;
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    const FloorPlan plan = RandomPlan(seed, 10 + 25 * static_cast<int>(seed));
+    const ClosestWallIndex index(plan, options);
+    SplitMix64 rng(300 + seed);
+    const Eigen::Vector2d lo = plan.min.array() - 4.0, hi = plan.max.array() + 4.0;
+    int on_grid = 0, beyond = 0;
+    double worst_on_wall = 0;
+    for (int i = 0; i < 20000; ++i) {
+      Eigen::Vector2d q = RandomVector2(rng, lo, hi);
+      if (i % 4 == 0) {  // a quarter on a wall or within 20 cm of one
+        const Segment& s = plan.segments[rng.Next() % plan.segments.size()];
+        q = s.a + rng.Uniform() * (s.b - s.a) + RandomVector2(rng, {-0.1, -0.1}, {0.1, 0.1});
+      }
+      const auto want = BruteForceClosestWall(plan, q, options.max_distance_m);
+      const double got = index.Distance(q);
+      if (!want) {
+        EXPECT_EQ(got, std::numeric_limits<double>::infinity()) << "(" << q.transpose() << ")";
+        ++beyond;
+        continue;
+      }
+      const double d = want->distance;
+      if (d < near) {
+        // Interpolating d^2 errs by at most h^2 / 2 at a segment's end, and by its slope
+        // (2 d) times h where two walls' distances meet.
+        EXPECT_NEAR(got * got, d * d, h * h / 2 + 2 * d * h) << "(" << q.transpose() << ")";
+        if (d < 0.2) worst_on_wall = std::max(worst_on_wall, std::abs(got - d));
+        ++on_grid;
+      } else if (d > near + 2 * h) {
+        EXPECT_NEAR(got, d, 1e-9) << "(" << q.transpose() << ")";
+      }
+    }
+    EXPECT_LT(worst_on_wall, 0.75 * h) << "seed " << seed;
+    EXPECT_GT(on_grid, 5000);
+    EXPECT_GT(beyond, 500);
+  }
+}
+
 TEST(ClosestWallIndexTest, SingleHorizontalSegment) {
   // Flat bounds (min.y == max.y) must still give a usable grid.
   const auto parse = MakeFloorPlan("one", {{{0, 0}, {5, 0}}});
