@@ -19,7 +19,7 @@ struct Sample {
 };
 
 struct SampleBounds {
-  size_t min_samples = 200;
+  size_t min_samples = 1000;
   size_t max_samples = 3000;
   // KLD-sampling: the error bound and the histogram its count is taken over (the wearer's
   // plan position and heading, at these bins).

@@ -83,7 +83,7 @@ TEST(ConfigTest, ValuesAreParsedAndConverted) {
       plan_path: "/srv/plans/floor1.geojson"
       walls { density_per_m2: 80 seed: 9 }
       icp { max_iterations: 30 levels: 1 }
-      tracking { samples { max_samples: 800 } }
+      tracking { samples { max_samples: 1500 } }
   )",
                           &c, &error))
       << error;
@@ -92,7 +92,7 @@ TEST(ConfigTest, ValuesAreParsedAndConverted) {
   EXPECT_EQ(ToWallExtractionOptions(c).seed, 9u);
   EXPECT_EQ(ToMclOptions(c).icp.max_iterations, 30u);
   EXPECT_EQ(ToMclOptions(c).icp.levels, 1u);
-  EXPECT_EQ(ToMclOptions(c).samples.max_samples, 800u);
+  EXPECT_EQ(ToMclOptions(c).samples.max_samples, 1500u);
   EXPECT_EQ(c.walls().max_edge_m(), 10.0);  // untouched fields keep their defaults
 }
 
