@@ -181,6 +181,7 @@ v1::FloorposedConfig MakeConfig() {
   config.mutable_limits()->set_max_wall_points(50000);
   // Updates in smaller windows and beliefs: the same code, at a tenth of the cost.
   config.mutable_walls()->set_window_max_points(1000);
+  config.mutable_tracking()->mutable_samples()->set_min_samples(100);
   config.mutable_tracking()->mutable_samples()->set_max_samples(300);
   return config;
 }

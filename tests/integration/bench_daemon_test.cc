@@ -65,7 +65,7 @@ TEST(BenchDaemonTest, TheDaemonRunsTheConfigurationGiven) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   const std::string config = (dir / "mcl.conf").string();
-  std::ofstream(config) << "tracking { samples { max_samples: 400 } }\n";
+  std::ofstream(config) << "tracking { samples { min_samples: 200 max_samples: 400 } }\n";
   const std::string out = (dir / "out.json").string();
   tools::ChildProcess bench({FLOORPOSE_PATH, "bench", "daemon", "--minutes", "1", "--speed", "20",
                              "--domain", std::to_string(testing::UniqueDomain()), "--config",
