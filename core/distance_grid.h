@@ -33,8 +33,6 @@ class DistanceGrid {
   // about p, when all four are within near_m of a wall; otherwise nothing.
   std::optional<double> Near(const Eigen::Vector2d& p) const;
 
-  double near_m() const { return near_m_; }
-  const GridGeometry& geometry() const { return grid_; }
   size_t MemoryBytes() const { return d2_.size() * sizeof(uint16_t); }
 
  private:
