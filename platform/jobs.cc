@@ -57,7 +57,11 @@ std::optional<Job> JobScheduler::TakeDue(tracking::MclTracker& tracker, WallStor
                     window_s > 0 ? now - static_cast<int64_t>(window_s * 1e9) : INT64_MIN);
   };
   if (global && tracker.SearchDue(now, store.points())) {
-    // Where on the whole plan do the walls fit: to seed the belief, or to reseed it.
+    // Where on the whole plan do the walls fit: to seed the belief, or to reseed it. A
+    // look that finds fewer than search_min_points in the window counts as a search: the
+    // next comes a search interval later and runs on that interval's walls too. (Looking
+    // again as soon as the window holds the least places the wearer sooner, and more often
+    // wrongly: docs/evaluation.md, Recovery.)
     tracker.MarkSearchStarted(now);
     const int64_t from = since(options.search_window_s);
     Job job;

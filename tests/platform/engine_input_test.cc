@@ -275,6 +275,40 @@ TEST_F(EngineInputTest, TheSearchWaitsForNewWalls) {
   ASSERT_TRUE(second && second->global);
 }
 
+// A search is due, but the walls of its window are too few (the store's are older): the
+// look counts as a search, and the next comes a search interval later, on the walls of
+// that interval too (docs/evaluation.md, Recovery).
+TEST_F(EngineInputTest, ALookAtTooFewWallsCountsAsASearch) {
+  config_.set_plan_path(Write("small.txt", "4\n0 0 3 0\n3 0 3 3\n3 3 0 3\n0 3 0 0\n"));
+  Start(/*with_plan=*/false);
+  const int64_t s = 1'000'000'000;
+  engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::ADDED, 1 * s, 9.0)));
+  const tracking::MclOptions& options = engine_->tracker().options();
+  ASSERT_GE(engine_->store().points(), options.search_min_points);
+  // The wall is still in the store, but older than the search's window.
+  const int64_t later = static_cast<int64_t>((options.search_window_s + 2) * 1e9);
+  clock_ns_ = later;
+  engine_->OnHeadsetPose(Wrap(Pose(later)));
+  EXPECT_FALSE(engine_->TakeDueJob());
+  // Scanned again: no search within the interval (poses 0.3 s apart: no loss of
+  // tracking)...
+  const int64_t rescan = later + 300'000'000;
+  const int64_t interval_end =
+      later + static_cast<int64_t>(options.recovery.search_interval_s * 1e9);
+  engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::UPDATED, rescan, 9.0)));
+  for (int64_t t = rescan; t < interval_end - 100'000'000; t += 300'000'000) {
+    engine_->OnHeadsetPose(Wrap(Pose(t)));
+    EXPECT_FALSE(engine_->TakeDueJob()) << static_cast<double>(t - later) * 1e-9 << " s";
+  }
+  // ...and one once it is over.
+  clock_ns_ = interval_end + 100'000'000;
+  engine_->OnHeadsetPose(Wrap(Pose(clock_ns_)));
+  auto job = engine_->TakeDueJob();
+  ASSERT_TRUE(job);
+  EXPECT_TRUE(job->global);
+  EXPECT_GE(job->cloud.size(), options.search_min_points);
+}
+
 // An update is due, but the walls of its window are too few (the wearer's walls were
 // scanned long ago): no job, and the next one is tried as soon as new walls come, not a
 // whole interval later.
