@@ -82,6 +82,9 @@ class EngineInputTest : public testing::TempDirTest {
     return pick;
   }
   const v1::DaemonStatus::Counters& c() const { return engine_->counters(); }
+  // A 3 x 3 m room, where a 9 m Wall() fits nowhere: the belief stays empty, and a search
+  // is due every recovery.search_interval_s.
+  static constexpr const char* kSmallRoom = "4\n0 0 3 0\n3 0 3 3\n3 3 0 3\n0 3 0 0\n";
 
   v1::FloorposedConfig config_;
   std::unique_ptr<Engine> engine_;
@@ -248,9 +251,7 @@ TEST_F(EngineInputTest, AWheeledDeviceMovesTheBeliefWithTheWheelsDrift) {
 // The whole-plan search runs on new walls only: a search on the walls of the last one
 // finds the same places again (issue 7).
 TEST_F(EngineInputTest, TheSearchWaitsForNewWalls) {
-  // A 3 x 3 m room, where a 9 m wall fits nowhere: the belief stays empty, and a search
-  // is due every recovery.search_interval_s.
-  config_.set_plan_path(Write("small.txt", "4\n0 0 3 0\n3 0 3 3\n3 3 0 3\n0 3 0 0\n"));
+  config_.set_plan_path(Write("small.txt", kSmallRoom));
   Start(/*with_plan=*/false);
   const int64_t s = 1'000'000'000;
   engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::ADDED, 1 * s, 9.0)));
@@ -279,7 +280,7 @@ TEST_F(EngineInputTest, TheSearchWaitsForNewWalls) {
 // look counts as a search, and the next comes a search interval later, on the walls of
 // that interval too (docs/evaluation.md, Recovery).
 TEST_F(EngineInputTest, ALookAtTooFewWallsCountsAsASearch) {
-  config_.set_plan_path(Write("small.txt", "4\n0 0 3 0\n3 0 3 3\n3 3 0 3\n0 3 0 0\n"));
+  config_.set_plan_path(Write("small.txt", kSmallRoom));
   Start(/*with_plan=*/false);
   const int64_t s = 1'000'000'000;
   engine_->OnMeshDelta(Wrap(Wall(1, v1::MeshDelta::ADDED, 1 * s, 9.0)));
