@@ -164,8 +164,8 @@ class MclTracker {
   bool SearchDue(int64_t now_ns, size_t window_points) const;
   void MarkSearchStarted(int64_t now_ns) { last_search_ns_ = now_ns; }
   // Seeds the belief with a search's refined places (RefinePlaces' order), or mixes them
-  // into it as recovery does; returns what it did. `cloud_slam`, the walls the search ran
-  // on, weigh the places against one another (PlaceLogWeights).
+  // into it as recovery does (offer.cc); returns what it did. `cloud_slam`, the walls the search
+  // ran on, weigh the places against one another (PlaceLogWeights).
   std::string OfferPlaces(const std::vector<GlobalPlace>& places,
                           const std::vector<Eigen::Vector2d>& cloud_slam, int64_t stamp_ns);
 
