@@ -48,9 +48,9 @@ std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places,
   const Eigen::Vector2d wearer = odometry_.position.value_or(Eigen::Vector2d::Zero());
   const Eigen::Matrix3d P = PlaceCovariance(options_.place_sigma_m, options_.place_sigma_rad);
   const size_t k = fit.size();
+  const std::vector<double> log_weights = PlaceLogWeights(fit, cloud_slam);
   if (belief_.empty()) {
     const size_t n = std::max<size_t>(1, options_.samples.max_samples / k);
-    const std::vector<double> log_weights = PlaceLogWeights(fit, cloud_slam);
     for (size_t i = 0; i < k; ++i)
       belief_.AddGaussian(fit[i]->T_plan_slam, P, fit[i]->T_plan_slam * wearer, n, log_weights[i],
                           rng_);
@@ -66,7 +66,6 @@ std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places,
   // less what the place it leads with takes of it where the search found that too: the
   // search's walls and the walk weigh the places found against one another.
   const Mode lead = belief_.LeadingMode(wearer, options_.publish.within_m, kPlaceRad);
-  const std::vector<double> log_weights = PlaceLogWeights(fit, cloud_slam);
   std::vector<Se2> fresh;
   std::vector<double> fresh_log_weights;
   double all = 0, of_fresh = 0;
