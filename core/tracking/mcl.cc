@@ -328,12 +328,9 @@ bool MclTracker::SearchDue(int64_t now_ns, size_t window_points) const {
     // as soon as the doubt since the loss asks.
     if (!recovery_.relocalized() || start_.settled) return true;
     const double since_start_s = static_cast<double>(now_ns - start_.stamp_ns) * 1e-9;
-    return recovery_.SearchDue(std::min(since_s, since_start_s), recovery_.Elsewhere());
+    return recovery_.SearchDue(std::min(since_s, since_start_s));
   }
-  // Once a place is published, as often as it may be wrong: the wearer elsewhere, or at
-  // another of the belief's places.
-  return recovery_.SearchDue(
-      since_s, has_alignment() ? 1 - AssessAtWearer().probability : recovery_.Elsewhere());
+  return recovery_.SearchDue(since_s);
 }
 
 }  // namespace floorpose::tracking

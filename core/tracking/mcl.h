@@ -30,8 +30,8 @@ namespace floorpose::tracking {
 
 // Samples within publish.within_m at the wearer and this in heading are one place.
 constexpr double kPlaceRad = 10.0 * M_PI / 180;
-// The share of the belief the place ICP reaches from the leading one is offered
-// (RunMclUpdate).
+// The least share of the belief a place offered to it gets: a search's place the belief
+// does not hold, or the place ICP reaches from the leading one (RunMclUpdate).
 constexpr double kOfferShare = 0.05;
 
 struct MclOptions {
@@ -157,8 +157,7 @@ class MclTracker {
 
   // A search of the whole plan is due without a belief, once after every start (pick,
   // flip, place, restore, relocalization) to check it, and then at a rate in proportion to
-  // the chance that the published place is wrong, or before one is published that the
-  // wearer is elsewhere (RecoveryOptions::search_share); at most every
+  // the chance that the wearer is elsewhere (RecoveryOptions::search_share); at most every
   // search_interval_s. A relocalized frame is checked once the walls have settled the
   // belief in it, or as soon as the doubt since the loss asks: a place a search finds is
   // drawn compact, and outweighs a spread belief of the same fit on its spread alone.

@@ -62,14 +62,9 @@ std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places,
     last_update_ns_ = stamp_ns;
     return "seeded with " + std::to_string(k) + " place(s)";
   }
-  // Recovery: the chance that the wearer is at none of the belief's places moves to the
-  // places found, save the chance that they are wrong too (start_doubt, as for the places
-  // of a search that seeds the belief), and no more: the belief's places carry the whole
-  // walk's evidence, a search's only its window's. The places the belief does not hold
-  // get that mass, less what the place it leads with takes of it where the search found
-  // that too: the search's walls and the walk weigh the places found against one another.
-  // However little it is, each is drawn with min_samples / 4 samples, for the walls after
-  // the search to raise.
+  // Recovery: the places the belief does not hold get the mass the belief may be missing,
+  // less what the place it leads with takes of it where the search found that too: the
+  // search's walls and the walk weigh the places found against one another.
   const Mode lead = belief_.LeadingMode(wearer, options_.publish.within_m, kPlaceRad);
   std::vector<Se2> fresh;
   std::vector<double> fresh_log_weights;
@@ -84,18 +79,8 @@ std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places,
     of_fresh += std::exp(log_weights[i]);
   }
   if (fresh.empty()) return "the belief holds every place found";
-  const double elsewhere = recovery_.Elsewhere();
-  double found = elsewhere * (1 - options_.recovery.start_doubt);
-  double share = found / (1 - elsewhere + found) * of_fresh / all;
-  if (recovery_.relocalized() && !recovery_.searched()) {
-    // The check of a relocalized frame: the loss is not doubted (Recovery::Relocalized), so
-    // "elsewhere" does not hold the chance that the frame jumped beyond the relocalization
-    // spread; the places the check finds beyond the belief take kOfferShare of it.
-    share = std::max(kOfferShare, elsewhere) * of_fresh / all;
-    found = 0;
-  }
+  const double share = std::max(kOfferShare, recovery_.Elsewhere()) * of_fresh / all;
   belief_.Mix(fresh, fresh_log_weights, P, wearer, share, options_.samples.min_samples / 4, rng_);
-  recovery_.Found(found);
   ++belief_version_;  // an update running on the belief without them is void
   return "mixed in " + std::to_string(fresh.size()) + " place(s) at " +
          std::to_string(static_cast<int>(100 * share)) + "%";

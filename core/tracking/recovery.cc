@@ -73,16 +73,11 @@ void Recovery::Observe(double mean_log_likelihood, double exponent, double dt_s)
   log_odds_ = std::clamp(log_odds_, -30.0, 30.0);
 }
 
-void Recovery::Found(double found) {
-  if (!(found > 0)) return;
-  log_odds_ = Logit(std::clamp(Elsewhere() - found, 1e-9, 1 - 1e-9));
-}
-
 double Recovery::Elsewhere() const { return Logistic(log_odds_); }
 
-bool Recovery::SearchDue(double since_s, double wrong) const {
+bool Recovery::SearchDue(double since_s) const {
   return since_s >= options_.search_interval_s &&
-         wrong * since_s >= options_.search_share * options_.search_interval_s;
+         Elsewhere() * since_s >= options_.search_share * options_.search_interval_s;
 }
 
 double Recovery::FitRatio() const { return std::exp(fit_ - expected_); }

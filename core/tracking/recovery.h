@@ -24,8 +24,7 @@ struct RecoveryOptions {
   double lost_s = 600.0;     // mean time between losses of the wearer, seconds
   double start_doubt = 0.5;  // probability that a pick, place or restore is wrong
   // Search the plan for other places once after every start, then at a rate in proportion
-  // to the probability that the published place is wrong: every search_interval_s at
-  // search_share (MclTracker::SearchDue).
+  // to "elsewhere": every search_interval_s at search_share (MclTracker::SearchDue).
   double search_share = 0.2;
   double search_interval_s = 3.0;
 };
@@ -57,22 +56,16 @@ class Recovery {
   // (a restart of the daemon: the SLAM frame and the wearer went on).
   void Resume(double elsewhere);
   bool searched() const { return searched_; }
-  // A search's places the belief did not hold were mixed into it with `found` of the
-  // probability of "elsewhere": that much of the wearer is the belief's now. (Left in the
-  // doubt too, it would count twice: after a wrong pick the searched truth would hold the
-  // belief, and its published probability wait on the doubt walked down update by update.)
-  void Found(double found);
   // One update: the belief's mean log-likelihood per wall point, the tempering exponent
   // it was weighed with, dt_s after the last.
   void Observe(double mean_log_likelihood, double exponent, double dt_s);
   // The probability that the wearer is at none of the belief's places.
   double Elsewhere() const;
-  // Whether another search of the plan is due since_s after the last, while the published
-  // place is wrong with probability `wrong` (the wearer elsewhere, or at another of the
-  // belief's places): searches come at a rate in proportion to it, every search_interval_s
-  // at search_share and ten times as seldom at a tenth of it. The searches cost CPU; the
-  // places they find are worth it only as often as the published place may be wrong.
-  bool SearchDue(double since_s, double wrong) const;
+  // Whether another search of the plan is due since_s after the last: searches come at a
+  // rate in proportion to Elsewhere(), every search_interval_s at search_share and ten
+  // times as seldom at a tenth of it. The searches cost CPU; the places they find are
+  // worth it only as often as the belief may have missed the wearer.
+  bool SearchDue(double since_s) const;
   // Halfway between the fit per point of a right alignment and of a random one.
   double MidFit() const { return 0.5 * (expected_ + random_); }
   // The latest fit over the fit expected of a right alignment, as a likelihood ratio per

@@ -105,7 +105,7 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
     // the window like a right place and better than the leading one by more than 1/kOfferShare in
     // the window's likelihood. The belief may have lost its samples there (a walk through a door
     // drawn closed is priced, and pulls them to the next opening), so the place is offered to the
-    // belief at kOfferShare; the next updates weigh it.
+    // belief as a search's places are; the next updates weigh it.
     const bool another_place =
         moved_m <= options.icp.max_correspondence_m && icp_fit > u.mid_fit &&
         options.measurement.independent_points * (icp_fit - mode_fit) > -std::log(kOfferShare);

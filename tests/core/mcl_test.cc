@@ -167,21 +167,7 @@ TEST(RecoveryTest, AFitLikeARandomPlaceKeepsTheDoubtAndARightOneClearsIt) {
   EXPECT_LT(stale.Elsewhere(), 0.01);
 }
 
-TEST(RecoveryTest, PlacesFoundTakeTheDoubtTheyAnswer) {
-  MeasurementModel m;
-  const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
-  Recovery r({}, m, index);
-  const double random = RandomLogLikelihood(m, index);
-  while (r.Elsewhere() < 0.99) r.Observe(random - 1.0, 1.0, 1.0);  // a wrong pick
-  const double before = r.Elsewhere();
-  r.Found(0.0);
-  EXPECT_DOUBLE_EQ(r.Elsewhere(), before) << "nothing found, nothing moves";
-  // A search's places take half the doubt (start_doubt: they may be wrong too).
-  r.Found(0.5 * before);
-  EXPECT_NEAR(r.Elsewhere(), 0.5 * before, 1e-9);
-}
-
-TEST(RecoveryTest, SearchesComeAsOftenAsThePublishedPlaceMayBeWrong) {
+TEST(RecoveryTest, SearchesComeAsOftenAsTheWearerMayBeElsewhere) {
   MeasurementModel m;
   const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
   RecoveryOptions o;
@@ -189,8 +175,8 @@ TEST(RecoveryTest, SearchesComeAsOftenAsThePublishedPlaceMayBeWrong) {
   o.search_interval_s = 3.0;
   Recovery r(o, m, index);
   ASSERT_NEAR(r.Elsewhere(), 0.5, 1e-9);
-  EXPECT_FALSE(r.SearchDue(2.9, r.Elsewhere())) << "never more often than search_interval_s";
-  EXPECT_TRUE(r.SearchDue(3.0, r.Elsewhere()));
+  EXPECT_FALSE(r.SearchDue(2.9)) << "never more often than search_interval_s";
+  EXPECT_TRUE(r.SearchDue(3.0));
   // Fits halfway between a right place and a random one bring the doubt down to a few
   // percent: a search is due after 0.2 * 3 / Elsewhere() seconds.
   const double mid =
@@ -198,8 +184,8 @@ TEST(RecoveryTest, SearchesComeAsOftenAsThePublishedPlaceMayBeWrong) {
   while (r.Elsewhere() > 0.02) r.Observe(mid, 0.5, 1.0);
   const double due_s = o.search_share * o.search_interval_s / r.Elsewhere();
   EXPECT_GT(due_s, 30.0);
-  EXPECT_FALSE(r.SearchDue(0.99 * due_s, r.Elsewhere()));
-  EXPECT_TRUE(r.SearchDue(1.01 * due_s, r.Elsewhere()));
+  EXPECT_FALSE(r.SearchDue(0.99 * due_s));
+  EXPECT_TRUE(r.SearchDue(1.01 * due_s));
 }
 
 // A walk in the asymmetric room: wall points seen from the wearer within 4 m (slam
@@ -314,7 +300,7 @@ TEST(MclTrackerTest, APickOnTheWrongWallIsNotReliableAndTheSearchPlacesTheWearer
   // The search finds the truth; the belief takes it as the walk goes on.
   GlobalPlace found;
   found.T_plan_slam = room.truth;
-  EXPECT_THAT(mcl.OfferPlaces({found}, {}, t), ::testing::HasSubstr("mixed in 1 place(s)"));
+  EXPECT_THAT(mcl.OfferPlaces({found}, {}, t), ::testing::HasSubstr("mixed in"));
   WalkOntoTheTruth(mcl, room, &t);
 }
 
@@ -440,9 +426,8 @@ TEST(MclTrackerTest, AWalkThroughPlanWallsCostsAPlaceThroughWallPerWall) {
 
 TEST(MclTrackerTest, ASearchThatFindsTheBeliefsOwnPlaceBetterGivesTheOthersLess) {
   // A belief placed by a pick and walked; a search then finds its place and another 1.5 m
-  // off, which the search's walls fit far worse. The other gets the doubt's share (what
-  // start_doubt leaves of it) only when it is all the search found; beside the belief's
-  // own place it gets a sliver of it.
+  // off, which the search's walls fit far worse. The other gets the doubt's share only when
+  // it is all the search found; beside the belief's own place it gets a sliver of it.
   RoomWalk room;
   const Eigen::Vector2d at{8, 5};
   GlobalPlace right, off;
@@ -465,7 +450,7 @@ TEST(MclTrackerTest, ASearchThatFindsTheBeliefsOwnPlaceBetterGivesTheOthersLess)
     ASSERT_THAT(mcl.OfferPlaces(found, walls, t), ::testing::HasSubstr("mixed in 1"));
     mass_off.push_back(mcl.belief().MassWithin(wearer_slam, off.T_plan_slam * wearer_slam, 0.7));
   }
-  EXPECT_GT(mass_off[0], 0.005) << "the doubt's share";
+  EXPECT_GE(mass_off[0], 0.04) << "at least the offer's 5%";
   EXPECT_LT(mass_off[1], 0.01 * mass_off[0]);
 }
 
