@@ -43,6 +43,9 @@ TEST_F(GlobalPlacementTest, AWalkWithoutAPickIsPlacedAndNeverReliablyWrong) {
   ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &placed, &error, nullptr, true))
       << error;
   EXPECT_GT(placed.global_searches, 0u);
+  EXPECT_GT(placed.first_search_s, 0.0) << "a search waits for walls";
+  EXPECT_LE(placed.first_search_s, placed.time_to_first_reliable_s) << "and places the wearer";
+  EXPECT_GE(placed.first_search_truth, 0) << "the office's first search holds the truth";
   EXPECT_GT(placed.poses, placed.unaligned_poses) << "placed for most of the walk";
   EXPECT_EQ(placed.false_reliable_poses, 0u);
   EXPECT_LT(placed.max_error_m, 1.0);

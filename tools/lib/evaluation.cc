@@ -178,10 +178,19 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     if (baseline != Baseline::kNone) continue;  // baselines never register
     if (auto job = engine.TakeDueJob()) {
       platform::Done done = platform::RunJob(std::move(*job), platform::MonotonicNs);
-      if (done.job.global)
-        ++report->global_searches;
-      else
+      if (done.job.global) {
+        if (report->global_searches++ == 0) {
+          report->first_search_s =
+              static_cast<double>(done.job.stamp_ns - inputs.front().stamp_ns) * 1e-9;
+          for (size_t i = 0; latest && i < done.places.size(); ++i)
+            if ((done.places[i].T_plan_slam * latest->slam - latest->plan).norm() <= 1.0) {
+              report->first_search_truth = static_cast<int>(i);
+              break;
+            }
+        }
+      } else {
         reg_times.push_back(done.result.time_ms);
+      }
       // For tuning: how far the result and the alignment in use put the wearer from the
       // truth (the engine logs its decision right after).
       if (latest && spdlog::should_log(spdlog::level::debug) && done.job.global && done.job.index) {
@@ -449,6 +458,8 @@ std::string ToJson(const EvalReport& r) {
       {"losses_back_in_time", losses.back},
       {"false_reliable_after_losses", losses.false_reliable},
       {"global_searches", r.global_searches},
+      {"first_search_s", r.first_search_s},
+      {"first_search_truth", r.first_search_truth},
       {"wrong_floor_poses", r.wrong_floor_poses},
       {"floor_changes", r.floor_changes}};
   return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
@@ -486,7 +497,10 @@ std::string ToText(const EvalReport& r) {
     s << "  loss of tracking, resumed at " << l.resumed_s << " s: reliable within 1 m " << l.back_s
       << " s later (-1: not in the " << l.followed_s << " s followed), " << l.false_reliable
       << " poses reliable but over 1 m off before\n";
-  if (r.global_searches) s << "  whole-plan searches           " << r.global_searches << "\n";
+  if (r.global_searches)
+    s << "  whole-plan searches           " << r.global_searches << ", the first at "
+      << r.first_search_s << " s, the truth its place " << r.first_search_truth
+      << " (0: first, -1: none)\n";
   if (r.floor_changes || r.wrong_floor_poses)
     s << "  floor changes                 " << r.floor_changes << ", " << r.wrong_floor_poses
       << " poses on another floor than the truth's\n";

@@ -108,6 +108,11 @@ struct EvalReport {
   // than 1 m off before.
   std::vector<LossScore> losses;
   size_t global_searches = 0;  // whole-plan searches run (placements and checks)
+  // The first of them: seconds into the recording (-1: none), and the order among its
+  // places of the first within 1 m of the truth at the wearer (-1: none was). A late
+  // placement either waited for the walls a search needs or chose among its places.
+  double first_search_s = -1;
+  int first_search_truth = -1;
   // A .floors plan set: floors the daemon changed to, and poses published with another
   // floor than the truth's.
   size_t floor_changes = 0, wrong_floor_poses = 0;
