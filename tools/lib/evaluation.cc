@@ -126,6 +126,10 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     Se2 T_plan_slam;  // the true alignment at this pose
   };
   std::optional<Latest> latest;  // the newest pose with ground truth
+  // How far an alignment puts the wearer of `latest` from the truth, metres.
+  const auto off_at_wearer = [&latest](const Se2& T) {
+    return (T * latest->slam - latest->plan).norm();
+  };
   // Losses of tracking, as the tracker takes them: the stamp of the first pose after each.
   const auto lost_after_ns = static_cast<int64_t>(config.tracking().motion().lost_after_s() * 1e9);
   std::optional<int64_t> last_pose_ns;
@@ -183,7 +187,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
           report->first_search_s =
               static_cast<double>(done.job.stamp_ns - inputs.front().stamp_ns) * 1e-9;
           for (size_t i = 0; latest && i < done.places.size(); ++i)
-            if ((done.places[i].T_plan_slam * latest->slam - latest->plan).norm() <= 1.0) {
+            if (off_at_wearer(done.places[i].T_plan_slam) <= 1.0) {
               report->first_search_truth = static_cast<int>(i);
               break;
             }
@@ -204,7 +208,7 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
               "{:.0f}% hidden, {:.0f}% unseen of {}, {:.2f} m from the truth",
               place.score, place.fit_mse, 100 * place.inlier_ratio, place.path_crossings,
               100 * place.hidden_ratio, 100 * place.unseen_ratio, place.unseen_expected,
-              (place.T_plan_slam * latest->slam - latest->plan).norm());
+              off_at_wearer(place.T_plan_slam));
       }
       if (latest && spdlog::should_log(spdlog::level::debug) && done.job.global) {
         for (const GlobalPlace& place : done.places)
@@ -215,9 +219,9 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
               static_cast<double>(latest->stamp_ns - inputs.front().stamp_ns) * 1e-9, place.score,
               place.fit_mse, 100 * place.inlier_ratio, place.path_crossings,
               100 * place.hidden_ratio, 100 * place.unseen_ratio, place.unseen_expected,
-              100 * place.alike, place.rank,
-              (place.T_plan_slam * latest->slam - latest->plan).norm(), place.T_plan_slam.t.x(),
-              place.T_plan_slam.t.y(), place.T_plan_slam.theta, latest->slam.x(), latest->slam.y());
+              100 * place.alike, place.rank, off_at_wearer(place.T_plan_slam),
+              place.T_plan_slam.t.x(), place.T_plan_slam.t.y(), place.T_plan_slam.theta,
+              latest->slam.x(), latest->slam.y());
       } else if (latest && done.job.index && spdlog::should_log(spdlog::level::debug)) {
         // What share of the registered walls lies on the plan under each: low under the
         // truth too means the plan lacks what the wearer sees, not a wrong result.
@@ -233,8 +237,8 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
             "on the plan: {:.0f}% under the result, {:.0f}% in use, {:.0f}% true; the result "
             "turns {:.1f} deg from the truth, the alignment in use {:.1f}",
             static_cast<double>(latest->stamp_ns - inputs.front().stamp_ns) * 1e-9,
-            (done.result.T_plan_slam * latest->slam - latest->plan).norm(),
-            (engine.tracker().alignment().T_plan_slam * latest->slam - latest->plan).norm(),
+            off_at_wearer(done.result.T_plan_slam),
+            off_at_wearer(engine.tracker().alignment().T_plan_slam),
             on_plan(done.result.T_plan_slam), on_plan(engine.tracker().alignment().T_plan_slam),
             on_plan(latest->T_plan_slam),
             WrapAngle(done.result.T_plan_slam.theta - latest->T_plan_slam.theta) * 180 / M_PI,
