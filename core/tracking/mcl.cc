@@ -141,6 +141,8 @@ BeliefSummary MclTracker::Summary(const Eigen::Vector2d& wearer_slam, const Se2&
   s.mass_within = belief_.MassWithin(wearer_slam, T * wearer_slam, options_.publish.within_m);
   s.elsewhere = recovery_.Elsewhere();
   s.fit_ratio = recovery_.FitRatio();
+  s.fits = recovery_.Fits();
+  s.searched = recovery_.searched();
   s.places = places_;
   s.checked = start_.checked;
   return s;

@@ -71,6 +71,8 @@ class Recovery {
   // The latest fit over the fit expected of a right alignment, as a likelihood ratio per
   // point (1: as expected).
   double FitRatio() const;
+  // Whether the latest fit is nearer a right alignment's than a random one's.
+  bool Fits() const { return fit_ >= MidFit(); }
 
  private:
   RecoveryOptions options_;

@@ -21,6 +21,8 @@ struct BeliefSummary {
   double mass_within = 0;  // of the samples, within within_m of the published position
   double elsewhere = 0;    // Recovery::Elsewhere
   double fit_ratio = 1;    // Recovery::FitRatio
+  bool fits = true;        // the latest walls fit nearer a right place than a random one
+  bool searched = true;    // a search of the plan has checked the start (Recovery::searched)
   size_t places = 1;       // distinct places holding mass (Belief modes)
   bool checked = false;    // an update weighted the belief since it was set
 };

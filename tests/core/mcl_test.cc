@@ -188,6 +188,45 @@ TEST(RecoveryTest, SearchesComeAsOftenAsTheWearerMayBeElsewhere) {
   EXPECT_TRUE(r.SearchDue(1.01 * due_s));
 }
 
+TEST(ReliabilityTest, TheReasonNamesTheTermThatKeepsTheProbabilityDown) {
+  const PublishOptions o;
+  BeliefSummary s;
+  s.mass_within = 1.0;
+  s.checked = true;
+  EXPECT_EQ(Assess(s, o).flag, ReliabilityFlag::kReliable);
+  EXPECT_EQ(Assess(s, o).reason, "");
+  // The doubt dominates while the latest walls fit like a right place's (231% of the
+  // expected): the doubt is the start's, not the walls'.
+  s.elsewhere = 0.6;
+  s.fit_ratio = 2.31;
+  s.searched = false;
+  EXPECT_EQ(Assess(s, o).reason,
+            "no search has confirmed the place (60% that the wearer is elsewhere)");
+  s.searched = true;
+  EXPECT_EQ(Assess(s, o).reason, "the place is still in doubt (60% that the wearer is elsewhere)");
+  s.fits = false;
+  s.fit_ratio = 0.2;
+  EXPECT_EQ(Assess(s, o).reason, "the walls fit the plan poorly (20% of the expected fit)");
+  // The belief's own spread dominates.
+  s.elsewhere = 0.05;
+  s.mass_within = 0.7;
+  EXPECT_EQ(Assess(s, o).reason, "uncertain: 70% of the belief within 1 m");
+  s.places = 3;
+  EXPECT_EQ(Assess(s, o).reason, "3 places fit (70% of the belief here)");
+  s.checked = false;
+  EXPECT_EQ(Assess(s, o).reason, "not yet checked against the walls (70% within 1 m)");
+}
+
+TEST(RecoveryTest, TheLatestFitIsReadAgainstTheMidpointOfRightAndRandom) {
+  MeasurementModel m;
+  const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
+  Recovery r({}, m, index);
+  EXPECT_TRUE(r.Fits()) << "a start fits as expected until walls say otherwise";
+  r.Observe(r.MidFit() - 0.01, 0.5, 1.0);
+  EXPECT_FALSE(r.Fits());
+  r.Observe(r.MidFit() + 0.01, 0.5, 1.0);
+  EXPECT_TRUE(r.Fits());
+}
 // A walk in the asymmetric room: wall points seen from the wearer within 4 m (slam
 // frame, T_plan_slam = truth), stamped a second apart.
 struct RoomWalk {
