@@ -227,6 +227,7 @@ TEST(RecoveryTest, TheLatestFitIsReadAgainstTheMidpointOfRightAndRandom) {
   r.Observe(r.MidFit() + 0.01, 0.5, 1.0);
   EXPECT_TRUE(r.Fits());
 }
+
 // A walk in the asymmetric room: wall points seen from the wearer within 4 m (slam
 // frame, T_plan_slam = truth), stamped a second apart.
 struct RoomWalk {

@@ -340,6 +340,11 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
       return p.reliable && p.error_m <= 1.0;
     });
     report->time_to_recovered_s = since_first(recovered);
+    report->first_step_s =
+        since_first(std::find_if(scored.begin(), scored.end(), [&](const EvalPose& p) {
+          return std::hypot(p.true_x - scored.front().true_x, p.true_y - scored.front().true_y) >=
+                 kFirstStepM;
+        }));
     report->false_reliable_before_recovered =
         static_cast<size_t>(std::count_if(scored.begin(), recovered, [](const EvalPose& p) {
           return p.reliable && p.error_m > 1.0;
@@ -456,6 +461,7 @@ std::string ToJson(const EvalReport& r) {
       {"false_reliable_poses", r.false_reliable_poses},
       {"time_to_unreliable_s", r.time_to_unreliable_s},
       {"time_to_recovered_s", r.time_to_recovered_s},
+      {"first_step_s", r.first_step_s},
       {"false_reliable_before_recovered", r.false_reliable_before_recovered},
       {"losses", r.losses.size()},
       {"losses_timed", losses.timed},

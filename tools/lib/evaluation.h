@@ -49,6 +49,9 @@ const char* IlcSplit(const std::string& floor);
 // The seconds within which a loss of tracking should be RELIABLE within 1 m again (issue
 // 43's target for `relocalize`).
 constexpr double kBackAfterLossS = 20.0;
+// How far the wearer has moved at the first step, metres: over the truth's jitter while
+// standing (none in the simulator), under one stride.
+constexpr double kFirstStepM = 0.3;
 
 // The scored poses after one loss of tracking: a pose after more than
 // tracking.motion.lost_after_s of none, or after one saying TRACKING_LOST, as the tracker
@@ -100,6 +103,10 @@ struct EvalReport {
   // From the first scored pose (a wrong pick: simulate --kidnap) to the first flagged
   // UNRELIABLE, and to the first RELIABLE within 1 m (-1: never).
   double time_to_unreliable_s = -1, time_to_recovered_s = -1;
+  // From the first scored pose to the wearer's first step: the first true position
+  // kFirstStepM or more from the first (-1: never). Issue 43 times a placement in seconds
+  // of walking; a wearer may stand scanning first (the simulator's first 4 s).
+  double first_step_s = -1;
   // The poses flagged RELIABLE while more than 1 m off before that first RELIABLE pose
   // within 1 m (all of them when there is none): a wrong place trusted, not drift.
   size_t false_reliable_before_recovered = 0;
