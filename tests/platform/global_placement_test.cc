@@ -59,6 +59,18 @@ TEST_F(GlobalPlacementTest, AWalkWithoutAPickIsPlacedAndNeverReliablyWrong) {
   ASSERT_FALSE(placed.track.empty());
   EXPECT_NEAR(placed.brier, brier / static_cast<double>(placed.track.size()), 1e-12);
   EXPECT_LT(placed.brier, 0.25);
+  // The first step is the first scored pose whose true position has moved 0.3 m.
+  ASSERT_GE(placed.first_step_s, 0.0) << "the office walk walks";
+  for (const EvalPose& p : placed.track) {
+    const double moved_m =
+        std::hypot(p.true_x - placed.track[0].true_x, p.true_y - placed.track[0].true_y);
+    const double at_s = static_cast<double>(p.stamp_ns - placed.track[0].stamp_ns) * 1e-9;
+    if (at_s < placed.first_step_s - 1e-6) {
+      EXPECT_LT(moved_m, kFirstStepM) << at_s << " s";
+    } else if (std::abs(at_s - placed.first_step_s) < 1e-6) {
+      EXPECT_GE(moved_m, kFirstStepM);
+    }
+  }
   std::printf(
       "placed after %zu of %zu poses, %zu searches; first reliable after %.1f s; error "
       "mean %.2f m, max %.2f m\n",

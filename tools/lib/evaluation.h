@@ -105,7 +105,7 @@ struct EvalReport {
   double time_to_unreliable_s = -1, time_to_recovered_s = -1;
   // From the first scored pose to the wearer's first step: the first true position
   // kFirstStepM or more from the first (-1: never). Issue 43 times a placement in seconds
-  // of walking; a wearer may stand scanning first (the simulator's first 4 s).
+  // of walking; a wearer may stand scanning first.
   double first_step_s = -1;
   // The poses flagged RELIABLE while more than 1 m off before that first RELIABLE pose
   // within 1 m (all of them when there is none): a wrong place trusted, not drift.
