@@ -100,7 +100,8 @@ std::string PlacementTable(const std::vector<EvalReport>& reports, const std::st
      << "; the search ends at the first RELIABLE pose):\n\n"
         "| scenario | runs | placed within 1 m | placed more than 1 m off | never placed | "
         "seconds to placed, median | of walking (from the first step), median | slowest | "
-        "RELIABLE poses > 1 m off after placement (runs) |\n|---|---|---|---|---|---|---|---|---|\n";
+        "RELIABLE poses > 1 m off after placement (runs) "
+        "|\n|---|---|---|---|---|---|---|---|---|\n";
   auto row = [&](const std::string& name, const std::string& scenario) {
     size_t runs = 0, placed = 0, wrong = 0, false_poses = 0, false_runs = 0;
     std::vector<double> times, walking;
