@@ -15,14 +15,16 @@ Reliability Assess(const BeliefSummary& s, const PublishOptions& options) {
   if (!s.checked)
     std::snprintf(text, sizeof text, "not yet checked against the walls (%.0f%% within %.0f m)",
                   100 * s.mass_within, options.within_m);
-  else if (s.elsewhere >= 1.0 - s.mass_within && !s.fits)
-    std::snprintf(text, sizeof text, "the walls fit the plan poorly (%.0f%% of the expected fit)",
-                  100 * s.fit_ratio);
-  else if (s.elsewhere >= 1.0 - s.mass_within)  // the walls fit, the doubt is older
-    std::snprintf(text, sizeof text, "%s (%.0f%% that the wearer is elsewhere)",
-                  s.searched ? "the place is still in doubt" : "no search has confirmed the place",
-                  100 * s.elsewhere);
-  else if (s.places > 1)
+  else if (s.elsewhere >= 1.0 - s.mass_within) {  // the doubt outweighs the spread
+    if (!s.fits)
+      std::snprintf(text, sizeof text, "the walls fit the plan poorly (%.0f%% of the expected fit)",
+                    100 * s.fit_ratio);
+    else  // the walls fit: the doubt is the start's, or earlier walls'
+      std::snprintf(
+          text, sizeof text, "%s (%.0f%% that the wearer is elsewhere)",
+          s.searched ? "the place is still in doubt" : "no search has confirmed the place",
+          100 * s.elsewhere);
+  } else if (s.places > 1)
     std::snprintf(text, sizeof text, "%zu places fit (%.0f%% of the belief here)", s.places,
                   100 * s.mass_within);
   else
