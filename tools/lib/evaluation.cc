@@ -266,9 +266,17 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
   std::vector<double> errors, marker_errors;
   size_t reliable = 0, reliable_ok = 0;
   double brier = 0;
+  std::optional<Eigen::Vector2d> first_true;  // of the first published pose with a truth
   for (const v1::PlanPose& p : plan_poses) {
     auto it = truth.find(p.source_stamp_ns());
     if (it == truth.end()) continue;
+    // The wearer's first step, timed as time_to_first_reliable_s is: from the first pose
+    // published, placed or not.
+    const Eigen::Vector2d true_xy(it->second.x(), it->second.y());
+    if (!first_true) first_true = true_xy;
+    if (report->first_step_s < 0 && (true_xy - *first_true).norm() >= kFirstStepM)
+      report->first_step_s =
+          static_cast<double>(p.source_stamp_ns() - plan_poses.front().source_stamp_ns()) * 1e-9;
     // Before the first alignment the daemon has no plan position to give (it says so:
     // version 0, UNRELIABLE); the thesis scores from the initial alignment on.
     // A building of several floors: on the truth's floor or not (before any alignment too).
@@ -340,11 +348,6 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
       return p.reliable && p.error_m <= 1.0;
     });
     report->time_to_recovered_s = since_first(recovered);
-    report->first_step_s =
-        since_first(std::find_if(scored.begin(), scored.end(), [&](const EvalPose& p) {
-          return std::hypot(p.true_x - scored.front().true_x, p.true_y - scored.front().true_y) >=
-                 kFirstStepM;
-        }));
     report->false_reliable_before_recovered =
         static_cast<size_t>(std::count_if(scored.begin(), recovered, [](const EvalPose& p) {
           return p.reliable && p.error_m > 1.0;

@@ -103,9 +103,9 @@ struct EvalReport {
   // From the first scored pose (a wrong pick: simulate --kidnap) to the first flagged
   // UNRELIABLE, and to the first RELIABLE within 1 m (-1: never).
   double time_to_unreliable_s = -1, time_to_recovered_s = -1;
-  // From the first scored pose to the wearer's first step: the first true position
-  // kFirstStepM or more from the first (-1: never). Issue 43 times a placement in seconds
-  // of walking; a wearer may stand scanning first.
+  // From the first pose published (placed or not, as time_to_first_reliable_s) to the
+  // wearer's first step: the first true position kFirstStepM or more from the first (-1:
+  // never). Issue 43 times a placement in seconds of walking; a wearer may stand first.
   double first_step_s = -1;
   // The poses flagged RELIABLE while more than 1 m off before that first RELIABLE pose
   // within 1 m (all of them when there is none): a wrong place trusted, not drift.
