@@ -34,21 +34,13 @@ std::vector<Mode> Places(const Belief& belief, const Eigen::Vector2d& wearer_sla
   return places;
 }
 
-}  // namespace
-
-MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cloud,
-                             const ClosestWallIndex& index, const MclOptions& options) {
-  MclUpdateResult out;
-  out.dt_s = u.dt_s;
-  out.belief_version = u.belief_version;
-  SplitMix64 rng(u.seed);
-  Belief& belief = u.belief;
+// Weighs every sample by the walls new since the last update (the whole window when
+// none are marked new), what was in sight and the walk; returns the belief's fit per
+// point before weighing, which the recovery filter reads.
+double WeighSamples(Belief& belief, const MclUpdate& u, const std::vector<Eigen::Vector2d>& cloud,
+                    const std::vector<Eigen::Vector2d>& points, double exponent,
+                    const ClosestWallIndex& index, const MclOptions& options) {
   const double reach = index.max_distance_m();
-  // Measurement: the window's new share of evidence, and no more than one independent
-  // measurement per point of a sparse window.
-  const std::vector<Eigen::Vector2d> points = ThinCloud(cloud, 0.1, options.weigh_points);
-  const double exponent = u.evidence * std::min(options.measurement.independent_points,
-                                                static_cast<double>(points.size()));
   // The fit the recovery filter weighs is predictive: of the walls the belief has not
   // been weighed on yet, under the belief before this update. The walls that shaped the
   // belief fit it well wherever it settled, right or wrong.
@@ -71,56 +63,81 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
     s.log_weight += exponent * (mll + sight.Mean()) +
                     options.motion.PathLogPrior(u.path_slam, s.T_plan_slam, index);
   }
-  out.fit = fit;
-  out.exponent = exponent;
-  const double radius_m = options.publish.within_m;
-  const double radius_rad = kPlaceRad;
+  return fit;
+}
+
+// The place with the least expected error at the wearer, or the one published now while
+// no other holds kSwitchRatio times its mass: a belief split about evenly must not make
+// the published pose jump between its places.
+Mode PublishedMode(const Belief& belief, const MclUpdate& u, double radius_m) {
+  const Mode best = belief.Estimate(u.wearer_slam, radius_m, kPlaceRad);
+  if (!u.published) return best;
+  const Mode kept = belief.ModeAt(*u.published, u.wearer_slam, radius_m, kPlaceRad);
+  return kept.mass * kSwitchRatio >= best.mass ? kept : best;
+}
+
+// ICP on the whole window from the published place: its polish is published when it stays
+// within the place and fits better; the samples stay where the belief put them (moving
+// them with it collapses the belief onto whatever ICP settles on, right or not). Beyond
+// the place ICP may reach another, within its correspondence reach, that fits the window
+// like a right place and better than the published one by more than 1/kOfferShare in the
+// window's likelihood. The belief may have lost its samples there (a walk through a door
+// drawn closed is priced, and pulls them to the next opening), so the place is offered to
+// the belief as a search's places are; the next updates weigh it.
+void PolishOrOffer(MclUpdateResult& out, Belief& belief, const MclUpdate& u,
+                   const std::vector<Eigen::Vector2d>& cloud,
+                   const std::vector<Eigen::Vector2d>& points, const ClosestWallIndex& index,
+                   const MclOptions& options, SplitMix64& rng) {
+  const Se2 mode = out.published;
+  out.icp = RegisterIcp(cloud, index, mode, options.icp);
+  if (!out.icp.converged) return;
+  const Eigen::Vector2d pivot = mode * u.wearer_slam;
+  const Eigen::Vector3d shift = Difference(out.icp.T_plan_slam, mode, pivot);
+  const double moved_m = shift.tail<2>().norm();
+  const double reach = index.max_distance_m();
+  const double icp_fit =
+      options.measurement.MeanLogLikelihood(points, out.icp.T_plan_slam, index, reach);
+  const double mode_fit = options.measurement.MeanLogLikelihood(points, mode, index, reach);
+  if (moved_m <= options.publish.within_m && std::abs(shift(0)) <= kPlaceRad) {
+    out.polished = icp_fit >= mode_fit;
+    if (out.polished) out.published = out.icp.T_plan_slam;
+    return;
+  }
+  const bool another_place =
+      moved_m <= options.icp.max_correspondence_m && icp_fit > u.mid_fit &&
+      options.measurement.independent_points * (icp_fit - mode_fit) > -std::log(kOfferShare);
+  if (!another_place) return;
+  belief.Mix({out.icp.T_plan_slam}, {0.0},
+             PlaceCovariance(options.place_sigma_m, options.place_sigma_rad), u.wearer_slam,
+             kOfferShare, options.samples.min_samples / 4, rng);
+  out.offered = true;
+}
+
+}  // namespace
+
+MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cloud,
+                             const ClosestWallIndex& index, const MclOptions& options) {
+  MclUpdateResult out;
+  out.dt_s = u.dt_s;
+  out.belief_version = u.belief_version;
+  SplitMix64 rng(u.seed);
+  Belief& belief = u.belief;
+  // Measurement: the window's new share of evidence, and no more than one independent
+  // measurement per point of a sparse window.
+  const std::vector<Eigen::Vector2d> points = ThinCloud(cloud, 0.1, options.weigh_points);
+  out.exponent = u.evidence * std::min(options.measurement.independent_points,
+                                       static_cast<double>(points.size()));
+  out.fit = WeighSamples(belief, u, cloud, points, out.exponent, index, options);
   belief.Normalize();
   if (belief.EffectiveSize() < 0.5 * static_cast<double>(belief.size()) ||
       belief.size() > options.samples.max_samples)
     belief.Resample(options.samples, u.wearer_slam, rng);
-  // The place with the least expected error at the wearer, polished by ICP on the whole
-  // window when that fits the walls better. The polish is published; the samples stay where the
-  // belief put them (moving them with it collapses the belief onto whatever ICP settles on, right
-  // or not).
-  Mode mode = belief.Estimate(u.wearer_slam, radius_m, radius_rad);
-  if (u.published) {
-    // The published place stays until another holds kSwitchRatio times its mass: a belief
-    // split about evenly must not make the published pose jump between its places.
-    const Mode kept = belief.ModeAt(*u.published, u.wearer_slam, radius_m, radius_rad);
-    if (kept.mass * kSwitchRatio >= mode.mass) mode = kept;
-  }
+  const double radius_m = options.publish.within_m;
+  const Mode mode = PublishedMode(belief, u, radius_m);
   out.mode_mass = mode.mass;
   out.published = mode.T_plan_slam;
-  out.icp = RegisterIcp(cloud, index, mode.T_plan_slam, options.icp);
-  const Eigen::Vector2d pivot = mode.T_plan_slam * u.wearer_slam;
-  const Eigen::Vector3d shift = Difference(out.icp.T_plan_slam, mode.T_plan_slam, pivot);
-  const double moved_m = shift.tail<2>().norm();
-  if (out.icp.converged) {
-    const double icp_fit =
-        options.measurement.MeanLogLikelihood(points, out.icp.T_plan_slam, index, reach);
-    const double mode_fit =
-        options.measurement.MeanLogLikelihood(points, mode.T_plan_slam, index, reach);
-    // Beyond the leading place ICP may reach another, within its correspondence reach, that fits
-    // the window like a right place and better than the leading one by more than 1/kOfferShare in
-    // the window's likelihood. The belief may have lost its samples there (a walk through a door
-    // drawn closed is priced, and pulls them to the next opening), so the place is offered to the
-    // belief as a search's places are; the next updates weigh it.
-    const bool another_place =
-        moved_m <= options.icp.max_correspondence_m && icp_fit > u.mid_fit &&
-        options.measurement.independent_points * (icp_fit - mode_fit) > -std::log(kOfferShare);
-    if (moved_m <= radius_m && std::abs(shift(0)) <= radius_rad) {
-      out.polished = icp_fit >= mode_fit;
-      if (out.polished) out.published = out.icp.T_plan_slam;
-    } else if (another_place) {
-      belief.Mix({out.icp.T_plan_slam}, {0.0},
-                 PlaceCovariance(options.place_sigma_m, options.place_sigma_rad), u.wearer_slam,
-                 kOfferShare, options.samples.min_samples / 4, rng);
-      out.offered = true;
-    }
-  }
-  out.places =
-      std::max<size_t>(1, Places(belief, u.wearer_slam, radius_m, radius_rad, 0.05).size());
+  PolishOrOffer(out, belief, u, cloud, points, index, options, rng);
+  out.places = std::max<size_t>(1, Places(belief, u.wearer_slam, radius_m, kPlaceRad, 0.05).size());
   out.belief = std::move(belief);
   return out;
 }
