@@ -798,6 +798,466 @@ const char* ToString(Scenario scenario) {
   return "?";
 }
 
+namespace {
+
+// The plan as drawn, and what of it stands: in doors the plan has a line across every
+// opening that reality lacks; in stale reality lost and moved walls since. Returns how
+// the drawing differs from the building, in words.
+std::string DrawPlan(const FloorPlan& input, const SimulatorOptions& o, SplitMix64& reality_rng,
+                     Simulation* sim, Reality* initial) {
+  sim->plan = input;
+  const FloorPlan& plan = sim->plan;
+  std::string drawn_text;
+  if (o.scenario == Scenario::kDoors) {
+    const std::vector<Segment> doors = DoorLines(input, o.max_door_m);
+    sim->plan.segments.insert(sim->plan.segments.end(), doors.begin(), doors.end());
+    drawn_text = Format(
+        "doors: the plan draws the openings of 0.6-%.1f m closed (%.0f lines, one per "
+        "face of a wall); reality has them open",
+        o.max_door_m, static_cast<double>(doors.size()));
+  }
+  initial->plan_wall_present.assign(plan.segments.size(), 1);
+  initial->plan_wall_glass.assign(plan.segments.size(), 0);
+  initial->plan_wall_offset.assign(plan.segments.size(), Eigen::Vector2d::Zero());
+  for (size_t i = input.segments.size(); i < plan.segments.size(); ++i)
+    initial->plan_wall_present[i] = 0;
+  if (o.scenario == Scenario::kStale) drawn_text = MarkStale(plan, o, reality_rng, initial);
+  return drawn_text;
+}
+
+// Builds the scenario's reality and says, in words, how it differs from the plan. In hall
+// a generated walk is kept to the plan's most open area.
+std::string BuildScenario(RealityBuilder& builder, FreeSpace& free_space,
+                          const std::string& drawn_text, const SimulatorOptions& o,
+                          bool given_trajectory) {
+  switch (o.scenario) {
+    case Scenario::kCorridor:
+      return "corridor: reality equals the plan; goals far apart (long hallways)";
+    case Scenario::kDoors: return drawn_text;
+    case Scenario::kStale: return drawn_text + builder.NewWalls(builder.reality.ceiling_m);
+    case Scenario::kScaled: return "scaled: the plan was scanned from paper (below)";
+    case Scenario::kRelocalize:
+      return "relocalize: reality equals the plan; the headset loses tracking (below)";
+    case Scenario::kOffice: return builder.Furnish();
+    case Scenario::kGlass: return builder.Glass(o.glass_share);
+    case Scenario::kMismatch: return builder.Mismatch(o.absent_share, builder.reality.ceiling_m);
+    case Scenario::kHall: {
+      // The most open area: cells far from every wall, around the most open one. A space
+      // of 10 x 10 m has 5 m of clearance in its middle.
+      const int centre = free_space.MostOpenCell();
+      const double most = centre < 0 ? 0.0 : free_space.Clearance(free_space.CellCentre(centre));
+      const double keep = std::min(3.0, 0.6 * most);
+      const double ceiling = builder.reality.ceiling_m;
+      if (given_trajectory)
+        return Format("hall: ceiling %.1f m; the given trajectory decides where the walk goes",
+                      ceiling);
+      free_space.RestrictTo(centre, keep);
+      return most >= 5.0
+                 ? Format(
+                       "hall: the walk stays in the plan's largest open area, at least %.1f m "
+                       "from walls (%.0f m2); ceiling %.1f m",
+                       keep, free_space.walkable_area_m2(), ceiling)
+                 : Format(
+                       "hall: the plan has no open area of 10 x 10 m; the walk stays in its "
+                       "most open area instead, at least %.1f m from walls (%.0f m2); ceiling "
+                       "%.1f m",
+                       keep, free_space.walkable_area_m2(), ceiling);
+    }
+  }
+  return "";
+}
+
+// The SLAM drift's draws for a walk.
+struct Drift {
+  double scale = 1.0;      // of distances walked
+  double bias = 0.0;       // of heading, rad per metre
+  double yaw_scale = 1.0;  // of angles turned
+};
+
+// Ground truth and the SLAM drift: the true motion between poses, integrated with a scale
+// error, a heading bias and random walks, and the frame's jump at the end of each loss of
+// tracking. The SLAM frame starts at the head, looking along +y (Unity's +z), as HoloLens
+// sets it up.
+Drift TrackSlam(const std::vector<HeadSample>& head, const std::vector<Loss>& losses,
+                const SimulatorOptions& o, SplitMix64& drift_rng, Simulation* sim) {
+  const double dt = o.pose_period_s;
+  const double k = o.drift_scale;
+  Drift drift;
+  drift.scale = 1.0 + k * o.scale_error_sigma * drift_rng.Gaussian();
+  drift.bias = k * o.heading_bias_rad_per_m * drift_rng.Uniform(0.5, 1.5) *
+               (drift_rng.Next() % 2 ? 1.0 : -1.0);
+  drift.yaw_scale = 1.0 + k * o.yaw_scale_error_sigma * drift_rng.Gaussian();
+  const size_t n = head.size();
+  Se2 slam{M_PI / 2, Eigen::Vector2d::Zero()};
+  sim->steps.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    SimulatedStep& step = sim->steps[i];
+    step.stamp_ns = static_cast<int64_t>(std::llround((o.start_s + i * dt) * 1e9));
+    step.true_plan = {head[i].position, head[i].yaw, o.eye_height_m};
+    if (i > 0) {
+      const Se2 motion = ToSe2(sim->steps[i - 1].true_plan).Inverse() * ToSe2(step.true_plan);
+      const double d = motion.t.norm();
+      sim->length_m += d;
+      const double heading_error =
+          drift.bias * d + k * o.heading_walk_rad_per_sqrt_m * std::sqrt(d) * drift_rng.Gaussian() +
+          k * o.heading_walk_rad_per_sqrt_s * std::sqrt(dt) * drift_rng.Gaussian() +
+          (drift.yaw_scale - 1.0) * motion.theta;
+      const Eigen::Vector2d position_error =
+          k * o.position_walk_m_per_sqrt_m * std::sqrt(d) *
+          Eigen::Vector2d(drift_rng.Gaussian(), drift_rng.Gaussian());
+      slam = slam * Se2{motion.theta + heading_error, drift.scale * motion.t + position_error};
+    }
+    for (const Loss& loss : losses) {
+      if (loss.to != i) continue;
+      // Relocalized: the frame jumps about where the headset is.
+      const Se2 jump = Se2{0.0, slam.t + loss.offset} * Se2{loss.angle, Eigen::Vector2d::Zero()} *
+                       Se2{0.0, -slam.t};
+      slam = jump * slam;
+      sim->relocalizations.push_back(
+          {o.start_s + loss.from * dt, o.start_s + loss.to * dt, jump, loss.offset.norm()});
+    }
+    step.T_slam_plan = slam * ToSe2(step.true_plan).Inverse();
+    const double jitter_rad = k * o.jitter_rad * drift_rng.Gaussian();
+    const Eigen::Vector2d jitter_m =
+        k * o.jitter_m * Eigen::Vector2d(drift_rng.Gaussian(), drift_rng.Gaussian());
+    step.slam = {slam.t + jitter_m, WrapAngle(slam.theta + jitter_rad), 0.0};
+  }
+  sim->T_slam_plan_initial = sim->steps[0].T_slam_plan;
+  sim->duration_s = (n - 1) * dt;
+  return drift;
+}
+
+// A plan wall the headset has meshed, at the pose it was first in the mesh within range.
+struct MeshedWall {
+  size_t step = 0;
+  int segment = -1;
+  Eigen::Vector2d point;
+};
+
+// The headset's spatial mapping: the patches its rays hit, gathered by chunk, and every
+// mesh tick the meshes of the chunks that changed, re-meshed in the SLAM frame of the
+// moment. It also finds the wall pick, a gaze hit on the mesh (thesis section 6.3.3).
+class Mesher {
+ public:
+  Mesher(const SimulatorOptions& o, const std::vector<Surface>& surfaces,
+         const std::vector<HeadSample>& head, double ceiling_m, SplitMix64& sensor_rng,
+         SplitMix64& mesh_rng)
+      : o_(o),
+        surfaces_(surfaces),
+        head_(head),
+        ceiling_(ceiling_m),
+        sensor_rng_(sensor_rng),
+        mesh_rng_(mesh_rng) {}
+
+  // What the rays of pose i hit, nearer than the maximum range.
+  void See(size_t i);
+  // The mesh tick at pose i: ADDED or UPDATED for the chunks seen anew (at most every
+  // update_after_s), sometimes REMOVED for one far behind.
+  void Emit(size_t i, SimulatedStep& step, MeshCounts& counts);
+  // The pick: at the first pose from `earliest` on with a plan wall in the mesh within
+  // sensor range, the wall patch nearest the wearer.
+  void TryPick(size_t i, size_t earliest);
+  const std::optional<MeshedWall>& picked() const { return picked_; }
+
+ private:
+  struct Chunk {
+    std::set<PatchKey> seen;
+    std::set<PatchKey> meshed;  // the patches in the mesh the headset has now
+    bool live = false, dirty = false;
+    double emitted_s = 0.0;
+    uint64_t id = 0;
+  };
+  ChunkKey ChunkOf(const Eigen::Vector2d& p) const {
+    return {static_cast<int>(std::floor(p.x() / o_.chunk_m)),
+            static_cast<int>(std::floor(p.y() / o_.chunk_m))};
+  }
+  // Every patch seen so far, meshed with fresh noise in today's SLAM frame.
+  void MeshPatches(const std::set<PatchKey>& patches, const Se2& T_slam_plan, SimMesh* mesh);
+
+  const SimulatorOptions& o_;
+  const std::vector<Surface>& surfaces_;
+  const std::vector<HeadSample>& head_;
+  double ceiling_;
+  SplitMix64& sensor_rng_;
+  SplitMix64& mesh_rng_;
+  std::map<ChunkKey, Chunk> chunks_;
+  std::vector<size_t> near_;  // the surfaces in reach of the pose being seen
+  std::optional<MeshedWall> picked_;
+};
+
+void Mesher::See(size_t i) {
+  const double eye = o_.eye_height_m;
+  const Eigen::Vector3d eye_at(head_[i].position.x(), head_[i].position.y(), eye);
+  near_.clear();
+  for (size_t s = 0; s < surfaces_.size(); ++s)
+    if ((surfaces_[s].centre - head_[i].position).norm() <= o_.max_range_m + surfaces_[s].radius)
+      near_.push_back(s);
+  for (int r = 0; r < o_.rays_h * o_.rays_v; ++r) {
+    const double yaw = head_[i].yaw - 0.5 * o_.fov_h_rad +
+                       (r % o_.rays_h + sensor_rng_.Uniform()) * o_.fov_h_rad / o_.rays_h;
+    const double pitch = head_[i].pitch - 0.5 * o_.fov_v_rad +
+                         (r / o_.rays_h + sensor_rng_.Uniform()) * o_.fov_v_rad / o_.rays_v;
+    const Eigen::Vector3d d(std::cos(pitch) * std::cos(yaw), std::cos(pitch) * std::sin(yaw),
+                            std::sin(pitch));
+    double best = o_.max_range_m;
+    int hit = 0;  // a surface index, kFloor, kCeiling, or none (0 with best unchanged)
+    bool any = false;
+    if (d.z() < -1e-9 && -eye / d.z() < best) best = -eye / d.z(), hit = kFloor, any = true;
+    if (d.z() > 1e-9 && (ceiling_ - eye) / d.z() < best)
+      best = (ceiling_ - eye) / d.z(), hit = kCeiling, any = true;
+    for (size_t s : near_) {
+      const Surface& f = surfaces_[s];
+      const double dn = d.dot(f.normal);
+      if (std::abs(dn) < 1e-9) continue;
+      const double t = (f.origin - eye_at).dot(f.normal) / dn;
+      if (t <= 0 || t >= best) continue;
+      const Eigen::Vector3d q = eye_at + t * d - f.origin;
+      const double a = q.dot(f.u), b = q.dot(f.v);
+      if (a < 0 || b < 0 || a > f.u_len || b > f.v_len) continue;
+      best = t, hit = static_cast<int>(s), any = true;
+    }
+    // Nearer than the minimum range: seen, but the spatial mapping keeps none of it.
+    if (!any || best < o_.min_range_m) continue;
+    const Eigen::Vector3d p = eye_at + best * d;
+    PatchKey key;
+    Eigen::Vector2d centre;
+    if (hit < 0) {
+      const int ix = static_cast<int>(std::floor(p.x() / o_.floor_cell_m));
+      const int iy = static_cast<int>(std::floor(p.y() / o_.floor_cell_m));
+      key = {hit, ix, iy};
+      centre = o_.floor_cell_m * Eigen::Vector2d(ix + 0.5, iy + 0.5);
+    } else {
+      const Surface& f = surfaces_[hit];
+      const Eigen::Vector3d q = p - f.origin;
+      const int iu = std::clamp(static_cast<int>(q.dot(f.u) / f.u_len * f.nu), 0, f.nu - 1);
+      const int iv = std::clamp(static_cast<int>(q.dot(f.v) / f.v_len * f.nv), 0, f.nv - 1);
+      key = {hit, iu, iv};
+      centre = f.PatchCentre(iu, iv);
+    }
+    Chunk& chunk = chunks_[ChunkOf(centre)];
+    if (chunk.seen.insert(key).second) chunk.dirty = true;
+  }
+}
+
+void Mesher::Emit(size_t i, SimulatedStep& step, MeshCounts& counts) {
+  const double dt = o_.pose_period_s;
+  const double now_s = i * dt;
+  for (auto& [key, chunk] : chunks_) {
+    if (chunk.id == 0)  // from the chunk's place, like a spatial-mapping volume's id
+      chunk.id = (static_cast<uint64_t>(key.first + (1 << 20)) << 21) +
+                 static_cast<uint64_t>(key.second + (1 << 20)) + 1;
+    const Eigen::Vector2d middle = o_.chunk_m * Eigen::Vector2d(key.first + 0.5, key.second + 0.5);
+    if (!chunk.dirty) {
+      // Far behind: the headset sometimes drops a surface; seen again, it comes back.
+      if (chunk.live && (middle - head_[i].position).norm() >= o_.remove_min_distance_m &&
+          mesh_rng_.Uniform() < o_.remove_rate_per_s * dt * o_.poses_per_mesh_tick) {
+        step.meshes.push_back({chunk.id, MeshChange::kRemoved, {}, {}});
+        ++counts.removed;
+        chunk.live = false;
+        chunk.seen.clear();
+        chunk.meshed.clear();
+      }
+      continue;
+    }
+    if (chunk.live && now_s - chunk.emitted_s < o_.update_after_s) continue;
+    SimMesh mesh;
+    mesh.id = chunk.id;
+    mesh.change = chunk.live ? MeshChange::kUpdated : MeshChange::kAdded;
+    ++(chunk.live ? counts.updated : counts.added);
+    chunk.live = true;
+    chunk.dirty = false;
+    chunk.emitted_s = now_s;
+    chunk.meshed = chunk.seen;
+    MeshPatches(chunk.seen, step.T_slam_plan, &mesh);
+    counts.vertices += mesh.vertices_slam.size();
+    counts.triangles += mesh.triangles.size() / 3;
+    step.meshes.push_back(std::move(mesh));
+  }
+}
+
+void Mesher::MeshPatches(const std::set<PatchKey>& patches, const Se2& T, SimMesh* mesh) {
+  const double eye = o_.eye_height_m;
+  auto vertex = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d noisy =
+        p + o_.vertex_noise_m *
+                Eigen::Vector3d(mesh_rng_.Gaussian(), mesh_rng_.Gaussian(), mesh_rng_.Gaussian());
+    const Eigen::Vector2d xy = T * noisy.head<2>();
+    mesh->vertices_slam.emplace_back(static_cast<float>(xy.x()), static_cast<float>(xy.y()),
+                                     static_cast<float>(noisy.z() - eye));
+  };
+  auto quads = [&](uint32_t first, int su, int sv) {
+    for (int b = 0; b < sv; ++b)
+      for (int a = 0; a < su; ++a) {
+        const uint32_t v00 = first + b * (su + 1) + a, v10 = v00 + 1;
+        const uint32_t v01 = v00 + su + 1, v11 = v01 + 1;
+        for (uint32_t t : {v00, v10, v11, v00, v11, v01}) mesh->triangles.push_back(t);
+      }
+  };
+  for (const auto& [surface, iu, iv] : patches) {
+    const auto first = static_cast<uint32_t>(mesh->vertices_slam.size());
+    if (surface < 0) {
+      const double z = surface == kFloor ? 0.0 : ceiling_;
+      const double offset = o_.patch_noise_m * mesh_rng_.Gaussian();
+      for (int b = 0; b <= 1; ++b)
+        for (int a = 0; a <= 1; ++a)
+          vertex({(iu + a) * o_.floor_cell_m, (iv + b) * o_.floor_cell_m, z + offset});
+      quads(first, 1, 1);
+      continue;
+    }
+    const Surface& f = surfaces_[surface];
+    const int su = 1 + static_cast<int>(mesh_rng_.Next() % o_.max_subdivisions);
+    const int sv = 1 + static_cast<int>(mesh_rng_.Next() % o_.max_subdivisions);
+    const double pu = f.u_len / f.nu, pv = f.v_len / f.nv;
+    const Eigen::Vector3d offset = o_.patch_noise_m * mesh_rng_.Gaussian() * f.normal;
+    for (int b = 0; b <= sv; ++b)
+      for (int a = 0; a <= su; ++a)
+        vertex(f.origin + offset + (iu + static_cast<double>(a) / su) * pu * f.u +
+               (iv + static_cast<double>(b) / sv) * pv * f.v);
+    quads(first, su, sv);
+  }
+}
+
+void Mesher::TryPick(size_t i, size_t earliest) {
+  if (picked_ || i < earliest) return;
+  double nearest = o_.max_range_m;
+  for (const auto& [key, chunk] : chunks_)
+    for (const auto& [surface, iu, iv] : chunk.meshed) {
+      if (surface < 0 || surfaces_[surface].segment < 0) continue;
+      const Eigen::Vector2d c = surfaces_[surface].PatchCentre(iu, iv);
+      const double d = (c - head_[i].position).norm();
+      if (d > nearest) continue;
+      nearest = d;
+      picked_ = MeshedWall{i, surfaces_[surface].segment, c};
+    }
+}
+
+// The wall pick (thesis section 6.3.4): the plan side is the meshed wall picked (or,
+// without a mesh or a meshed wall, the true nearest visible wall at `earliest`); the
+// headset side is chosen so that AlignFromWallPick gives the truth composed with a random
+// error of up to 9 degrees and 2.5 m about the wearer (thesis table 7.1), an error of the
+// pick as a whole.
+void PlacePick(const std::optional<MeshedWall>& picked, size_t earliest, const SimulatorOptions& o,
+               SplitMix64& pick_rng, Simulation* sim) {
+  const FloorPlan& plan = sim->plan;
+  const Reality& reality = sim->reality;
+  WallPick& pick = sim->pick;
+  sim->pick_step = picked ? picked->step : earliest;
+  const SimulatedStep& at = sim->steps[sim->pick_step];
+  const Eigen::Vector2d wearer = at.true_plan.position;
+  if (picked) {
+    const Segment& s = plan.segments[picked->segment];
+    pick.plan_point = ClosestPointOnSegment(s, picked->point);
+    pick.plan_normal = s.Normal();
+    if (pick.plan_normal.dot(wearer - pick.plan_point) < 0) pick.plan_normal *= -1.0;
+  } else {
+    double nearest = 1e300;
+    for (size_t i = 0; i < plan.segments.size(); ++i) {
+      if (!reality.plan_wall_present[i] || reality.plan_wall_glass[i]) continue;
+      const Eigen::Vector2d c = ClosestPointOnSegment(plan.segments[i], wearer);
+      if ((c - wearer).norm() >= nearest) continue;
+      nearest = (c - wearer).norm();
+      pick.plan_point = c;
+      pick.plan_normal = plan.segments[i].Normal();
+      if (pick.plan_normal.dot(wearer - c) < 0) pick.plan_normal *= -1.0;
+    }
+    if (nearest > 1e299) {  // every wall is glass or absent: pick the nearest plan wall
+      for (const Segment& s : plan.segments) {
+        const Eigen::Vector2d c = ClosestPointOnSegment(s, wearer);
+        if ((c - wearer).norm() >= nearest) continue;
+        nearest = (c - wearer).norm();
+        pick.plan_point = c;
+        pick.plan_normal = s.Normal();
+      }
+    }
+  }
+  double angle = pick_rng.Uniform(-o.max_pick_error_rad, o.max_pick_error_rad);
+  double offset = pick_rng.Uniform(0.0, o.max_pick_offset_m);
+  const double direction = pick_rng.Uniform(-M_PI, M_PI);
+  if (o.kidnap_m > 0) {  // the same draws, so a kidnapped walk is the same walk
+    angle = angle < 0 ? -o.kidnap_rad : o.kidnap_rad;
+    offset = o.kidnap_m;
+  }
+  // About the wearer: E = Trans(wearer + offset) Rot(angle) Trans(-wearer).
+  sim->pick_error =
+      Se2{0.0, wearer + offset * Eigen::Vector2d(std::cos(direction), std::sin(direction))} *
+      Se2{angle, Eigen::Vector2d::Zero()} * Se2{0.0, -wearer};
+  const Se2 T_plan_slam = sim->pick_error * at.T_slam_plan.Inverse();
+  pick.slam_point = T_plan_slam.Inverse() * pick.plan_point;
+  pick.slam_normal = Se2{-T_plan_slam.theta, {0, 0}}.R() * pick.plan_normal;
+  sim->pick_height_m = o.pick_height_m - o.eye_height_m;
+}
+
+// Ten markers at equal distances along the walk, the first at the start and the last at
+// the end (thesis section 5.1), each on the nearest pose.
+void PlaceMarkers(Simulation* sim) {
+  const size_t kept = sim->steps.size();
+  std::vector<double> along(kept, 0.0);
+  for (size_t i = 1; i < kept; ++i)
+    along[i] = along[i - 1] +
+               (sim->steps[i].true_plan.position - sim->steps[i - 1].true_plan.position).norm();
+  for (uint32_t m = 1; m <= 10; ++m) {
+    const double target = along.back() * (m - 1) / 9.0;
+    size_t i = std::lower_bound(along.begin(), along.end(), target) - along.begin();
+    i = std::min(i, kept - 1);
+    if (i > 0 && target - along[i - 1] < along[i] - target) --i;
+    sim->steps[i].marker = m;
+  }
+}
+
+// The settings of a simulation, human-readable, for SimulationInfo.
+struct Settings {
+  std::string scenario;  // how reality differs from the plan
+  std::string region;    // where the walk may go
+  bool given_trajectory = false;
+  Drift drift;
+  std::string scaled;  // how the plan was scaled and skewed
+  bool picked_on_mesh = false;
+};
+
+std::string Describe(const Simulation& sim, const SimulatorOptions& o, const Settings& set) {
+  const double k = o.drift_scale;
+  const double angle_deg = sim.pick_error.theta / kDeg;
+  std::string text = std::string("scenario ") + set.scenario + ". ";
+  text += "Walkable region: " + set.region + ". ";
+  text +=
+      set.given_trajectory
+          ? Format("Walk: the given trajectory, %.0f m in %.0f s. ", sim.length_m, sim.duration_s)
+          : Format(
+                "Walk: random goals joined by A* paths, %.1f-%.1f m/s, stops of "
+                "%.0f-%.0f s; ",
+                o.min_speed_mps, o.max_speed_mps, o.min_stop_s, o.max_stop_s) +
+                Format("%.0f m in %.0f s (target %.0f m). ", sim.length_m, sim.duration_s,
+                       o.target_length_m);
+  text += Format("Headset: poses every %.2f s, eye height %.2f m; sensor %.1f-%.1f m, ",
+                 o.pose_period_s, o.eye_height_m, o.min_range_m, o.max_range_m) +
+          Format("field of view %.0f x %.0f deg. ", o.fov_h_rad / kDeg, o.fov_v_rad / kDeg);
+  text += o.mesh ? Format(
+                       "Mesh: %.0f m chunks, patches of %.2f m, noise %.3f m per patch and "
+                       "%.3f m per vertex; ",
+                       o.chunk_m, o.patch_m, o.patch_noise_m, o.vertex_noise_m) +
+                       Format("updated at most every %.0f s; walls and ceiling %.1f m. ",
+                              o.update_after_s, sim.reality.ceiling_m)
+                 : std::string("Mesh: off. ");
+  text += Format("SLAM drift: scale error %+.2f%%, heading bias %+.4f deg/m, ",
+                 100.0 * (set.drift.scale - 1.0), set.drift.bias / kDeg) +
+          Format("heading walk %.4f rad/sqrt(m), yaw scale error %+.2f%%. ",
+                 k * o.heading_walk_rad_per_sqrt_m, 100.0 * (set.drift.yaw_scale - 1.0));
+  text += set.scaled;
+  for (const Relocalization& r : sim.relocalizations)
+    text += Format("Tracking lost at %.1f s for %.1f s, then the frame jumped %.2f m", r.lost_s,
+                   r.found_s - r.lost_s, r.jump_m) +
+            Format(" and %.1f deg. ", r.jump.theta / kDeg);
+  text += Format("Wall pick at %.1f s", (sim.steps[sim.pick_step].stamp_ns * 1e-9 - o.start_s));
+  if (o.mesh && !set.picked_on_mesh) text += " (no plan wall ever meshed: an unseen one)";
+  text += Format(", error: %.1f deg, %.2f m about the wearer.", angle_deg,
+                 (sim.pick_error * sim.steps[sim.pick_step].true_plan.position -
+                  sim.steps[sim.pick_step].true_plan.position)
+                     .norm());
+  return text;
+}
+
+}  // namespace
+
 Simulation Simulate(const FloorPlan& input, const SimulatorOptions& o,
                     const std::vector<TimedPose>* trajectory) {
   Simulation sim;
@@ -819,28 +1279,12 @@ Simulation Simulate(const FloorPlan& input, const SimulatorOptions& o,
   SplitMix64 mesh_rng = Stream(walk_key, 5), pick_rng = Stream(walk_key, 6);
   SplitMix64 loss_rng = Stream(walk_key, 7);
   const double dt = o.pose_period_s;
+  Settings settings;
+  settings.given_trajectory = trajectory != nullptr;
 
-  // The plan as drawn, and what of it stands. In doors the plan has a line across every
-  // opening that reality lacks; in stale reality lost and moved walls since.
-  sim.plan = input;
-  const FloorPlan& plan = sim.plan;
-  std::string drawn_text;
-  if (o.scenario == Scenario::kDoors) {
-    const std::vector<Segment> doors = DoorLines(input, o.max_door_m);
-    sim.plan.segments.insert(sim.plan.segments.end(), doors.begin(), doors.end());
-    drawn_text = Format(
-        "doors: the plan draws the openings of 0.6-%.1f m closed (%.0f lines, one per "
-        "face of a wall); reality has them open",
-        o.max_door_m, static_cast<double>(doors.size()));
-  }
   Reality initial;
-  initial.plan_wall_present.assign(plan.segments.size(), 1);
-  initial.plan_wall_glass.assign(plan.segments.size(), 0);
-  initial.plan_wall_offset.assign(plan.segments.size(), Eigen::Vector2d::Zero());
-  for (size_t i = input.segments.size(); i < plan.segments.size(); ++i)
-    initial.plan_wall_present[i] = 0;
-  if (o.scenario == Scenario::kStale) drawn_text = MarkStale(plan, o, reality_rng, &initial);
-
+  const std::string drawn_text = DrawPlan(input, o, reality_rng, &sim, &initial);
+  const FloorPlan& plan = sim.plan;
   // Where one can walk: the plan's walls, all of them (so the walk never crosses one, even
   // where reality lacks it); in the scenarios of a plan that differs from the building,
   // the walls that stand.
@@ -862,57 +1306,12 @@ Simulation Simulate(const FloorPlan& input, const SimulatorOptions& o,
     sim.error = "no walkable region on the plan";
     return sim;
   }
-
-  // Reality.
   RealityBuilder builder(plan, free_space, keep_clear, reality_rng, std::move(initial));
   builder.reality.ceiling_m = o.scenario == Scenario::kHall ? o.hall_ceiling_m : o.ceiling_m;
-  std::string scenario_text;
-  switch (o.scenario) {
-    case Scenario::kCorridor:
-      scenario_text = "corridor: reality equals the plan; goals far apart (long hallways)";
-      break;
-    case Scenario::kDoors: scenario_text = drawn_text; break;
-    case Scenario::kStale:
-      scenario_text = drawn_text + builder.NewWalls(builder.reality.ceiling_m);
-      break;
-    case Scenario::kScaled:
-      scenario_text = "scaled: the plan was scanned from paper (below)";
-      break;
-    case Scenario::kRelocalize:
-      scenario_text = "relocalize: reality equals the plan; the headset loses tracking (below)";
-      break;
-    case Scenario::kOffice: scenario_text = builder.Furnish(); break;
-    case Scenario::kGlass: scenario_text = builder.Glass(o.glass_share); break;
-    case Scenario::kMismatch:
-      scenario_text = builder.Mismatch(o.absent_share, builder.reality.ceiling_m);
-      break;
-    case Scenario::kHall: {
-      // The most open area: cells far from every wall, around the most open one. A space
-      // of 10 x 10 m has 5 m of clearance in its middle.
-      const int centre = free_space.MostOpenCell();
-      const double most = centre < 0 ? 0.0 : free_space.Clearance(free_space.CellCentre(centre));
-      const double keep = std::min(3.0, 0.6 * most);
-      if (!trajectory) free_space.RestrictTo(centre, keep);
-      scenario_text =
-          trajectory ? Format(
-                           "hall: ceiling %.1f m; the given trajectory decides where the walk "
-                           "goes",
-                           builder.reality.ceiling_m)
-          : most >= 5.0
-              ? Format(
-                    "hall: the walk stays in the plan's largest open area, at least %.1f m "
-                    "from walls (%.0f m2); ceiling %.1f m",
-                    keep, free_space.walkable_area_m2(), builder.reality.ceiling_m)
-              : Format(
-                    "hall: the plan has no open area of 10 x 10 m; the walk stays in its most "
-                    "open area instead, at least %.1f m from walls (%.0f m2); ceiling %.1f m",
-                    keep, free_space.walkable_area_m2(), builder.reality.ceiling_m);
-      break;
-    }
-  }
+  settings.scenario = BuildScenario(builder, free_space, drawn_text, o, trajectory != nullptr);
+  settings.region = free_space.region();
   sim.reality = builder.reality;
-  const Reality& reality = sim.reality;
-  const std::vector<Surface> surfaces = RealSurfaces(plan, reality, o.patch_m);
+  const std::vector<Surface> surfaces = RealSurfaces(plan, sim.reality, o.patch_m);
 
   if (!trajectory) head = GenerateWalk(free_space, o.scenario, o, walk_rng);
   if (head.size() < 2) {
@@ -920,342 +1319,28 @@ Simulation Simulate(const FloorPlan& input, const SimulatorOptions& o,
     return sim;
   }
   const size_t n = head.size();
-
   const std::vector<Loss> losses =
       o.scenario == Scenario::kRelocalize ? DrawLosses(n, o, loss_rng) : std::vector<Loss>{};
   std::vector<uint8_t> lost(n, 0);  // no poses and no meshes while lost
   for (const Loss& loss : losses)
     for (size_t i = loss.from; i < loss.to; ++i) lost[i] = 1;
+  settings.drift = TrackSlam(head, losses, o, drift_rng, &sim);
 
-  // Ground truth and the SLAM drift: the true motion between poses, integrated with a scale
-  // error, a heading bias and random walks. The SLAM frame starts at the head, looking
-  // along +y (Unity's +z), as HoloLens sets it up.
-  const double k = o.drift_scale;
-  const double scale = 1.0 + k * o.scale_error_sigma * drift_rng.Gaussian();
-  const double bias = k * o.heading_bias_rad_per_m * drift_rng.Uniform(0.5, 1.5) *
-                      (drift_rng.Next() % 2 ? 1.0 : -1.0);
-  const double yaw_scale = 1.0 + k * o.yaw_scale_error_sigma * drift_rng.Gaussian();
-  Se2 slam{M_PI / 2, Eigen::Vector2d::Zero()};
-  sim.steps.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    SimulatedStep& step = sim.steps[i];
-    step.stamp_ns = static_cast<int64_t>(std::llround((o.start_s + i * dt) * 1e9));
-    step.true_plan = {head[i].position, head[i].yaw, o.eye_height_m};
-    if (i > 0) {
-      const Se2 motion = ToSe2(sim.steps[i - 1].true_plan).Inverse() * ToSe2(step.true_plan);
-      const double d = motion.t.norm();
-      sim.length_m += d;
-      const double heading_error =
-          bias * d + k * o.heading_walk_rad_per_sqrt_m * std::sqrt(d) * drift_rng.Gaussian() +
-          k * o.heading_walk_rad_per_sqrt_s * std::sqrt(dt) * drift_rng.Gaussian() +
-          (yaw_scale - 1.0) * motion.theta;
-      const Eigen::Vector2d position_error =
-          k * o.position_walk_m_per_sqrt_m * std::sqrt(d) *
-          Eigen::Vector2d(drift_rng.Gaussian(), drift_rng.Gaussian());
-      slam = slam * Se2{motion.theta + heading_error, scale * motion.t + position_error};
-    }
-    for (const Loss& loss : losses) {
-      if (loss.to != i) continue;
-      // Relocalized: the frame jumps about where the headset is.
-      const Se2 jump = Se2{0.0, slam.t + loss.offset} * Se2{loss.angle, Eigen::Vector2d::Zero()} *
-                       Se2{0.0, -slam.t};
-      slam = jump * slam;
-      sim.relocalizations.push_back(
-          {o.start_s + loss.from * dt, o.start_s + loss.to * dt, jump, loss.offset.norm()});
-    }
-    step.T_slam_plan = slam * ToSe2(step.true_plan).Inverse();
-    const double jitter_rad = k * o.jitter_rad * drift_rng.Gaussian();
-    const Eigen::Vector2d jitter_m =
-        k * o.jitter_m * Eigen::Vector2d(drift_rng.Gaussian(), drift_rng.Gaussian());
-    step.slam = {slam.t + jitter_m, WrapAngle(slam.theta + jitter_rad), 0.0};
-  }
-  sim.T_slam_plan_initial = sim.steps[0].T_slam_plan;
-  sim.duration_s = (n - 1) * dt;
-
-  // The sensor and the mesh.
-  struct Chunk {
-    std::set<PatchKey> seen;
-    std::set<PatchKey> meshed;  // the patches in the mesh the headset has now
-    bool live = false, dirty = false;
-    double emitted_s = 0.0;
-    uint64_t id = 0;
-  };
-  std::map<ChunkKey, Chunk> chunks;
-  auto chunk_of = [&](const Eigen::Vector2d& p) -> ChunkKey {
-    return {static_cast<int>(std::floor(p.x() / o.chunk_m)),
-            static_cast<int>(std::floor(p.y() / o.chunk_m))};
-  };
-  const double ceiling = reality.ceiling_m;
-  const double eye = o.eye_height_m;
-  std::vector<size_t> near;
-  // The wall pick is a gaze hit on the mesh (thesis section 6.3.3): the first pose from
-  // pick_time_s on with a plan wall in the headset's mesh within sensor range; the wall
-  // patch nearest the wearer is the one picked.
   const size_t earliest_pick =
       std::min(n - 1, static_cast<size_t>(std::llround(o.pick_time_s / dt)));
-  struct MeshedWall {
-    size_t step = 0;
-    int segment = -1;
-    Eigen::Vector2d point;
-  };
-  std::optional<MeshedWall> picked;
-  auto try_pick = [&](size_t i) {
-    if (picked || i < earliest_pick) return;
-    double nearest = o.max_range_m;
-    for (const auto& [key, chunk] : chunks)
-      for (const auto& [surface, iu, iv] : chunk.meshed) {
-        if (surface < 0 || surfaces[surface].segment < 0) continue;
-        const Eigen::Vector2d c = surfaces[surface].PatchCentre(iu, iv);
-        const double d = (c - head[i].position).norm();
-        if (d > nearest) continue;
-        nearest = d;
-        picked = MeshedWall{i, surfaces[surface].segment, c};
-      }
-  };
+  Mesher mesher(o, surfaces, head, sim.reality.ceiling_m, sensor_rng, mesh_rng);
   for (size_t i = 0; i < n && o.mesh; ++i) {
     if (lost[i]) continue;  // tracking lost: the headset maps nothing
-    SimulatedStep& step = sim.steps[i];
-    const Eigen::Vector3d eye_at(head[i].position.x(), head[i].position.y(), eye);
-    near.clear();
-    for (size_t s = 0; s < surfaces.size(); ++s)
-      if ((surfaces[s].centre - head[i].position).norm() <= o.max_range_m + surfaces[s].radius)
-        near.push_back(s);
-    for (int r = 0; r < o.rays_h * o.rays_v; ++r) {
-      const double yaw = head[i].yaw - 0.5 * o.fov_h_rad +
-                         (r % o.rays_h + sensor_rng.Uniform()) * o.fov_h_rad / o.rays_h;
-      const double pitch = head[i].pitch - 0.5 * o.fov_v_rad +
-                           (r / o.rays_h + sensor_rng.Uniform()) * o.fov_v_rad / o.rays_v;
-      const Eigen::Vector3d d(std::cos(pitch) * std::cos(yaw), std::cos(pitch) * std::sin(yaw),
-                              std::sin(pitch));
-      double best = o.max_range_m;
-      int hit = 0;  // a surface index, kFloor, kCeiling, or none (0 with best unchanged)
-      bool any = false;
-      if (d.z() < -1e-9 && -eye / d.z() < best) best = -eye / d.z(), hit = kFloor, any = true;
-      if (d.z() > 1e-9 && (ceiling - eye) / d.z() < best)
-        best = (ceiling - eye) / d.z(), hit = kCeiling, any = true;
-      for (size_t s : near) {
-        const Surface& f = surfaces[s];
-        const double dn = d.dot(f.normal);
-        if (std::abs(dn) < 1e-9) continue;
-        const double t = (f.origin - eye_at).dot(f.normal) / dn;
-        if (t <= 0 || t >= best) continue;
-        const Eigen::Vector3d q = eye_at + t * d - f.origin;
-        const double a = q.dot(f.u), b = q.dot(f.v);
-        if (a < 0 || b < 0 || a > f.u_len || b > f.v_len) continue;
-        best = t, hit = static_cast<int>(s), any = true;
-      }
-      // Nearer than the minimum range: seen, but the spatial mapping keeps none of it.
-      if (!any || best < o.min_range_m) continue;
-      const Eigen::Vector3d p = eye_at + best * d;
-      PatchKey key;
-      Eigen::Vector2d centre;
-      if (hit < 0) {
-        const int ix = static_cast<int>(std::floor(p.x() / o.floor_cell_m));
-        const int iy = static_cast<int>(std::floor(p.y() / o.floor_cell_m));
-        key = {hit, ix, iy};
-        centre = o.floor_cell_m * Eigen::Vector2d(ix + 0.5, iy + 0.5);
-      } else {
-        const Surface& f = surfaces[hit];
-        const Eigen::Vector3d q = p - f.origin;
-        const int iu = std::clamp(static_cast<int>(q.dot(f.u) / f.u_len * f.nu), 0, f.nu - 1);
-        const int iv = std::clamp(static_cast<int>(q.dot(f.v) / f.v_len * f.nv), 0, f.nv - 1);
-        key = {hit, iu, iv};
-        centre = f.PatchCentre(iu, iv);
-      }
-      Chunk& chunk = chunks[chunk_of(centre)];
-      if (chunk.seen.insert(key).second) chunk.dirty = true;
-    }
-
-    if (i % o.poses_per_mesh_tick != 0) {
-      try_pick(i);
-      continue;
-    }
-    const double now_s = i * dt;
-    const Se2& T = step.T_slam_plan;
-    for (auto& [key, chunk] : chunks) {
-      if (chunk.id == 0)  // from the chunk's place, like a spatial-mapping volume's id
-        chunk.id = (static_cast<uint64_t>(key.first + (1 << 20)) << 21) +
-                   static_cast<uint64_t>(key.second + (1 << 20)) + 1;
-      const Eigen::Vector2d middle = o.chunk_m * Eigen::Vector2d(key.first + 0.5, key.second + 0.5);
-      if (!chunk.dirty) {
-        // Far behind: the headset sometimes drops a surface; seen again, it comes back.
-        if (chunk.live && (middle - head[i].position).norm() >= o.remove_min_distance_m &&
-            mesh_rng.Uniform() < o.remove_rate_per_s * dt * o.poses_per_mesh_tick) {
-          step.meshes.push_back({chunk.id, MeshChange::kRemoved, {}, {}});
-          ++sim.counts.removed;
-          chunk.live = false;
-          chunk.seen.clear();
-          chunk.meshed.clear();
-        }
-        continue;
-      }
-      if (chunk.live && now_s - chunk.emitted_s < o.update_after_s) continue;
-      SimMesh mesh;
-      mesh.id = chunk.id;
-      mesh.change = chunk.live ? MeshChange::kUpdated : MeshChange::kAdded;
-      ++(chunk.live ? sim.counts.updated : sim.counts.added);
-      chunk.live = true;
-      chunk.dirty = false;
-      chunk.emitted_s = now_s;
-      chunk.meshed = chunk.seen;
-      // Every patch seen so far, re-meshed with fresh noise in today's SLAM frame.
-      auto vertex = [&](const Eigen::Vector3d& p) {
-        const Eigen::Vector3d noisy =
-            p + o.vertex_noise_m *
-                    Eigen::Vector3d(mesh_rng.Gaussian(), mesh_rng.Gaussian(), mesh_rng.Gaussian());
-        const Eigen::Vector2d xy = T * noisy.head<2>();
-        mesh.vertices_slam.emplace_back(static_cast<float>(xy.x()), static_cast<float>(xy.y()),
-                                        static_cast<float>(noisy.z() - eye));
-      };
-      auto quads = [&](uint32_t first, int su, int sv) {
-        for (int b = 0; b < sv; ++b)
-          for (int a = 0; a < su; ++a) {
-            const uint32_t v00 = first + b * (su + 1) + a, v10 = v00 + 1;
-            const uint32_t v01 = v00 + su + 1, v11 = v01 + 1;
-            for (uint32_t t : {v00, v10, v11, v00, v11, v01}) mesh.triangles.push_back(t);
-          }
-      };
-      for (const auto& [surface, iu, iv] : chunk.seen) {
-        const auto first = static_cast<uint32_t>(mesh.vertices_slam.size());
-        if (surface < 0) {
-          const double z = surface == kFloor ? 0.0 : ceiling;
-          const double offset = o.patch_noise_m * mesh_rng.Gaussian();
-          for (int b = 0; b <= 1; ++b)
-            for (int a = 0; a <= 1; ++a)
-              vertex({(iu + a) * o.floor_cell_m, (iv + b) * o.floor_cell_m, z + offset});
-          quads(first, 1, 1);
-          continue;
-        }
-        const Surface& f = surfaces[surface];
-        const int su = 1 + static_cast<int>(mesh_rng.Next() % o.max_subdivisions);
-        const int sv = 1 + static_cast<int>(mesh_rng.Next() % o.max_subdivisions);
-        const double pu = f.u_len / f.nu, pv = f.v_len / f.nv;
-        const Eigen::Vector3d offset = o.patch_noise_m * mesh_rng.Gaussian() * f.normal;
-        for (int b = 0; b <= sv; ++b)
-          for (int a = 0; a <= su; ++a)
-            vertex(f.origin + offset + (iu + static_cast<double>(a) / su) * pu * f.u +
-                   (iv + static_cast<double>(b) / sv) * pv * f.v);
-        quads(first, su, sv);
-      }
-      sim.counts.vertices += mesh.vertices_slam.size();
-      sim.counts.triangles += mesh.triangles.size() / 3;
-      step.meshes.push_back(std::move(mesh));
-    }
-    try_pick(i);
+    mesher.See(i);
+    if (i % o.poses_per_mesh_tick == 0) mesher.Emit(i, sim.steps[i], sim.counts);
+    mesher.TryPick(i, earliest_pick);
   }
-
-  // The wall pick (thesis section 6.3.4): the plan side is the meshed wall picked above (or,
-  // without a mesh or a meshed wall, the true nearest visible wall at pick_time_s); the
-  // headset side is chosen so that AlignFromWallPick gives the truth composed with a random
-  // error of up to 9 degrees and 2.5 m about the wearer (thesis table 7.1), an error of the
-  // pick as a whole.
-  sim.pick_step = picked ? picked->step : earliest_pick;
-  {
-    const SimulatedStep& at = sim.steps[sim.pick_step];
-    const Eigen::Vector2d wearer = at.true_plan.position;
-    if (picked) {
-      const Segment& s = plan.segments[picked->segment];
-      sim.pick.plan_point = ClosestPointOnSegment(s, picked->point);
-      sim.pick.plan_normal = s.Normal();
-      if (sim.pick.plan_normal.dot(wearer - sim.pick.plan_point) < 0) sim.pick.plan_normal *= -1.0;
-    } else {
-      double nearest = 1e300;
-      for (size_t i = 0; i < plan.segments.size(); ++i) {
-        if (!reality.plan_wall_present[i] || reality.plan_wall_glass[i]) continue;
-        const Eigen::Vector2d c = ClosestPointOnSegment(plan.segments[i], wearer);
-        if ((c - wearer).norm() >= nearest) continue;
-        nearest = (c - wearer).norm();
-        sim.pick.plan_point = c;
-        sim.pick.plan_normal = plan.segments[i].Normal();
-        if (sim.pick.plan_normal.dot(wearer - c) < 0) sim.pick.plan_normal *= -1.0;
-      }
-      if (nearest > 1e299) {  // every wall is glass or absent: pick the nearest plan wall
-        for (const Segment& s : plan.segments) {
-          const Eigen::Vector2d c = ClosestPointOnSegment(s, wearer);
-          if ((c - wearer).norm() >= nearest) continue;
-          nearest = (c - wearer).norm();
-          sim.pick.plan_point = c;
-          sim.pick.plan_normal = s.Normal();
-        }
-      }
-    }
-    double angle = pick_rng.Uniform(-o.max_pick_error_rad, o.max_pick_error_rad);
-    double offset = pick_rng.Uniform(0.0, o.max_pick_offset_m);
-    const double direction = pick_rng.Uniform(-M_PI, M_PI);
-    if (o.kidnap_m > 0) {  // the same draws, so a kidnapped walk is the same walk
-      angle = angle < 0 ? -o.kidnap_rad : o.kidnap_rad;
-      offset = o.kidnap_m;
-    }
-    // About the wearer: E = Trans(wearer + offset) Rot(angle) Trans(-wearer).
-    sim.pick_error =
-        Se2{0.0, wearer + offset * Eigen::Vector2d(std::cos(direction), std::sin(direction))} *
-        Se2{angle, Eigen::Vector2d::Zero()} * Se2{0.0, -wearer};
-    const Se2 T_plan_slam = sim.pick_error * at.T_slam_plan.Inverse();
-    sim.pick.slam_point = T_plan_slam.Inverse() * sim.pick.plan_point;
-    sim.pick.slam_normal = Se2{-T_plan_slam.theta, {0, 0}}.R() * sim.pick.plan_normal;
-    sim.pick_height_m = o.pick_height_m - eye;
-  }
-
+  settings.picked_on_mesh = mesher.picked().has_value();
+  PlacePick(mesher.picked(), earliest_pick, o, pick_rng, &sim);
   if (!losses.empty()) DropLostSteps(lost, &sim);  // while lost, the headset sends nothing
-
-  const std::string scaled_text =
-      o.scenario == Scenario::kScaled ? ScaleAndSkew(input, o, reality_rng, &sim) : std::string();
-
-  // Ten markers at equal distances along the walk, the first at the start and the last at
-  // the end (thesis section 5.1), each on the nearest pose.
-  {
-    const size_t kept = sim.steps.size();
-    std::vector<double> along(kept, 0.0);
-    for (size_t i = 1; i < kept; ++i)
-      along[i] = along[i - 1] +
-                 (sim.steps[i].true_plan.position - sim.steps[i - 1].true_plan.position).norm();
-    for (uint32_t m = 1; m <= 10; ++m) {
-      const double target = along.back() * (m - 1) / 9.0;
-      size_t i = std::lower_bound(along.begin(), along.end(), target) - along.begin();
-      i = std::min(i, kept - 1);
-      if (i > 0 && target - along[i - 1] < along[i] - target) --i;
-      sim.steps[i].marker = m;
-    }
-  }
-
-  // The description, for SimulationInfo.
-  const double angle_deg = sim.pick_error.theta / kDeg;
-  std::string& text = sim.description;
-  text = std::string("scenario ") + scenario_text + ". ";
-  text += "Walkable region: " + free_space.region() + ". ";
-  text += trajectory ? Format("Walk: the given trajectory, %.0f m in %.0f s. ", sim.length_m,
-                              sim.duration_s)
-                     : Format(
-                           "Walk: random goals joined by A* paths, %.1f-%.1f m/s, stops of "
-                           "%.0f-%.0f s; ",
-                           o.min_speed_mps, o.max_speed_mps, o.min_stop_s, o.max_stop_s) +
-                           Format("%.0f m in %.0f s (target %.0f m). ", sim.length_m,
-                                  sim.duration_s, o.target_length_m);
-  text += Format("Headset: poses every %.2f s, eye height %.2f m; sensor %.1f-%.1f m, ",
-                 o.pose_period_s, o.eye_height_m, o.min_range_m, o.max_range_m) +
-          Format("field of view %.0f x %.0f deg. ", o.fov_h_rad / kDeg, o.fov_v_rad / kDeg);
-  text += o.mesh ? Format(
-                       "Mesh: %.0f m chunks, patches of %.2f m, noise %.3f m per patch and "
-                       "%.3f m per vertex; ",
-                       o.chunk_m, o.patch_m, o.patch_noise_m, o.vertex_noise_m) +
-                       Format("updated at most every %.0f s; walls and ceiling %.1f m. ",
-                              o.update_after_s, ceiling)
-                 : std::string("Mesh: off. ");
-  text += Format("SLAM drift: scale error %+.2f%%, heading bias %+.4f deg/m, ",
-                 100.0 * (scale - 1.0), bias / kDeg) +
-          Format("heading walk %.4f rad/sqrt(m), yaw scale error %+.2f%%. ",
-                 k * o.heading_walk_rad_per_sqrt_m, 100.0 * (yaw_scale - 1.0));
-  text += scaled_text;
-  for (const Relocalization& r : sim.relocalizations)
-    text += Format("Tracking lost at %.1f s for %.1f s, then the frame jumped %.2f m", r.lost_s,
-                   r.found_s - r.lost_s, r.jump_m) +
-            Format(" and %.1f deg. ", r.jump.theta / kDeg);
-  text += Format("Wall pick at %.1f s", (sim.steps[sim.pick_step].stamp_ns * 1e-9 - o.start_s));
-  if (o.mesh && !picked) text += " (no plan wall ever meshed: an unseen one)";
-  text += Format(", error: %.1f deg, %.2f m about the wearer.", angle_deg,
-                 (sim.pick_error * sim.steps[sim.pick_step].true_plan.position -
-                  sim.steps[sim.pick_step].true_plan.position)
-                     .norm());
+  if (o.scenario == Scenario::kScaled) settings.scaled = ScaleAndSkew(input, o, reality_rng, &sim);
+  PlaceMarkers(&sim);
+  sim.description = Describe(sim, o, settings);
   return sim;
 }
 
