@@ -313,6 +313,18 @@ const char* CommandName(v1::Command::CommandCase c) {
   return "";
 }
 
+// Command.wall_pick in the SLAM frame: the headset's side converted from its convention.
+WallPick PickInSlam(const v1::Command::WallPick& p, HeadsetFrame frame) {
+  const Eigen::Vector3d point =
+      PointToSlam(frame, {p.headset_point().x(), p.headset_point().y(), p.headset_point().z()});
+  const Eigen::Vector3d normal =
+      PointToSlam(frame, {p.headset_normal().x(), p.headset_normal().y(), p.headset_normal().z()});
+  return {point.head<2>(),
+          normal.head<2>(),
+          {p.plan_x(), p.plan_y()},
+          {p.plan_normal_x(), p.plan_normal_y()}};
+}
+
 }  // namespace
 
 void Engine::OnCommand(const Envelope& e) {
@@ -326,51 +338,15 @@ void Engine::OnCommand(const Envelope& e) {
   std::string done;
   if (error.empty()) {
     switch (cmd.command_case()) {
-      case v1::Command::kLoadPlan: {
-        const auto& load = cmd.load_plan();
-        std::string path = load.path();
-        if (!load.plan_id().empty() && !load.path().empty())
-          error = "give plan_id or path, not both";
-        else if (load.plan_id().empty() && load.path().empty())
-          error = "load_plan without plan_id or path";
-        else if (!load.plan_id().empty())
-          FindPlanFile(config().plan_dir(), load.plan_id(), &path, &error);
-        else if (plan_loading_)
-          error = "another plan is loading: try again when it is answered";
-        if (!error.empty()) break;
-        const std::string floor = load.floor().empty() ? config().floor() : load.floor();
-        // Read and built elsewhere; the poses meanwhile go on on the plan in use.
-        auto built = std::make_shared<PlanLoad>();
-        auto finish = [this, built, cmd, reply, path] {
-          plan_loading_ = false;
-          const std::string refused = UseLoad(std::move(*built));
-          if (refused.empty()) store_.TakeNewPoints();  // the store is kept: the same walls
-          FinishCommand(cmd, reply, refused, refused.empty() ? "plan loaded: " + path : "");
-        };
-        auto work = [built, config = config(), now = now_ns_, path, floor] {
-          *built = ReadPlan(config, now, path, floor);
-        };
-        if (!offload_) {
-          work();
-          return finish();
-        }
-        plan_loading_ = true;
-        return offload_(std::move(work), std::move(finish));
-      }
-      case v1::Command::kWallPick: {
-        const auto& p = cmd.wall_pick();
-        const Eigen::Vector3d point = PointToSlam(
-            frame_, {p.headset_point().x(), p.headset_point().y(), p.headset_point().z()});
-        const Eigen::Vector3d normal = PointToSlam(
-            frame_, {p.headset_normal().x(), p.headset_normal().y(), p.headset_normal().z()});
-        WallPick pick{point.head<2>(),
-                      normal.head<2>(),
-                      {p.plan_x(), p.plan_y()},
-                      {p.plan_normal_x(), p.plan_normal_y()}};
-        error = tracker_.ApplyWallPick(pick, intake_.clock().newest_ns());
+      case v1::Command::kLoadPlan:
+        error = StartLoadPlan(cmd, reply);
+        if (error.empty()) return;  // answered once the plan is built
+        break;
+      case v1::Command::kWallPick:
+        error = tracker_.ApplyWallPick(PickInSlam(cmd.wall_pick(), frame_),
+                                       intake_.clock().newest_ns());
         if (error.empty()) done = "wall pick applied";
         break;
-      }
       case v1::Command::kFlip:
         error = tracker_.Flip(intake_.clock().newest_ns());
         if (error.empty()) done = "flipped";
@@ -419,6 +395,41 @@ void Engine::OnCommand(const Envelope& e) {
     }
   }
   FinishCommand(cmd, std::move(reply), error, done);
+}
+
+std::string Engine::StartLoadPlan(const v1::Command& cmd, const v1::CommandReply& reply) {
+  const auto& load = cmd.load_plan();
+  std::string path = load.path();
+  std::string error;
+  if (!load.plan_id().empty() && !load.path().empty())
+    error = "give plan_id or path, not both";
+  else if (load.plan_id().empty() && load.path().empty())
+    error = "load_plan without plan_id or path";
+  else if (!load.plan_id().empty())
+    FindPlanFile(config().plan_dir(), load.plan_id(), &path, &error);
+  else if (plan_loading_)
+    error = "another plan is loading: try again when it is answered";
+  if (!error.empty()) return error;
+  const std::string floor = load.floor().empty() ? config().floor() : load.floor();
+  // Read and built elsewhere; the poses meanwhile go on on the plan in use.
+  auto built = std::make_shared<PlanLoad>();
+  auto finish = [this, built, cmd, reply, path] {
+    plan_loading_ = false;
+    const std::string refused = UseLoad(std::move(*built));
+    if (refused.empty()) store_.TakeNewPoints();  // the store is kept: the same walls
+    FinishCommand(cmd, reply, refused, refused.empty() ? "plan loaded: " + path : "");
+  };
+  auto work = [built, config = config(), now = now_ns_, path, floor] {
+    *built = ReadPlan(config, now, path, floor);
+  };
+  if (!offload_) {
+    work();
+    finish();
+    return "";
+  }
+  plan_loading_ = true;
+  offload_(std::move(work), std::move(finish));
+  return "";
 }
 
 void Engine::FinishCommand(const v1::Command& cmd, v1::CommandReply reply, const std::string& error,

@@ -121,6 +121,9 @@ class Engine {
   // A plan read and built (ReadPlan, on any thread) becomes the plan in use, or its
   // refusal is counted.
   std::string UseLoad(PlanLoad load);
+  // Command.load_plan: starts reading and building the plan (on offload_ when there is
+  // one), answered when it is built; why not, if it cannot start.
+  std::string StartLoadPlan(const v1::Command& cmd, const v1::CommandReply& reply);
   // The end of a command: its reply and status, and what it changed published.
   void FinishCommand(const v1::Command& cmd, v1::CommandReply reply, const std::string& error,
                      const std::string& done);
