@@ -29,27 +29,21 @@ struct Input {
   platform::Envelope envelope;
 };
 
-}  // namespace
+// What a recording gives an evaluation: the daemon's inputs in the daemon's order, the
+// ground truth by stamp, and the headset's device id.
+struct Recorded {
+  std::vector<Input> inputs;
+  std::map<int64_t, v1::GroundTruthPose> truth;
+  std::string device_id;
+};
 
-double Percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1,
-                    static_cast<size_t>(q * static_cast<double>(v.size() - 1) + 0.5))];
-}
-
-bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& recording,
-              Baseline baseline, EvalReport* report, std::string* error,
-              platform::RecordingWriter* session, bool no_pick) {
-  *report = {};
+bool ReadRecorded(const std::string& recording, EvalReport* report, Recorded* out,
+                  std::string* error) {
   platform::RecordingReader reader(recording);
   if (!reader.ok()) {
     *error = reader.error();
     return false;
   }
-  std::vector<Input> inputs;
-  std::map<int64_t, v1::GroundTruthPose> truth;
-  std::string device_id;
   v1::RecordingRecord record;
   while (reader.Next(&record)) {
     if (record.topic() == kSimInfoTopic) {
@@ -63,81 +57,142 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     }
     if (record.topic() == kGroundTruthTopic) {
       v1::GroundTruthPose gt;
-      if (gt.ParseFromString(record.envelope().payload())) truth[gt.stamp_ns()] = gt;
+      if (gt.ParseFromString(record.envelope().payload())) out->truth[gt.stamp_ns()] = gt;
       continue;
     }
     const auto topic = platform::TopicFromName(record.topic());
     if (!topic ||
         (*topic != Topic::kMeshDelta && *topic != Topic::kHeadsetPose && *topic != Topic::kCommand))
       continue;  // daemon outputs in a recording of a live session
-    if (device_id.empty() && *topic == Topic::kHeadsetPose)
-      device_id = record.envelope().device_id();
-    inputs.push_back(
+    if (out->device_id.empty() && *topic == Topic::kHeadsetPose)
+      out->device_id = record.envelope().device_id();
+    out->inputs.push_back(
         {record.envelope().stamp_ns(), *topic, platform::FromProto(record.envelope())});
   }
   if (!reader.error().empty()) {
     *error = recording + ": " + reader.error();
     return false;
   }
-  if (truth.empty()) {
+  if (out->truth.empty()) {
     *error = recording + ": no ground truth in the recording (made by `floorpose simulate`?)";
     return false;
   }
   // The daemon's order (it sorts each batch the same way).
-  std::stable_sort(inputs.begin(), inputs.end(), [](const Input& a, const Input& b) {
+  std::stable_sort(out->inputs.begin(), out->inputs.end(), [](const Input& a, const Input& b) {
     return platform::InputBefore(a.topic, a.stamp_ns, b.topic, b.stamp_ns);
   });
+  return true;
+}
 
-  v1::FloorposedConfig config = base_config;
-  if (!device_id.empty()) config.mutable_dds()->set_device_id(device_id);
-  report->method = baseline == Baseline::kNoAlgorithm ? "none"
-                   : baseline == Baseline::kBestFit   ? "best-fit"
-                                                      : "mcl";
-  int64_t virtual_now = 0;
-  uint64_t session_seq = 0;
-  std::vector<v1::PlanPose>& plan_poses = report->plan_poses;
-  platform::Engine engine(
-      config,
-      [&](Topic t, const google::protobuf::Message& m) {
-        if (session)
-          session->Append(
-              virtual_now, t,
-              {config.dds().device_id(), ++session_seq, virtual_now, m.SerializeAsString()});
-        if (t == Topic::kPlanPose) plan_poses.push_back(static_cast<const v1::PlanPose&>(m));
-        if (t == Topic::kExplored) report->explored = static_cast<const v1::ExploredMap&>(m);
-        if (t == Topic::kPlanTrack) {
-          ++report->plan_tracks;
-          report->last_plan_track = static_cast<const v1::PlanTrack&>(m);
-        }
-      },
-      [&] { return virtual_now; });
-  if (const std::string e = engine.Start(); !e.empty()) {
-    *error = e;
-    return false;
+// The newest pose with ground truth, as the replay goes.
+struct Latest {
+  Eigen::Vector2d slam, plan;
+  int64_t stamp_ns;
+  Se2 T_plan_slam;  // the true alignment at this pose
+  // How far an alignment puts this pose's wearer from the truth, metres.
+  double OffAtWearer(const Se2& T) const { return (T * slam - plan).norm(); }
+};
+
+// For tuning (--log-level debug): how a job's result, and the alignment in use, put the
+// wearer against the truth; the engine logs its decision right after.
+void LogAgainstTruth(const platform::Done& done, const Latest& latest,
+                     const platform::Engine& engine, const v1::FloorposedConfig& config,
+                     int64_t start_ns) {
+  const double at_s = static_cast<double>(latest.stamp_ns - start_ns) * 1e-9;
+  if (done.job.global && done.job.index) {
+    // The true place as a search would have it: is it missed, or beaten?
+    const double score = done.job.global->Get().Score(done.job.cloud, latest.T_plan_slam);
+    const std::vector<GlobalPlace> true_place =
+        platform::RefineAsSearch(done.job, {{latest.T_plan_slam, score}});
+    for (const GlobalPlace& place : true_place)
+      spdlog::debug(
+          "truth itself: scoring {:.3f}, refined fit {:.4f}, {:.0f}% inliers, {} crossings, "
+          "{:.0f}% hidden, {:.0f}% unseen of {}, {:.2f} m from the truth",
+          place.score, place.fit_mse, 100 * place.inlier_ratio, place.path_crossings,
+          100 * place.hidden_ratio, 100 * place.unseen_ratio, place.unseen_expected,
+          latest.OffAtWearer(place.T_plan_slam));
   }
-  const HeadsetFrame frame =
-      ParseHeadsetFrame(config.headset_frame()).value_or(HeadsetFrame::kUnityLeftHandedYUp);
+  if (done.job.global) {
+    for (const GlobalPlace& place : done.places)
+      spdlog::debug(
+          "at {:.1f} s, truth: place scoring {:.3f} (fit {:.4f}, {:.0f}% inliers, {} "
+          "crossings, {:.0f}% hidden, {:.0f}% unseen of {}, {:.0f}% alike, rank {}) is {:.2f} "
+          "m off at the wearer; T {:.3f} {:.3f} {:.4f}, wearer {:.2f} {:.2f} (slam)",
+          at_s, place.score, place.fit_mse, 100 * place.inlier_ratio, place.path_crossings,
+          100 * place.hidden_ratio, 100 * place.unseen_ratio, place.unseen_expected,
+          100 * place.alike, place.rank, latest.OffAtWearer(place.T_plan_slam),
+          place.T_plan_slam.t.x(), place.T_plan_slam.t.y(), place.T_plan_slam.theta,
+          latest.slam.x(), latest.slam.y());
+    return;
+  }
+  if (!done.job.index) return;
+  // What share of the registered walls lies on the plan under each: low under the truth
+  // too means the plan lacks what the wearer sees, not a wrong result.
+  const std::vector<Eigen::Vector2d>& cloud = done.job.cloud;
+  const auto on_plan = [&](const Se2& T) {
+    RegistrationResult fit;
+    EvaluateFit(cloud, *done.job.index, T, config.icp().max_correspondence_m(),
+                config.icp().inlier_threshold_m(), &fit, nullptr);
+    return 100.0 * fit.inliers / std::max<size_t>(1, cloud.size());
+  };
+  const Se2& in_use = engine.tracker().alignment().T_plan_slam;
+  spdlog::debug(
+      "at {:.1f} s, truth: result {:.2f} m off at the wearer, alignment in use {:.2f} m; "
+      "on the plan: {:.0f}% under the result, {:.0f}% in use, {:.0f}% true; the result "
+      "turns {:.1f} deg from the truth, the alignment in use {:.1f}",
+      at_s, latest.OffAtWearer(done.result.T_plan_slam), latest.OffAtWearer(in_use),
+      on_plan(done.result.T_plan_slam), on_plan(in_use), on_plan(latest.T_plan_slam),
+      WrapAngle(done.result.T_plan_slam.theta - latest.T_plan_slam.theta) * 180 / M_PI,
+      WrapAngle(in_use.theta - latest.T_plan_slam.theta) * 180 / M_PI);
+}
+
+// What a replay learns beside the poses the engine publishes.
+struct Replay {
   std::map<int64_t, Pose2> slam_poses;  // for the best-fit baseline
   std::set<int64_t> registered;         // poses published under a registered alignment
   std::vector<double> reg_times;
-  struct Latest {
-    Eigen::Vector2d slam, plan;
-    int64_t stamp_ns;
-    Se2 T_plan_slam;  // the true alignment at this pose
-  };
-  std::optional<Latest> latest;  // the newest pose with ground truth
-  // How far an alignment puts the wearer of `latest` from the truth, metres.
-  const auto off_at_wearer = [&latest](const Se2& T) {
-    return (T * latest->slam - latest->plan).norm();
-  };
-  // Losses of tracking, as the tracker takes them: the stamp of the first pose after each.
-  const auto lost_after_ns = static_cast<int64_t>(config.tracking().motion().lost_after_s() * 1e9);
+  std::vector<int64_t> resumed;  // losses of tracking, as the tracker takes them: the
+                                 // stamp of the first pose after each
+  std::optional<Latest> latest;
   std::optional<int64_t> last_pose_ns;
   bool said_lost = false;
-  std::vector<int64_t> resumed;
-  for (const Input& in : inputs) {
-    virtual_now = in.stamp_ns;
-    if (session) session->Append(virtual_now, in.topic, in.envelope);
+
+  // A headset pose as the engine took it: a loss of tracking ended (TRACKING_LOST, or a
+  // silence of more than lost_after_ns), and the truth at it.
+  void Observe(const platform::DecodedPose& pose,
+               const std::map<int64_t, v1::GroundTruthPose>& truth, int64_t lost_after_ns,
+               bool keep_slam) {
+    if (pose.tracking == v1::HeadsetPose::TRACKING_LOST) {
+      said_lost = true;
+    } else {
+      if (last_pose_ns && (said_lost || pose.stamp_ns - *last_pose_ns > lost_after_ns))
+        resumed.push_back(pose.stamp_ns);
+      said_lost = false;
+    }
+    last_pose_ns = pose.stamp_ns;
+    if (keep_slam) slam_poses[pose.stamp_ns] = pose.pose_slam;
+    if (auto it = truth.find(pose.stamp_ns); it != truth.end())
+      latest = Latest{pose.pose_slam.position,
+                      {it->second.x(), it->second.y()},
+                      pose.stamp_ns,
+                      Se2{it->second.heading(), {it->second.x(), it->second.y()}} *
+                          Se2{pose.pose_slam.heading, pose.pose_slam.position}.Inverse()};
+  }
+};
+
+// Feeds every input to the engine on its virtual clock, and runs every job it asks for at
+// once (the worker, without its wait), so that a replay is deterministic.
+Replay ReplayInputs(const Recorded& rec, const v1::FloorposedConfig& config, Baseline baseline,
+                    bool no_pick, platform::RecordingWriter* session, int64_t* virtual_now,
+                    platform::Engine& engine, EvalReport* report) {
+  Replay out;
+  const HeadsetFrame frame =
+      ParseHeadsetFrame(config.headset_frame()).value_or(HeadsetFrame::kUnityLeftHandedYUp);
+  const auto lost_after_ns = static_cast<int64_t>(config.tracking().motion().lost_after_s() * 1e9);
+  const int64_t start_ns = rec.inputs.front().stamp_ns;
+  for (const Input& in : rec.inputs) {
+    *virtual_now = in.stamp_ns;
+    if (session) session->Append(*virtual_now, in.topic, in.envelope);
     switch (in.topic) {
       case Topic::kCommand: {
         v1::Command command;
@@ -149,123 +204,44 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
       }
       case Topic::kMeshDelta: engine.OnMeshDelta(in.envelope); break;
       case Topic::kHeadsetPose: {
-        const size_t published = plan_poses.size();
+        const size_t published = report->plan_poses.size();
         engine.OnHeadsetPose(in.envelope);
-        if (plan_poses.size() > published) {
-          const int64_t stamp = plan_poses.back().source_stamp_ns();
-          if (engine.tracker().alignment().source == AlignmentSource::kRegistration)
-            registered.insert(stamp);
-        }
+        if (report->plan_poses.size() > published &&
+            engine.tracker().alignment().source == AlignmentSource::kRegistration)
+          out.registered.insert(report->plan_poses.back().source_stamp_ns());
         platform::DecodedPose pose;
-        if (platform::DecodeHeadsetPose(in.envelope.payload, frame, config.limits(), &pose)
-                .empty()) {
-          if (pose.tracking == v1::HeadsetPose::TRACKING_LOST) {
-            said_lost = true;
-          } else {
-            if (last_pose_ns && (said_lost || pose.stamp_ns - *last_pose_ns > lost_after_ns))
-              resumed.push_back(pose.stamp_ns);
-            said_lost = false;
-          }
-          last_pose_ns = pose.stamp_ns;
-          if (baseline == Baseline::kBestFit) slam_poses[pose.stamp_ns] = pose.pose_slam;
-          if (auto it = truth.find(pose.stamp_ns); it != truth.end())
-            latest = {pose.pose_slam.position,
-                      {it->second.x(), it->second.y()},
-                      pose.stamp_ns,
-                      Se2{it->second.heading(), {it->second.x(), it->second.y()}} *
-                          Se2{pose.pose_slam.heading, pose.pose_slam.position}.Inverse()};
-        }
+        if (platform::DecodeHeadsetPose(in.envelope.payload, frame, config.limits(), &pose).empty())
+          out.Observe(pose, rec.truth, lost_after_ns, baseline == Baseline::kBestFit);
         break;
       }
       default: break;
     }
     if (baseline != Baseline::kNone) continue;  // baselines never register
-    if (auto job = engine.TakeDueJob()) {
-      platform::Done done = platform::RunJob(std::move(*job), platform::MonotonicNs);
-      if (done.job.global) {
-        if (report->global_searches++ == 0) {
-          report->first_search_s =
-              static_cast<double>(done.job.stamp_ns - inputs.front().stamp_ns) * 1e-9;
-          for (size_t i = 0; latest && i < done.places.size(); ++i)
-            if (off_at_wearer(done.places[i].T_plan_slam) <= 1.0) {
-              report->first_search_truth = static_cast<int>(i);
-              break;
-            }
+    auto job = engine.TakeDueJob();
+    if (!job) continue;
+    platform::Done done = platform::RunJob(std::move(*job), platform::MonotonicNs);
+    if (!done.job.global) {
+      out.reg_times.push_back(done.result.time_ms);
+    } else if (report->global_searches++ == 0) {
+      report->first_search_s = static_cast<double>(done.job.stamp_ns - start_ns) * 1e-9;
+      for (size_t i = 0; out.latest && i < done.places.size(); ++i)
+        if (out.latest->OffAtWearer(done.places[i].T_plan_slam) <= 1.0) {
+          report->first_search_truth = static_cast<int>(i);
+          break;
         }
-      } else {
-        reg_times.push_back(done.result.time_ms);
-      }
-      // For tuning: how far the result and the alignment in use put the wearer from the
-      // truth (the engine logs its decision right after).
-      if (latest && spdlog::should_log(spdlog::level::debug) && done.job.global && done.job.index) {
-        // The true place as a search would have it: is it missed, or beaten?
-        const double score = done.job.global->Get().Score(done.job.cloud, latest->T_plan_slam);
-        const std::vector<GlobalPlace> true_place =
-            platform::RefineAsSearch(done.job, {{latest->T_plan_slam, score}});
-        for (const GlobalPlace& place : true_place)
-          spdlog::debug(
-              "truth itself: scoring {:.3f}, refined fit {:.4f}, {:.0f}% inliers, {} crossings, "
-              "{:.0f}% hidden, {:.0f}% unseen of {}, {:.2f} m from the truth",
-              place.score, place.fit_mse, 100 * place.inlier_ratio, place.path_crossings,
-              100 * place.hidden_ratio, 100 * place.unseen_ratio, place.unseen_expected,
-              off_at_wearer(place.T_plan_slam));
-      }
-      if (latest && spdlog::should_log(spdlog::level::debug) && done.job.global) {
-        for (const GlobalPlace& place : done.places)
-          spdlog::debug(
-              "at {:.1f} s, truth: place scoring {:.3f} (fit {:.4f}, {:.0f}% inliers, {} "
-              "crossings, {:.0f}% hidden, {:.0f}% unseen of {}, {:.0f}% alike, rank {}) is {:.2f} "
-              "m off at the wearer; T {:.3f} {:.3f} {:.4f}, wearer {:.2f} {:.2f} (slam)",
-              static_cast<double>(latest->stamp_ns - inputs.front().stamp_ns) * 1e-9, place.score,
-              place.fit_mse, 100 * place.inlier_ratio, place.path_crossings,
-              100 * place.hidden_ratio, 100 * place.unseen_ratio, place.unseen_expected,
-              100 * place.alike, place.rank, off_at_wearer(place.T_plan_slam),
-              place.T_plan_slam.t.x(), place.T_plan_slam.t.y(), place.T_plan_slam.theta,
-              latest->slam.x(), latest->slam.y());
-      } else if (latest && done.job.index && spdlog::should_log(spdlog::level::debug)) {
-        // What share of the registered walls lies on the plan under each: low under the
-        // truth too means the plan lacks what the wearer sees, not a wrong result.
-        const std::vector<Eigen::Vector2d>& cloud = done.job.cloud;
-        const auto on_plan = [&](const Se2& T) {
-          RegistrationResult fit;
-          EvaluateFit(cloud, *done.job.index, T, config.icp().max_correspondence_m(),
-                      config.icp().inlier_threshold_m(), &fit, nullptr);
-          return 100.0 * fit.inliers / std::max<size_t>(1, cloud.size());
-        };
-        spdlog::debug(
-            "at {:.1f} s, truth: result {:.2f} m off at the wearer, alignment in use {:.2f} m; "
-            "on the plan: {:.0f}% under the result, {:.0f}% in use, {:.0f}% true; the result "
-            "turns {:.1f} deg from the truth, the alignment in use {:.1f}",
-            static_cast<double>(latest->stamp_ns - inputs.front().stamp_ns) * 1e-9,
-            off_at_wearer(done.result.T_plan_slam),
-            off_at_wearer(engine.tracker().alignment().T_plan_slam),
-            on_plan(done.result.T_plan_slam), on_plan(engine.tracker().alignment().T_plan_slam),
-            on_plan(latest->T_plan_slam),
-            WrapAngle(done.result.T_plan_slam.theta - latest->T_plan_slam.theta) * 180 / M_PI,
-            WrapAngle(engine.tracker().alignment().T_plan_slam.theta - latest->T_plan_slam.theta) *
-                180 / M_PI);
-      }
-      engine.OnRegistrationDone(std::move(done));
     }
+    if (out.latest && spdlog::should_log(spdlog::level::debug))
+      LogAgainstTruth(done, *out.latest, engine, config, start_ns);
+    engine.OnRegistrationDone(std::move(done));
   }
-  engine.PublishExplored();  // what was explored since the last one
-  report->floor_changes = engine.counters().floor_changes();
+  return out;
+}
 
-  // Score every plan pose that has ground truth.
-  std::optional<Se2> best_fit;
-  if (baseline == Baseline::kBestFit) {
-    std::vector<Eigen::Vector2d> from, to;
-    for (const auto& [stamp, pose] : slam_poses) {
-      auto it = truth.find(stamp);
-      if (it == truth.end()) continue;
-      from.push_back(pose.position);
-      to.emplace_back(it->second.x(), it->second.y());
-    }
-    best_fit = sim::FitSe2(from, to);
-  }
-  std::vector<double> errors, marker_errors;
-  size_t reliable = 0, reliable_ok = 0;
-  double brier = 0;
+// Every published plan pose that has ground truth, scored into report->track; poses before
+// the first alignment only counted. With a best-fit baseline, the fit's position instead.
+void ScorePoses(const std::map<int64_t, v1::GroundTruthPose>& truth, const Replay& replay,
+                const std::optional<Se2>& best_fit, EvalReport* report) {
+  const std::vector<v1::PlanPose>& plan_poses = report->plan_poses;
   std::optional<Eigen::Vector2d> first_true;  // of the first published pose with a truth
   for (const v1::PlanPose& p : plan_poses) {
     auto it = truth.find(p.source_stamp_ns());
@@ -291,14 +267,14 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     e.y = p.y();
     e.heading = p.heading();
     e.alignment_version = p.alignment_version();
-    e.registered = registered.count(e.stamp_ns) > 0;
+    e.registered = replay.registered.count(e.stamp_ns) > 0;
     e.reliable = p.reliability().flag() == v1::Reliability::RELIABLE;
     e.unreliable = p.reliability().flag() == v1::Reliability::UNRELIABLE;
     e.probability = p.reliability().probability();
     e.reason = p.reliability().reason();
     if (best_fit) {
-      const auto s = slam_poses.find(e.stamp_ns);
-      if (s == slam_poses.end()) continue;
+      const auto s = replay.slam_poses.find(e.stamp_ns);
+      if (s == replay.slam_poses.end()) continue;
       const Eigen::Vector2d q = *best_fit * s->second.position;
       e.x = q.x();
       e.y = q.y();
@@ -308,77 +284,144 @@ bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& record
     e.true_y = it->second.y();
     e.marker = it->second.marker();
     e.error_m = std::hypot(e.x - e.true_x, e.y - e.true_y);
-    errors.push_back(e.error_m);
-    if (e.marker) marker_errors.push_back(e.error_m);
-    reliable += e.reliable;
-    reliable_ok += e.reliable && e.error_m <= 1.0;
-    const double miss = e.probability - (e.error_m <= 1.0 ? 1.0 : 0.0);
-    brier += miss * miss;
-    if (e.reliable && report->time_to_first_reliable_s < 0 && !plan_poses.empty()) {
+    if (e.reliable && report->time_to_first_reliable_s < 0) {
       report->time_to_first_reliable_s =
           static_cast<double>(e.stamp_ns - plan_poses.front().source_stamp_ns()) * 1e-9;
       report->first_reliable_error_m = e.error_m;
     }
     report->track.push_back(e);
   }
+}
+
+double Mean(const std::vector<double>& v) {
+  double sum = 0;
+  for (double x : v) sum += x;
+  return sum / static_cast<double>(v.size());
+}
+
+// The report's figures from its scored track.
+void Summarize(const std::vector<int64_t>& resumed, bool best_fit, EvalReport* report) {
+  const std::vector<EvalPose>& t = report->track;
+  std::vector<double> errors, marker_errors;
+  size_t reliable = 0, reliable_ok = 0;
+  double brier = 0;
+  for (const EvalPose& e : t) {
+    errors.push_back(e.error_m);
+    if (e.marker) marker_errors.push_back(e.error_m);
+    reliable += e.reliable;
+    reliable_ok += e.reliable && e.error_m <= 1.0;
+    const double miss = e.probability - (e.error_m <= 1.0 ? 1.0 : 0.0);
+    brier += miss * miss;
+  }
   report->poses = errors.size();
-  if (!errors.empty()) {
-    double sum = 0;
-    for (double x : errors) sum += x;
-    report->mean_error_m = sum / static_cast<double>(errors.size());
-    report->p95_error_m = Percentile(errors, 0.95);
-    report->max_error_m = *std::max_element(errors.begin(), errors.end());
-    report->final_error_m = errors.back();
-    report->divergences = static_cast<size_t>(
-        std::count_if(errors.begin(), errors.end(), [](double x) { return x > 5.0; }));
-    report->reliable_fraction = static_cast<double>(reliable) / static_cast<double>(errors.size());
-    report->reliable_precision_1m =
-        reliable ? static_cast<double>(reliable_ok) / static_cast<double>(reliable) : 0.0;
-    report->false_reliable_poses = reliable - reliable_ok;
-    report->brier = brier / static_cast<double>(errors.size());
-    const std::vector<EvalPose>& scored = report->track;
-    const auto since_first = [&](auto it) {
-      return it == scored.end()
-                 ? -1.0
-                 : static_cast<double>(it->stamp_ns - scored.front().stamp_ns) * 1e-9;
-    };
-    report->time_to_unreliable_s = since_first(
-        std::find_if(scored.begin(), scored.end(), [](const EvalPose& p) { return p.unreliable; }));
-    const auto recovered = std::find_if(scored.begin(), scored.end(), [](const EvalPose& p) {
-      return p.reliable && p.error_m <= 1.0;
-    });
-    report->time_to_recovered_s = since_first(recovered);
-    report->false_reliable_before_recovered =
-        static_cast<size_t>(std::count_if(scored.begin(), recovered, [](const EvalPose& p) {
-          return p.reliable && p.error_m > 1.0;
-        }));
-    report->losses = ScoreLosses(scored, resumed);
-    const std::vector<EvalPose>& t = report->track;
-    report->pick_error_m = t.front().error_m;
-    // The first pose under a registered alignment (turning the pick onto the walls'
-    // directions changes the version too, but is not a registration).
-    const auto fix =
-        std::find_if(t.begin(), t.end(), [](const EvalPose& p) { return p.registered; });
-    if (!best_fit && fix != t.end()) {
-      report->first_fix_s = static_cast<double>(fix->stamp_ns - t.front().stamp_ns) * 1e-9;
-      double settled = 0;
-      for (auto p = fix; p != t.end(); ++p) {
-        settled += p->error_m;
-        report->settled_max_error_m = std::max(report->settled_max_error_m, p->error_m);
-      }
-      report->settled_mean_error_m = settled / static_cast<double>(t.end() - fix);
+  if (!marker_errors.empty()) report->marker_mean_error_m = Mean(marker_errors);
+  if (errors.empty()) return;
+  report->mean_error_m = Mean(errors);
+  report->p95_error_m = Percentile(errors, 0.95);
+  report->max_error_m = *std::max_element(errors.begin(), errors.end());
+  report->final_error_m = errors.back();
+  report->divergences = static_cast<size_t>(
+      std::count_if(errors.begin(), errors.end(), [](double x) { return x > 5.0; }));
+  report->reliable_fraction = static_cast<double>(reliable) / static_cast<double>(errors.size());
+  report->reliable_precision_1m =
+      reliable ? static_cast<double>(reliable_ok) / static_cast<double>(reliable) : 0.0;
+  report->false_reliable_poses = reliable - reliable_ok;
+  report->brier = brier / static_cast<double>(errors.size());
+  const auto since_first = [&](auto it) {
+    return it == t.end() ? -1.0 : static_cast<double>(it->stamp_ns - t.front().stamp_ns) * 1e-9;
+  };
+  report->time_to_unreliable_s =
+      since_first(std::find_if(t.begin(), t.end(), [](const EvalPose& p) { return p.unreliable; }));
+  const auto recovered = std::find_if(
+      t.begin(), t.end(), [](const EvalPose& p) { return p.reliable && p.error_m <= 1.0; });
+  report->time_to_recovered_s = since_first(recovered);
+  report->false_reliable_before_recovered = static_cast<size_t>(std::count_if(
+      t.begin(), recovered, [](const EvalPose& p) { return p.reliable && p.error_m > 1.0; }));
+  report->losses = ScoreLosses(t, resumed);
+  report->pick_error_m = t.front().error_m;
+  // The first pose under a registered alignment (turning the pick onto the walls'
+  // directions changes the version too, but is not a registration).
+  const auto fix = std::find_if(t.begin(), t.end(), [](const EvalPose& p) { return p.registered; });
+  if (!best_fit && fix != t.end()) {
+    report->first_fix_s = static_cast<double>(fix->stamp_ns - t.front().stamp_ns) * 1e-9;
+    double settled = 0;
+    for (auto p = fix; p != t.end(); ++p) {
+      settled += p->error_m;
+      report->settled_max_error_m = std::max(report->settled_max_error_m, p->error_m);
     }
+    report->settled_mean_error_m = settled / static_cast<double>(t.end() - fix);
   }
-  if (!marker_errors.empty()) {
-    double sum = 0;
-    for (double x : marker_errors) sum += x;
-    report->marker_mean_error_m = sum / static_cast<double>(marker_errors.size());
+}
+
+// One SE(2) fitted after the fact to the whole walk's SLAM poses and their truth.
+Se2 BestFit(const std::map<int64_t, Pose2>& slam_poses,
+            const std::map<int64_t, v1::GroundTruthPose>& truth) {
+  std::vector<Eigen::Vector2d> from, to;
+  for (const auto& [stamp, pose] : slam_poses) {
+    auto it = truth.find(stamp);
+    if (it == truth.end()) continue;
+    from.push_back(pose.position);
+    to.emplace_back(it->second.x(), it->second.y());
   }
+  return sim::FitSe2(from, to);
+}
+
+}  // namespace
+
+double Percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1,
+                    static_cast<size_t>(q * static_cast<double>(v.size() - 1) + 0.5))];
+}
+
+bool Evaluate(const v1::FloorposedConfig& base_config, const std::string& recording,
+              Baseline baseline, EvalReport* report, std::string* error,
+              platform::RecordingWriter* session, bool no_pick) {
+  *report = {};
+  Recorded rec;
+  if (!ReadRecorded(recording, report, &rec, error)) return false;
+  v1::FloorposedConfig config = base_config;
+  if (!rec.device_id.empty()) config.mutable_dds()->set_device_id(rec.device_id);
+  report->method = baseline == Baseline::kNoAlgorithm ? "none"
+                   : baseline == Baseline::kBestFit   ? "best-fit"
+                                                      : "mcl";
+  int64_t virtual_now = 0;
+  uint64_t session_seq = 0;
+  platform::Engine engine(
+      config,
+      [&](Topic t, const google::protobuf::Message& m) {
+        if (session)
+          session->Append(
+              virtual_now, t,
+              {config.dds().device_id(), ++session_seq, virtual_now, m.SerializeAsString()});
+        if (t == Topic::kPlanPose)
+          report->plan_poses.push_back(static_cast<const v1::PlanPose&>(m));
+        if (t == Topic::kExplored) report->explored = static_cast<const v1::ExploredMap&>(m);
+        if (t == Topic::kPlanTrack) {
+          ++report->plan_tracks;
+          report->last_plan_track = static_cast<const v1::PlanTrack&>(m);
+        }
+      },
+      [&] { return virtual_now; });
+  if (const std::string e = engine.Start(); !e.empty()) {
+    *error = e;
+    return false;
+  }
+  const Replay replay =
+      ReplayInputs(rec, config, baseline, no_pick, session, &virtual_now, engine, report);
+  engine.PublishExplored();  // what was explored since the last one
+  report->floor_changes = engine.counters().floor_changes();
+  std::optional<Se2> best_fit;
+  if (baseline == Baseline::kBestFit) best_fit = BestFit(replay.slam_poses, rec.truth);
+  ScorePoses(rec.truth, replay, best_fit, report);
+  Summarize(replay.resumed, best_fit.has_value(), report);
   report->registrations = engine.counters().registrations();
   report->accepted = engine.counters().registrations_accepted();
-  report->reg_time_ms_median = Percentile(reg_times, 0.5);
-  report->reg_time_ms_max =
-      reg_times.empty() ? 0.0 : *std::max_element(reg_times.begin(), reg_times.end());
+  report->reg_time_ms_median = Percentile(replay.reg_times, 0.5);
+  report->reg_time_ms_max = replay.reg_times.empty() ? 0.0
+                                                     : *std::max_element(replay.reg_times.begin(),
+                                                                         replay.reg_times.end());
   return true;
 }
 
