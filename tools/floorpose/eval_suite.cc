@@ -232,21 +232,8 @@ std::string LossTable(const std::vector<EvalReport>& reports, const std::string&
   return any ? md.str() : std::string();
 }
 
-int RunSuite(const SuiteOptions& o) {
-  spdlog::set_level(spdlog::level::warn);  // thousands of registrations: only problems
-  v1::FloorposedConfig base_config;
-  std::string config_error;
-  if (!platform::LoadConfig(o.config, &base_config, &config_error)) {
-    spdlog::error("{}", config_error);
-    return 2;
-  }
-  const std::vector<std::string> plans = PlanFiles(o.plans);
-  if (plans.empty()) {
-    spdlog::error("no floor plans (*.geojson) found in the given --plans");
-    return 2;
-  }
-  fs::create_directories(fs::path(o.out) / "recordings");
-  fs::create_directories(fs::path(o.out) / "svg");
+// Every plan x scenario x seed, and where its recording goes.
+std::vector<SuiteRun> PlanRuns(const SuiteOptions& o, const std::vector<std::string>& plans) {
   std::vector<SuiteRun> runs;
   for (const std::string& plan : plans)
     for (const std::string& scenario : o.scenarios)
@@ -261,112 +248,75 @@ int RunSuite(const SuiteOptions& o) {
                             .string(),
                         {}});
       }
-  std::map<std::string, FloorPlan> loaded;
-  for (const std::string& p : plans) {
-    FloorPlanParse parse = platform::LoadFloorPlan(p);
-    if (!parse.ok()) {
-      spdlog::error("{}", parse.error);
-      return 1;
-    }
-    loaded[p] = parse.plan;
-  }
+  return runs;
+}
 
-  // Work items: one simulation, then its evaluations; spread over the cores.
-  std::vector<EvalReport> reports;
-  fs::create_directories(fs::path(o.out) / "plans");
-  std::mutex mu;
-  std::atomic<int> failures{0};
-  ParallelFor(runs.size(), o.jobs, "eval-suite", [&](size_t i, Progress& progress) {
-    SuiteRun& run = runs[i];
-    sim::SimulatorOptions sim;
-    sim.seed = run.seed;
-    sim.scenario = *sim::ParseScenario(run.scenario);
-    if (o.length_m > 0) sim.target_length_m = o.length_m;
-    if (o.kidnap) {
-      sim.kidnap_m = 10.0;
-      sim.kidnap_rad = M_PI / 2;
-    }
-    SimulateRecordingResult simulated;
-    std::string error;
-    if (!SimulateToRecording(loaded[run.plan_path], sim, nullptr, {}, run.recording, &simulated,
-                             &error)) {
-      spdlog::error("{}: {}", run.recording, error);
-      ++failures;
-      return;
-    }
-    std::string plan_path = run.plan_path;
-    if (PlanDiffersFromInput(simulated.simulation, loaded[run.plan_path])) {
-      run.drawn_plan =
-          (fs::path(o.out) / "plans" / (fs::path(run.recording).stem().string() + ".geojson"))
-              .string();
-      if (!WriteDrawnPlan(simulated.simulation, run.drawn_plan, &error)) {
-        spdlog::error("{}", error);
-        ++failures;
-        return;
-      }
-      plan_path = run.drawn_plan;
-    }
-    for (const std::string& method : o.methods) {
-      v1::FloorposedConfig config = base_config;
-      config.set_plan_path(plan_path);
-      config.set_log_level("warn");
-      const Baseline baseline = method == "none"       ? Baseline::kNoAlgorithm
-                                : method == "best-fit" ? Baseline::kBestFit
-                                                       : Baseline::kNone;
-      EvalReport report;
-      if (!Evaluate(config, run.recording, baseline, &report, &error, nullptr, o.no_pick)) {
-        spdlog::error("{} {}: {}", run.recording, method, error);
-        ++failures;
-        continue;
-      }
-      report.plan_id = run.plan_id;
-      report.split = SimulatedSplit(run.seed);
-      std::lock_guard lock(mu);
-      progress.Clear();
-      std::printf(
-          "%-12s %-10s seed %lu %-16s mean %6.2f m  max %6.2f m  reliable %3.0f%% (%3.0f%% "
-          "within 1 m)\n",
-          run.plan_id.c_str(), run.scenario.c_str(), static_cast<unsigned long>(run.seed),
-          report.method.c_str(), report.mean_error_m, report.max_error_m,
-          100 * report.reliable_fraction, 100 * report.reliable_precision_1m);
-      std::fflush(stdout);
-      report.track.shrink_to_fit();
-      report.plan_poses.clear();
-      reports.push_back(std::move(report));
-    }
-  });
+// Simulates a run to its recording, and writes its plan as drawn where that differs from
+// the input (doors, scaled); *plan_path is the plan the daemon is given. False: why, logged.
+bool SimulateRun(const SuiteOptions& o, const FloorPlan& plan, SuiteRun* run,
+                 std::string* plan_path) {
+  sim::SimulatorOptions sim;
+  sim.seed = run->seed;
+  sim.scenario = *sim::ParseScenario(run->scenario);
+  if (o.length_m > 0) sim.target_length_m = o.length_m;
+  if (o.kidnap) {
+    sim.kidnap_m = 10.0;
+    sim.kidnap_rad = M_PI / 2;
+  }
+  SimulateRecordingResult simulated;
+  std::string error;
+  if (!SimulateToRecording(plan, sim, nullptr, {}, run->recording, &simulated, &error)) {
+    spdlog::error("{}: {}", run->recording, error);
+    return false;
+  }
+  *plan_path = run->plan_path;
+  if (!PlanDiffersFromInput(simulated.simulation, plan)) return true;
+  run->drawn_plan =
+      (fs::path(o.out) / "plans" / (fs::path(run->recording).stem().string() + ".geojson"))
+          .string();
+  if (!WriteDrawnPlan(simulated.simulation, run->drawn_plan, &error)) {
+    spdlog::error("{}", error);
+    return false;
+  }
+  *plan_path = run->drawn_plan;
+  return true;
+}
 
-  std::sort(reports.begin(), reports.end(), [](const EvalReport& a, const EvalReport& b) {
-    return std::tie(a.plan_id, a.scenario, a.seed, a.method) <
-           std::tie(b.plan_id, b.scenario, b.seed, b.method);
-  });
-  {
-    std::ofstream json(fs::path(o.out) / "results.json");
-    for (const EvalReport& r : reports) json << ToJson(r) << "\n";
+// Evaluates a run's recording by one method. False: why, logged.
+bool EvaluateRun(const v1::FloorposedConfig& base_config, const SuiteOptions& o,
+                 const SuiteRun& run, const std::string& plan_path, const std::string& method,
+                 EvalReport* report) {
+  v1::FloorposedConfig config = base_config;
+  config.set_plan_path(plan_path);
+  config.set_log_level("warn");
+  const Baseline baseline = method == "none"       ? Baseline::kNoAlgorithm
+                            : method == "best-fit" ? Baseline::kBestFit
+                                                   : Baseline::kNone;
+  std::string error;
+  if (!Evaluate(config, run.recording, baseline, report, &error, nullptr, o.no_pick)) {
+    spdlog::error("{} {}: {}", run.recording, method, error);
+    return false;
   }
-  // Markdown: per plan and scenario, the mean error over seeds per method (table 7.10),
-  // then per method over everything.
-  std::ostringstream md;
-  md.setf(std::ios::fixed);
-  md.precision(2);
-  {
-    size_t development = 0;
-    for (const EvalReport& r : reports) development += r.split == "development";
-    md << "Runs: " << development << " development (seeds 11 and up), "
-       << reports.size() - development << " validation (seeds 1-10).\n\n";
-  }
+  report->plan_id = run.plan_id;
+  report->split = SimulatedSplit(run.seed);
+  return true;
+}
+
+// The runs' mean errors by plan and scenario and method, and the runs by method.
+struct Grouped {
+  std::map<std::pair<std::string, std::string>, std::map<std::string, std::vector<double>>> cell;
+  std::map<std::string, std::vector<const EvalReport*>> by_method;
+};
+
+// Per plan and scenario, the mean error over seeds per method (thesis table 7.10), then
+// per method over everything.
+void WriteErrorTables(const Grouped& g, const SuiteOptions& o, std::ostringstream& md) {
   md << "| plan | scenario |";
   for (const std::string& m : o.methods) md << " " << m << " |";
   md << "\n|---|---|";
   for (size_t i = 0; i < o.methods.size(); ++i) md << "---|";
   md << "\n";
-  std::map<std::pair<std::string, std::string>, std::map<std::string, std::vector<double>>> cell;
-  std::map<std::string, std::vector<const EvalReport*>> by_method;
-  for (const EvalReport& r : reports) {
-    cell[{r.plan_id, r.scenario}][r.method].push_back(r.mean_error_m);
-    by_method[r.method].push_back(&r);
-  }
-  for (const auto& [key, methods] : cell) {
+  for (const auto& [key, methods] : g.cell) {
     md << "| " << key.first << " | " << key.second << " |";
     for (const std::string& m : o.methods) {
       auto it = methods.find(m);
@@ -384,8 +334,9 @@ int RunSuite(const SuiteOptions& o) {
         "runs diverged (> 5 m) | reliable | reliable within 1 m | update ms (median) |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const std::string& m : o.methods) {
-    const auto& rs = by_method[m];
-    if (rs.empty()) continue;
+    const auto found = g.by_method.find(m);
+    if (found == g.by_method.end() || found->second.empty()) continue;
+    const auto& rs = found->second;
     double mean = 0, p95 = 0, mx = 0, fin = 0, marker = 0, rel = 0, prec = 0, reg = 0;
     size_t diverged = 0;
     for (const EvalReport* r : rs) {
@@ -404,8 +355,14 @@ int RunSuite(const SuiteOptions& o) {
        << " | " << fin / n << " | " << marker / n << " | " << diverged << " | " << 100 * rel / n
        << "% | " << 100 * prec / n << "% | " << reg / n << " |\n";
   }
+}
+
+// The Tracking issue's targets (first method): per cell (plan and scenario), the mean
+// over seeds against 0.3 m (corridor, hall) or 0.6 m, and against best-fit + 0.1 m; per
+// run, the max against 1.5 or 3 m, and divergences.
+void WriteTargetsTable(const std::vector<EvalReport>& reports, const Grouped& g,
+                       const SuiteOptions& o, std::ostringstream& md) {
   const std::string& first = o.methods.front();
-  // The Tracking issue's targets (first method): per cell (plan and scenario), the mean
   // over seeds against 0.3 m (corridor, hall) or 0.6 m, and against best-fit + 0.1 m;
   // per run, the max against 1.5 or 3 m, and divergences.
   md << "\nAgainst the Tracking targets (" << first
@@ -419,7 +376,7 @@ int RunSuite(const SuiteOptions& o) {
     const double mean_target = strict ? 0.3 : 0.6, max_target = strict ? 1.5 : 3.0;
     double sum = 0, worst = 0;
     size_t cells = 0, above = 0, above_best_fit = 0, above_max = 0, diverged = 0;
-    for (const auto& [key, methods] : cell) {
+    for (const auto& [key, methods] : g.cell) {
       if (key.second != scenario) continue;
       const auto mean_of = [&](const std::string& m) {
         auto it = methods.find(m);
@@ -450,11 +407,17 @@ int RunSuite(const SuiteOptions& o) {
     if (!cells) continue;
     md << "| " << scenario << " | " << sum / static_cast<double>(cells) << " | " << worst << " | "
        << above << " of " << cells << " | " << above_max << " | " << diverged << " | "
-       << (by_method.count("best-fit") ? std::to_string(above_best_fit) : std::string("-")) << " | "
-       << settled_above << " of " << settled.size() << ", " << settled_above_max << " |\n";
+       << (g.by_method.count("best-fit") ? std::to_string(above_best_fit) : std::string("-"))
+       << " | " << settled_above << " of " << settled.size() << ", " << settled_above_max << " |\n";
   }
-  // Reliability: does RELIABLE mean within 1 m, per scenario, and how calibrated is the
-  // published probability (first registering method).
+}
+
+// Reliability (first method): does RELIABLE mean within 1 m, per scenario; the placement,
+// kidnap and loss tables; how calibrated the published probability is (*curve), and its
+// Brier score.
+void WriteReliabilityTables(const std::vector<EvalReport>& reports, const SuiteOptions& o,
+                            std::ostringstream& md, std::vector<CalibrationBin>* curve) {
+  const std::string& first = o.methods.front();
   md << "\nReliability (" << first
      << "): poses flagged RELIABLE, and the share of those within 1 m, per scenario:\n\n"
         "| scenario | poses | reliable | reliable within 1 m | all within 1 m "
@@ -483,18 +446,41 @@ int RunSuite(const SuiteOptions& o) {
   if (o.no_pick) md << PlacementTable(reports, first, o.scenarios);
   if (o.kidnap) md << KidnapTable(reports, first, o.scenarios);
   md << LossTable(reports, first, o.scenarios);
-  const auto curve = CalibrationCurve(predicted, within);
+  *curve = CalibrationCurve(predicted, within);
   md << "\nCalibration of the published probability (" << first << ", every pose):\n\n"
-     << CalibrationTable(curve);
+     << CalibrationTable(*curve);
   md.precision(4);
   md << "\nBrier score (the mean squared difference of the probability and being within 1 m; "
         "lower is better): "
      << (predicted.empty() ? 0.0 : brier / static_cast<double>(predicted.size())) << "\n";
   md.precision(2);
-  std::ofstream(fs::path(o.out) / "svg" / "calibration.svg")
-      << CalibrationSvg({{first + ": published probability, every pose of the suite", curve}});
-  std::ofstream(fs::path(o.out) / "results.md") << md.str();
-  // SVGs of the best and the worst registered run.
+}
+
+// results.md: how many runs of each set, the error tables, the targets and the
+// reliability tables; the calibration curve in *curve.
+std::string ResultsMarkdown(const std::vector<EvalReport>& reports, const SuiteOptions& o,
+                            std::vector<CalibrationBin>* curve) {
+  std::ostringstream md;
+  md.setf(std::ios::fixed);
+  md.precision(2);
+  size_t development = 0;
+  for (const EvalReport& r : reports) development += r.split == "development";
+  md << "Runs: " << development << " development (seeds 11 and up), "
+     << reports.size() - development << " validation (seeds 1-10).\n\n";
+  Grouped grouped;
+  for (const EvalReport& r : reports) {
+    grouped.cell[{r.plan_id, r.scenario}][r.method].push_back(r.mean_error_m);
+    grouped.by_method[r.method].push_back(&r);
+  }
+  WriteErrorTables(grouped, o, md);
+  WriteTargetsTable(reports, grouped, o, md);
+  WriteReliabilityTables(reports, o, md, curve);
+  return md.str();
+}
+
+// SVGs of the best and the worst run of the first method, on the plan as drawn.
+void WriteBestAndWorst(const std::vector<EvalReport>& reports, const std::vector<SuiteRun>& runs,
+                       const std::map<std::string, FloorPlan>& loaded, const SuiteOptions& o) {
   std::vector<const EvalReport*> registered;
   for (const EvalReport& r : reports)
     if (r.method == o.methods.front()) registered.push_back(&r);
@@ -507,13 +493,87 @@ int RunSuite(const SuiteOptions& o) {
         if (run.plan_id != r->plan_id || run.scenario != r->scenario || run.seed != r->seed)
           continue;
         const FloorPlan drawn = run.drawn_plan.empty()
-                                    ? loaded[run.plan_path]
+                                    ? loaded.at(run.plan_path)
                                     : platform::LoadFloorPlan(run.drawn_plan).plan;
         std::ofstream(fs::path(o.out) / "svg" / (std::string(name) + ".svg")) << ToSvg(drawn, *r);
       }
     }
   }
-  std::fputs(md.str().c_str(), stdout);
+}
+
+int RunSuite(const SuiteOptions& o) {
+  spdlog::set_level(spdlog::level::warn);  // thousands of registrations: only problems
+  v1::FloorposedConfig base_config;
+  std::string config_error;
+  if (!platform::LoadConfig(o.config, &base_config, &config_error)) {
+    spdlog::error("{}", config_error);
+    return 2;
+  }
+  const std::vector<std::string> plans = PlanFiles(o.plans);
+  if (plans.empty()) {
+    spdlog::error("no floor plans (*.geojson) found in the given --plans");
+    return 2;
+  }
+  for (const char* dir : {"recordings", "svg", "plans"})
+    fs::create_directories(fs::path(o.out) / dir);
+  std::vector<SuiteRun> runs = PlanRuns(o, plans);
+  std::map<std::string, FloorPlan> loaded;
+  for (const std::string& p : plans) {
+    FloorPlanParse parse = platform::LoadFloorPlan(p);
+    if (!parse.ok()) {
+      spdlog::error("{}", parse.error);
+      return 1;
+    }
+    loaded[p] = parse.plan;
+  }
+
+  // Work items: one simulation, then its evaluations; spread over the cores.
+  std::vector<EvalReport> reports;
+  std::mutex mu;
+  std::atomic<int> failures{0};
+  ParallelFor(runs.size(), o.jobs, "eval-suite", [&](size_t i, Progress& progress) {
+    SuiteRun& run = runs[i];
+    std::string plan_path;
+    if (!SimulateRun(o, loaded.at(run.plan_path), &run, &plan_path)) {
+      ++failures;
+      return;
+    }
+    for (const std::string& method : o.methods) {
+      EvalReport report;
+      if (!EvaluateRun(base_config, o, run, plan_path, method, &report)) {
+        ++failures;
+        continue;
+      }
+      std::lock_guard lock(mu);
+      progress.Clear();
+      std::printf(
+          "%-12s %-10s seed %lu %-16s mean %6.2f m  max %6.2f m  reliable %3.0f%% (%3.0f%% "
+          "within 1 m)\n",
+          run.plan_id.c_str(), run.scenario.c_str(), static_cast<unsigned long>(run.seed),
+          report.method.c_str(), report.mean_error_m, report.max_error_m,
+          100 * report.reliable_fraction, 100 * report.reliable_precision_1m);
+      std::fflush(stdout);
+      report.track.shrink_to_fit();
+      report.plan_poses.clear();
+      reports.push_back(std::move(report));
+    }
+  });
+
+  std::sort(reports.begin(), reports.end(), [](const EvalReport& a, const EvalReport& b) {
+    return std::tie(a.plan_id, a.scenario, a.seed, a.method) <
+           std::tie(b.plan_id, b.scenario, b.seed, b.method);
+  });
+  {
+    std::ofstream json(fs::path(o.out) / "results.json");
+    for (const EvalReport& r : reports) json << ToJson(r) << "\n";
+  }
+  std::vector<CalibrationBin> curve;
+  const std::string md = ResultsMarkdown(reports, o, &curve);
+  std::ofstream(fs::path(o.out) / "svg" / "calibration.svg") << CalibrationSvg(
+      {{o.methods.front() + ": published probability, every pose of the suite", curve}});
+  std::ofstream(fs::path(o.out) / "results.md") << md;
+  WriteBestAndWorst(reports, runs, loaded, o);
+  std::fputs(md.c_str(), stdout);
   return failures ? 1 : 0;
 }
 
