@@ -37,6 +37,40 @@ bool Daemon::Start(std::string* error) {
     state_lock_ = platform::StateDirLock::Take(state_dir, error);
     if (!state_lock_) return false;
   }
+  if (!JoinDds(error)) return false;
+  spdlog::info("joined DDS domain {} as device '{}'{}{}", config_.dds().domain_id(),
+               config_.dds().device_id(), deterministic_ ? " (deterministic)" : "",
+               config_.dds().security().identity_certificate().empty()
+                   ? ""
+                   : " with DDS Security as " + config_.dds().security().identity_certificate());
+  engine_ = std::make_unique<platform::Engine>(
+      config_, [this](Topic t, const google::protobuf::Message& m) { Publish(t, m); },
+      platform::MonotonicNs);
+  if (!deterministic_) {
+    engine_->SetOffload([this](std::function<void()> work, std::function<void()> done) {
+      if (plan_thread_.joinable()) plan_thread_.join();  // the last one, done already
+      plan_thread_ = std::thread([this, work = std::move(work), done = std::move(done)] {
+        work();
+        {
+          std::lock_guard lock(posted_mu_);
+          posted_.push_back(done);
+        }
+        waiter_->Wake();
+      });
+    });
+  }
+  const std::string plan_error = engine_->Start();
+  if (!state_dir.empty()) ResumeFromStateDir(state_dir);
+  engine_->crew().PublishMarkers();
+  engine_->PublishStatus(plan_error.empty() ? "started" : plan_error);
+  running_ = true;
+  io_heartbeat_ns_ = platform::MonotonicNs();
+  worker_thread_ = std::thread([this] { WorkerLoop(); });
+  io_thread_ = std::thread([this] { IoLoop(); });
+  return true;
+}
+
+bool Daemon::JoinDds(std::string* error) {
   try {
     const std::optional<platform::DdsSecurity> security = platform::ToDdsSecurity(config_);
     participant_ = std::make_unique<platform::Participant>(
@@ -82,47 +116,20 @@ bool Daemon::Start(std::string* error) {
     team_pose_reader_.reset();
     team_status_reader_.reset();
   }
-  spdlog::info("joined DDS domain {} as device '{}'{}{}", config_.dds().domain_id(),
-               config_.dds().device_id(), deterministic_ ? " (deterministic)" : "",
-               config_.dds().security().identity_certificate().empty()
-                   ? ""
-                   : " with DDS Security as " + config_.dds().security().identity_certificate());
-  engine_ = std::make_unique<platform::Engine>(
-      config_, [this](Topic t, const google::protobuf::Message& m) { Publish(t, m); },
-      platform::MonotonicNs);
-  if (!deterministic_) {
-    engine_->SetOffload([this](std::function<void()> work, std::function<void()> done) {
-      if (plan_thread_.joinable()) plan_thread_.join();  // the last one, done already
-      plan_thread_ = std::thread([this, work = std::move(work), done = std::move(done)] {
-        work();
-        {
-          std::lock_guard lock(posted_mu_);
-          posted_.push_back(done);
-        }
-        waiter_->Wake();
-      });
-    });
-  }
-  const std::string plan_error = engine_->Start();
-  if (!state_dir.empty()) {
-    snapshot_path_ = platform::SnapshotPath(state_dir, config_.dds().device_id());
-    ResumeFromSnapshot();
-    snapshot_thread_ = std::thread([this] { SnapshotLoop(); });
-    markers_path_ = (std::filesystem::path(state_dir) / "markers.pb").string();
-    std::string markers_error;
-    if (!engine_->crew().markers().Load(markers_path_, &markers_error))
-      spdlog::warn("markers {} not read: {}", markers_path_, markers_error);
-    saved_markers_ = engine_->crew().markers().revision();
-    if (!engine_->crew().markers().markers().empty())
-      spdlog::info("{} markers from {}", engine_->crew().markers().markers().size(), markers_path_);
-  }
-  engine_->crew().PublishMarkers();
-  engine_->PublishStatus(plan_error.empty() ? "started" : plan_error);
-  running_ = true;
-  io_heartbeat_ns_ = platform::MonotonicNs();
-  worker_thread_ = std::thread([this] { WorkerLoop(); });
-  io_thread_ = std::thread([this] { IoLoop(); });
   return true;
+}
+
+void Daemon::ResumeFromStateDir(const std::string& state_dir) {
+  snapshot_path_ = platform::SnapshotPath(state_dir, config_.dds().device_id());
+  ResumeFromSnapshot();
+  snapshot_thread_ = std::thread([this] { SnapshotLoop(); });
+  markers_path_ = (std::filesystem::path(state_dir) / "markers.pb").string();
+  std::string markers_error;
+  if (!engine_->crew().markers().Load(markers_path_, &markers_error))
+    spdlog::warn("markers {} not read: {}", markers_path_, markers_error);
+  saved_markers_ = engine_->crew().markers().revision();
+  if (!engine_->crew().markers().markers().empty())
+    spdlog::info("{} markers from {}", engine_->crew().markers().markers().size(), markers_path_);
 }
 
 void Daemon::Stop() {

@@ -46,6 +46,12 @@ class Daemon {
   // Crash safety: resume from the snapshot at start (a bad one is set aside), and hand a
   // new one to the snapshot thread after a new alignment or, periodically, new walls.
   void ResumeFromSnapshot();
+  // The participant, the readers and writers of the wearer's topics and, where the
+  // permissions grant them, the team's; false: why in *error.
+  bool JoinDds(std::string* error);
+  // The state directory's snapshot (the belief goes on) and markers, and the thread that
+  // keeps the snapshot.
+  void ResumeFromStateDir(const std::string& state_dir);
   void MaybeSnapshot(int64_t now_ns, bool force);
   void SnapshotLoop();
 
