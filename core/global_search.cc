@@ -180,6 +180,75 @@ double GlobalSearch::Score(const std::vector<Eigen::Vector2d>& points_slam,
   return n ? sum / static_cast<double>(n) : 0.0;
 }
 
+namespace {
+
+// One point a cell (the first, in cell order), then a stride down to max_points; points
+// not finite or beyond 1000 km left out.
+std::vector<Eigen::Vector2d> ThinToCells(const std::vector<Eigen::Vector2d>& points, double cell,
+                                         size_t max_points) {
+  std::map<std::pair<int64_t, int64_t>, Eigen::Vector2d> voxels;
+  for (const Eigen::Vector2d& p : points) {
+    if (!p.allFinite() || p.cwiseAbs().maxCoeff() > 1e6) continue;
+    voxels.emplace(std::make_pair(static_cast<int64_t>(std::floor(p.x() / cell)),
+                                  static_cast<int64_t>(std::floor(p.y() / cell))),
+                   p);
+  }
+  if (voxels.empty()) return {};
+  const size_t step =
+      std::max<size_t>(1, (voxels.size() + max_points - 1) / std::max<size_t>(1, max_points));
+  std::vector<Eigen::Vector2d> cloud;
+  size_t k = 0;
+  for (const auto& [key, p] : voxels)
+    if (k++ % step == 0) cloud.push_back(p);
+  return cloud;
+}
+
+// A cloud turned to one heading: each point's cell offset from the cell of the cloud's
+// centre, the same as an offset into the pyramid's arrays (rows of `stride`), and their
+// bounds. A node whose points all land on the arrays (most of them) is summed without a
+// bound check per point.
+struct Offsets {
+  std::vector<Eigen::Vector2i> cell;
+  std::vector<ptrdiff_t> linear;
+  Eigen::Vector2i min{0, 0}, max{0, 0};
+};
+
+std::vector<Offsets> HeadingOffsets(const std::vector<Eigen::Vector2d>& cloud,
+                                    const Eigen::Vector2d& centre,
+                                    const std::vector<double>& angles, double cell, int stride) {
+  std::vector<Offsets> offsets(angles.size());
+  for (size_t r = 0; r < angles.size(); ++r) {
+    const Se2 rotate{angles[r], Eigen::Vector2d::Zero()};
+    Offsets& o = offsets[r];
+    for (const Eigen::Vector2d& p : cloud) {
+      const Eigen::Vector2d q = rotate * (p - centre) / cell;
+      const Eigen::Vector2i c(static_cast<int>(std::floor(q.x() + 0.5)),
+                              static_cast<int>(std::floor(q.y() + 0.5)));
+      o.min = o.cell.empty() ? c : o.min.cwiseMin(c);
+      o.max = o.cell.empty() ? c : o.max.cwiseMax(c);
+      o.cell.push_back(c);
+      o.linear.push_back(static_cast<ptrdiff_t>(c.y()) * stride + c.x());
+    }
+  }
+  return offsets;
+}
+
+// Whether every translation of a node (heading `angle`, level h, at cell x, y) lies within
+// distinct_cells of a place found at a heading within distinct_rad.
+bool Covered(const std::vector<std::pair<double, Eigen::Vector2d>>& found, double angle, int h,
+             int x, int y, double distinct_cells, double distinct_rad) {
+  const double size = (1 << h) - 1;
+  for (const auto& [found_angle, at] : found) {
+    if (std::abs(WrapAngle(angle - found_angle)) >= distinct_rad) continue;
+    const double dx = std::max(std::abs(x - at.x()), std::abs(x + size - at.x()));
+    const double dy = std::max(std::abs(y - at.y()), std::abs(y + size - at.y()));
+    if (std::hypot(dx, dy) < distinct_cells) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>& points_slam,
                                               const std::vector<double>& rotations,
                                               GlobalSearchStats* stats) const {
@@ -188,21 +257,8 @@ std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>
   st = {};
   const double cell = grid_.cell_m;
 
-  // Thinned: one point a cell (the first), then a stride down to max_points.
-  std::map<std::pair<int64_t, int64_t>, Eigen::Vector2d> voxels;
-  for (const Eigen::Vector2d& p : points_slam) {
-    if (!p.allFinite() || p.cwiseAbs().maxCoeff() > 1e6) continue;
-    voxels.emplace(std::make_pair(static_cast<int64_t>(std::floor(p.x() / cell)),
-                                  static_cast<int64_t>(std::floor(p.y() / cell))),
-                   p);
-  }
-  if (voxels.empty()) return {};
-  const size_t step = std::max<size_t>(
-      1, (voxels.size() + options_.max_points - 1) / std::max<size_t>(1, options_.max_points));
-  std::vector<Eigen::Vector2d> cloud;
-  size_t k = 0;
-  for (const auto& [key, p] : voxels)
-    if (k++ % step == 0) cloud.push_back(p);
+  const std::vector<Eigen::Vector2d> cloud = ThinToCells(points_slam, cell, options_.max_points);
+  if (cloud.empty()) return {};
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
   for (const Eigen::Vector2d& p : cloud) centre += p;
   centre /= static_cast<double>(cloud.size());
@@ -219,29 +275,8 @@ std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>
   }
   st.rotations = angles.size();
 
-  // Per heading, each point's cell offset from the cell of the cloud's centre, and the
-  // same as an offset into the pyramid's arrays. A node whose points all land on the
-  // arrays (most of them) is summed without a bound check per point.
   const int n_points = static_cast<int>(cloud.size());
-  struct Offsets {
-    std::vector<Eigen::Vector2i> cell;
-    std::vector<ptrdiff_t> linear;
-    Eigen::Vector2i min{0, 0}, max{0, 0};
-  };
-  std::vector<Offsets> offsets(angles.size());
-  for (size_t r = 0; r < angles.size(); ++r) {
-    const Se2 rotate{angles[r], Eigen::Vector2d::Zero()};
-    Offsets& o = offsets[r];
-    for (const Eigen::Vector2d& p : cloud) {
-      const Eigen::Vector2d q = rotate * (p - centre) / cell;
-      const Eigen::Vector2i c(static_cast<int>(std::floor(q.x() + 0.5)),
-                              static_cast<int>(std::floor(q.y() + 0.5)));
-      o.min = o.cell.empty() ? c : o.min.cwiseMin(c);
-      o.max = o.cell.empty() ? c : o.max.cwiseMax(c);
-      o.cell.push_back(c);
-      o.linear.push_back(static_cast<ptrdiff_t>(c.y()) * stride_ + c.x());
-    }
-  }
+  const std::vector<Offsets> offsets = HeadingOffsets(cloud, centre, angles, cell, stride_);
   // A leaf's score, or a node's bound on the scores of the leaves under it.
   const auto sum = [&](const Offsets& o, int x, int y, const auto* level, auto total) {
     const auto* at = level + static_cast<ptrdiff_t>(y + pad_) * stride_ + (x + pad_);
@@ -279,18 +314,9 @@ std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>
   std::vector<GlobalPlace> places;
   std::vector<std::pair<double, Eigen::Vector2d>> found;  // heading, centre cell (x, y)
   const double distinct_cells = options_.distinct_m / cell;
-  // Every translation of the node within distinct_m of a place found at a near heading.
-  auto covered = [&](const Node& n) {
-    const double size = (1 << n.h) - 1;
-    for (const auto& [angle, at] : found) {
-      if (std::abs(WrapAngle(angles[static_cast<size_t>(n.rotation)] - angle)) >=
-          options_.distinct_rad)
-        continue;
-      const double dx = std::max(std::abs(n.x - at.x()), std::abs(n.x + size - at.x()));
-      const double dy = std::max(std::abs(n.y - at.y()), std::abs(n.y + size - at.y()));
-      if (std::hypot(dx, dy) < distinct_cells) return true;
-    }
-    return false;
+  const auto covered = [&](const Node& n) {
+    return Covered(found, angles[static_cast<size_t>(n.rotation)], n.h, n.x, n.y, distinct_cells,
+                   options_.distinct_rad);
   };
   while (!open.empty() && places.size() < max_places()) {
     const Node n = open.top();
