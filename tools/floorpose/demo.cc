@@ -78,73 +78,28 @@ struct DemoOptions {
   std::string log;
 };
 
-int RunDemo(const DemoOptions& o) {
-  const std::string dir = DefaultDemoDir();
-  const std::string plan_path = o.plan.empty() ? dir + "/office.geojson" : o.plan;
-  const std::string walk_path = o.walk.empty() ? dir + "/office.walk" : o.walk;
-  const FloorPlanParse plan = platform::LoadFloorPlan(plan_path);
-  if (!plan.ok()) {
-    spdlog::error("{}", plan.error);
-    return 1;
-  }
-  std::vector<Eigen::Vector2d> waypoints;
-  std::string error;
-  if (!LoadWaypoints(walk_path, &waypoints, &error)) {
-    spdlog::error("{}", error);
-    return 1;
-  }
-  sim::DemoWalkOptions walk_options;
-  walk_options.seed = o.seed;
-  const sim::DemoWalk walk = SimulateDemoWalk(plan.plan, waypoints, walk_options);
-
-  // A private domain: loopback only, an id from our pid so parallel demos stay apart.
-  const uint32_t domain =
-      o.domain >= 0 ? static_cast<uint32_t>(o.domain) : 100 + static_cast<uint32_t>(getpid() % 120);
-  const fs::path tmp = fs::temp_directory_path() / ("floorpose-demo-" + std::to_string(getpid()));
-  fs::create_directories(tmp);
+// floorposed's configuration for the demo, written into tmp: loopback DDS on `domain`,
+// the plan, and tmp as its state directory. Returns the file.
+std::string WriteDemoConfig(const fs::path& tmp, uint32_t domain, const std::string& plan_path) {
   const std::string config_path = (tmp / "floorposed.conf").string();
-  {
-    std::ofstream conf(config_path);
-    conf << platform::LoopbackDdsConfigText(domain, "demo-headset") << "plan_path: \""
-         << fs::absolute(plan_path).string() << "\"\n"
-         << "log_level: \"info\"\nstate_dir: \"" << tmp.string() << "\"\n";
-  }
-  const std::string log_path = o.log.empty() ? (tmp / "floorposed.log").string() : o.log;
-  const std::string floorposed = o.floorposed.empty() ? FindFloorposed() : o.floorposed;
-  std::printf("floorpose demo: plan %s (%zu walls), walk of %.0f m in %zu poses, domain %u\n",
-              plan_path.c_str(), plan.plan.segments.size(), walk.length_m, walk.steps.size(),
-              domain);
-  std::printf("starting %s (log: %s)\n", floorposed.c_str(), log_path.c_str());
-  std::fflush(stdout);
-  ChildProcess daemon({floorposed, "--config", config_path}, log_path);
+  std::ofstream conf(config_path);
+  conf << platform::LoopbackDdsConfigText(domain, "demo-headset") << "plan_path: \""
+       << fs::absolute(plan_path).string() << "\"\n"
+       << "log_level: \"info\"\nstate_dir: \"" << tmp.string() << "\"\n";
+  return config_path;
+}
 
-  HeadsetLink link(domain, platform::LoopbackCycloneConfig(), "demo-headset");
-  if (!link.WaitForDaemon(std::chrono::seconds(15))) {
-    spdlog::error("floorposed did not come up on domain {} within 15 s (see {})", domain, log_path);
-    return 1;
-  }
-  const HeadsetFrame frame = HeadsetFrame::kUnityLeftHandedYUp;
-  link.Send(Topic::kCommand, ToWallPickCommand(walk, frame, 1), 0);
-  if (!link.WaitUntil([&] { return !link.alignments.empty(); }, std::chrono::seconds(5))) {
-    spdlog::error("no alignment after the wall pick; daemon said: {}",
-                  link.status_messages.empty() ? "nothing" : link.status_messages.back());
-    return 1;
-  }
-  std::printf("wall pick at plan (%.2f, %.2f): alignment version %lu\n", walk.pick.plan_point.x(),
-              walk.pick.plan_point.y(),
-              static_cast<unsigned long>(link.alignments.back().version()));
-  std::printf("%8s %8s %8s  %8s %8s  %7s  %-10s %s\n", "t [s]", "x", "y", "true x", "true y",
-              "err [m]", "flag", "alignment");
-
-  std::map<int64_t, size_t> step_of_stamp;
-  const auto period = std::chrono::duration<double>(walk_options.pose_period_s / o.rate);
-  auto next = std::chrono::steady_clock::now();
-  size_t printed = 0;
+// The plan poses received, scored against the walk's truth as they come; every `every`th
+// printed as a table row.
+struct DemoScore {
   std::vector<double> errors;
   size_t reliable = 0, reliable_within_1m = 0;
-  auto report = [&](size_t upto) {
-    for (; printed < upto; ++printed) {
-      const v1::PlanPose& p = link.plan_poses[printed];
+  size_t printed = 0;
+
+  void Take(const std::vector<v1::PlanPose>& poses, const std::map<int64_t, size_t>& step_of_stamp,
+            const sim::DemoWalk& walk, int every) {
+    for (; printed < poses.size(); ++printed) {
+      const v1::PlanPose& p = poses[printed];
       auto it = step_of_stamp.find(p.source_stamp_ns());
       if (it == step_of_stamp.end()) continue;
       const Pose2& truth = walk.steps[it->second].true_plan;
@@ -153,7 +108,7 @@ int RunDemo(const DemoOptions& o) {
       const bool is_reliable = p.reliability().flag() == v1::Reliability::RELIABLE;
       reliable += is_reliable;
       reliable_within_1m += is_reliable && err <= 1.0;
-      if (printed % static_cast<size_t>(std::max(1, o.every)) == 0)
+      if (printed % static_cast<size_t>(std::max(1, every)) == 0)
         std::printf("%8.1f %8.2f %8.2f  %8.2f %8.2f  %7.3f  %-10s v%lu\n",
                     static_cast<double>(p.source_stamp_ns()) * 1e-9, p.x(), p.y(),
                     truth.position.x(), truth.position.y(), err,
@@ -161,7 +116,17 @@ int RunDemo(const DemoOptions& o) {
                     static_cast<unsigned long>(p.alignment_version()));
     }
     std::fflush(stdout);
-  };
+  }
+};
+
+// Walks the headset: each step's meshes and pose, at `rate` times real time, the plan
+// poses scored as they come; then waits for the last of them and a final status.
+void WalkHeadset(const sim::DemoWalk& walk, double pose_period_s, const DemoOptions& o,
+                 HeadsetLink& link, DemoScore* score) {
+  const HeadsetFrame frame = HeadsetFrame::kUnityLeftHandedYUp;
+  std::map<int64_t, size_t> step_of_stamp;
+  const auto period = std::chrono::duration<double>(pose_period_s / o.rate);
+  auto next = std::chrono::steady_clock::now();
   for (size_t k = 0; k < walk.steps.size(); ++k) {
     const sim::SimStep& step = walk.steps[k];
     for (const sim::SimMesh& m : step.meshes)
@@ -171,20 +136,25 @@ int RunDemo(const DemoOptions& o) {
     next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);
     std::this_thread::sleep_until(next);
     link.Poll();
-    report(link.plan_poses.size());
+    score->Take(link.plan_poses, step_of_stamp, walk, o.every);
   }
   link.WaitUntil([&] { return link.plan_poses.size() >= walk.steps.size(); },
                  std::chrono::seconds(5));
-  report(link.plan_poses.size());
+  score->Take(link.plan_poses, step_of_stamp, walk, o.every);
   // One more status so the summary has the final counters.
   link.WaitUntil(
       [&] { return link.status && link.status->counters().poses_in() >= walk.steps.size(); },
       std::chrono::seconds(3));
-  const auto exit_code = daemon.Terminate(std::chrono::seconds(5));
+}
 
+// The summary after the walk: poses, errors, the daemon's counters and how it stopped.
+void PrintSummary(size_t sent, const HeadsetLink& link, const DemoScore& score,
+                  const std::optional<int>& exit_code, const ChildProcess& daemon) {
   const size_t received = link.plan_poses.size();
+  const std::vector<double>& errors = score.errors;
+  const size_t reliable = score.reliable, reliable_within_1m = score.reliable_within_1m;
   std::printf("\nsummary\n");
-  std::printf("  poses sent / plan poses received   %zu / %zu\n", walk.steps.size(), received);
+  std::printf("  poses sent / plan poses received   %zu / %zu\n", sent, received);
   if (!errors.empty()) {
     double sum = 0;
     for (double e : errors) sum += e;
@@ -212,7 +182,65 @@ int RunDemo(const DemoOptions& o) {
   std::printf("  floorposed stopped                 %s in %ld ms\n",
               exit_code && *exit_code == 0 ? "cleanly" : "NOT cleanly",
               static_cast<long>(daemon.last_stop_time().count()));
-  const bool ok = received == walk.steps.size() && exit_code && *exit_code == 0;
+}
+
+int RunDemo(const DemoOptions& o) {
+  const std::string dir = DefaultDemoDir();
+  const std::string plan_path = o.plan.empty() ? dir + "/office.geojson" : o.plan;
+  const std::string walk_path = o.walk.empty() ? dir + "/office.walk" : o.walk;
+  const FloorPlanParse plan = platform::LoadFloorPlan(plan_path);
+  if (!plan.ok()) {
+    spdlog::error("{}", plan.error);
+    return 1;
+  }
+  std::vector<Eigen::Vector2d> waypoints;
+  std::string error;
+  if (!LoadWaypoints(walk_path, &waypoints, &error)) {
+    spdlog::error("{}", error);
+    return 1;
+  }
+  sim::DemoWalkOptions walk_options;
+  walk_options.seed = o.seed;
+  const sim::DemoWalk walk = SimulateDemoWalk(plan.plan, waypoints, walk_options);
+
+  // A private domain: loopback only, an id from our pid so parallel demos stay apart.
+  const uint32_t domain =
+      o.domain >= 0 ? static_cast<uint32_t>(o.domain) : 100 + static_cast<uint32_t>(getpid() % 120);
+  const fs::path tmp = fs::temp_directory_path() / ("floorpose-demo-" + std::to_string(getpid()));
+  fs::create_directories(tmp);
+  const std::string config_path = WriteDemoConfig(tmp, domain, plan_path);
+  const std::string log_path = o.log.empty() ? (tmp / "floorposed.log").string() : o.log;
+  const std::string floorposed = o.floorposed.empty() ? FindFloorposed() : o.floorposed;
+  std::printf("floorpose demo: plan %s (%zu walls), walk of %.0f m in %zu poses, domain %u\n",
+              plan_path.c_str(), plan.plan.segments.size(), walk.length_m, walk.steps.size(),
+              domain);
+  std::printf("starting %s (log: %s)\n", floorposed.c_str(), log_path.c_str());
+  std::fflush(stdout);
+  ChildProcess daemon({floorposed, "--config", config_path}, log_path);
+
+  HeadsetLink link(domain, platform::LoopbackCycloneConfig(), "demo-headset");
+  if (!link.WaitForDaemon(std::chrono::seconds(15))) {
+    spdlog::error("floorposed did not come up on domain {} within 15 s (see {})", domain, log_path);
+    return 1;
+  }
+  const HeadsetFrame frame = HeadsetFrame::kUnityLeftHandedYUp;
+  link.Send(Topic::kCommand, ToWallPickCommand(walk, frame, 1), 0);
+  if (!link.WaitUntil([&] { return !link.alignments.empty(); }, std::chrono::seconds(5))) {
+    spdlog::error("no alignment after the wall pick; daemon said: {}",
+                  link.status_messages.empty() ? "nothing" : link.status_messages.back());
+    return 1;
+  }
+  std::printf("wall pick at plan (%.2f, %.2f): alignment version %lu\n", walk.pick.plan_point.x(),
+              walk.pick.plan_point.y(),
+              static_cast<unsigned long>(link.alignments.back().version()));
+  std::printf("%8s %8s %8s  %8s %8s  %7s  %-10s %s\n", "t [s]", "x", "y", "true x", "true y",
+              "err [m]", "flag", "alignment");
+
+  DemoScore score;
+  WalkHeadset(walk, walk_options.pose_period_s, o, link, &score);
+  const auto exit_code = daemon.Terminate(std::chrono::seconds(5));
+  PrintSummary(walk.steps.size(), link, score, exit_code, daemon);
+  const bool ok = link.plan_poses.size() == walk.steps.size() && exit_code && *exit_code == 0;
   if (!ok) std::printf("demo FAILED: see %s\n", log_path.c_str());
   if (ok && o.log.empty()) fs::remove_all(tmp);
   return ok ? 0 : 1;
