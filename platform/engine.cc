@@ -132,16 +132,26 @@ void Engine::OnMeshDelta(const Envelope& e) {
   const std::string error = DecodeMeshDelta(e.payload, frame_, config().limits(), &mesh, &kind);
   if (!error.empty()) return intake_.Reject(kind, error);
   if (!TakeStamp("mesh " + std::to_string(mesh.mesh_id), &mesh.stamp_ns)) return;
-  if (mesh.change == v1::MeshDelta::REMOVED) {
-    if (store_.Remove(mesh.mesh_id)) {
-      intake_.counters().set_meshes_removed(intake_.counters().meshes_removed() + 1);
-    } else {
-      intake_.counters().set_unknown_mesh_ids(intake_.counters().unknown_mesh_ids() + 1);
-      intake_.Warn("unknown mesh",
-                   "REMOVED for unknown mesh " + std::to_string(mesh.mesh_id) + ": ignored");
-    }
-    return;
+  if (mesh.change == v1::MeshDelta::REMOVED) return RemoveMesh(mesh.mesh_id);
+  if (OlderThanStored(mesh)) return;
+  WallExtractionReport report;
+  std::vector<WallPoint> points = ExtractWallPoints({&mesh.vertices, &mesh.triangles}, mesh.mesh_id,
+                                                    BandedWallOptions(), &report);
+  if (!Extracted(mesh, report)) return;
+  StoreWalls(mesh, std::move(points), report);
+}
+
+void Engine::RemoveMesh(uint64_t mesh_id) {
+  if (store_.Remove(mesh_id)) {
+    intake_.counters().set_meshes_removed(intake_.counters().meshes_removed() + 1);
+  } else {
+    intake_.counters().set_unknown_mesh_ids(intake_.counters().unknown_mesh_ids() + 1);
+    intake_.Warn("unknown mesh",
+                 "REMOVED for unknown mesh " + std::to_string(mesh_id) + ": ignored");
   }
+}
+
+bool Engine::OlderThanStored(const DecodedMesh& mesh) {
   if (const auto stored = store_.MeshStamp(mesh.mesh_id); stored && mesh.stamp_ns < *stored) {
     // A late copy of an older scan: the store has a newer one of the same surface.
     intake_.counters().set_stale_stamps(intake_.counters().stale_stamps() + 1);
@@ -150,17 +160,18 @@ void Engine::OnMeshDelta(const Envelope& e) {
                                    std::to_string(mesh.stamp_ns) +
                                    " ns is older than the stored one (" + std::to_string(*stored) +
                                    " ns): ignored");
-    return;
+    return true;
   }
-  WallExtractionReport report;
-  std::vector<WallPoint> points = ExtractWallPoints({&mesh.vertices, &mesh.triangles}, mesh.mesh_id,
-                                                    BandedWallOptions(), &report);
+  return false;
+}
+
+bool Engine::Extracted(const DecodedMesh& mesh, const WallExtractionReport& report) {
   if (report.over_limit) {
-    return intake_.Reject(Refusal::kOverLimits, "mesh " + std::to_string(mesh.mesh_id) + ": " +
-                                                    std::to_string(report.wall_area_m2) +
-                                                    " m2 of wall would give more than " +
-                                                    std::to_string(wall_options_.max_points) +
-                                                    " points");
+    intake_.Reject(Refusal::kOverLimits, "mesh " + std::to_string(mesh.mesh_id) + ": " +
+                                             std::to_string(report.wall_area_m2) +
+                                             " m2 of wall would give more than " +
+                                             std::to_string(wall_options_.max_points) + " points");
+    return false;
   }
   if (report.bad_indices || report.degenerate_triangles || mesh.unusable_vertices) {
     auto& c = intake_.counters();
@@ -173,6 +184,11 @@ void Engine::OnMeshDelta(const Envelope& e) {
                      std::to_string(report.degenerate_triangles) + " degenerate; " +
                      std::to_string(mesh.unusable_vertices) + " unusable vertices");
   }
+  return true;
+}
+
+void Engine::StoreWalls(const DecodedMesh& mesh, std::vector<WallPoint> points,
+                        const WallExtractionReport& report) {
   const bool known = store_.Contains(mesh.mesh_id);
   if (mesh.change == v1::MeshDelta::UPDATED && !known) {
     // Keep the data: an UPDATED whose ADDED was lost is still a good mesh.

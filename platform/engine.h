@@ -124,6 +124,14 @@ class Engine {
   // Command.load_plan: starts reading and building the plan (on offload_ when there is
   // one), answered when it is built; why not, if it cannot start.
   std::string StartLoadPlan(const v1::Command& cmd, const v1::CommandReply& reply);
+  // A mesh delta's parts: REMOVED; a late copy of an older scan than the store's (true:
+  // dropped); the extraction's limits and dropped triangles (false: refused); the walls
+  // into the store, making room at limits.max_wall_points.
+  void RemoveMesh(uint64_t mesh_id);
+  bool OlderThanStored(const DecodedMesh& mesh);
+  bool Extracted(const DecodedMesh& mesh, const WallExtractionReport& report);
+  void StoreWalls(const DecodedMesh& mesh, std::vector<WallPoint> points,
+                  const WallExtractionReport& report);
   // The end of a command: its reply and status, and what it changed published.
   void FinishCommand(const v1::Command& cmd, v1::CommandReply reply, const std::string& error,
                      const std::string& done);
