@@ -65,14 +65,20 @@ FreeSpace::FreeSpace(const std::vector<Segment>& walls, const Eigen::Vector2d& m
     return;
   }
   options_.cell_m = std::max(options_.cell_m, std::sqrt(extent.x() * extent.y() / kMaxCells));
-  const double c = options_.cell_m;
   origin_ = min.array() - options_.margin_m;
-  nx_ = static_cast<int>(std::ceil(extent.x() / c)) + 1;
-  ny_ = static_cast<int>(std::ceil(extent.y() / c)) + 1;
+  nx_ = static_cast<int>(std::ceil(extent.x() / options_.cell_m)) + 1;
+  ny_ = static_cast<int>(std::ceil(extent.y() / options_.cell_m)) + 1;
   const int n = nx_ * ny_;
+  clearance_ = Clearance(BlockedCells(walls));
+  std::vector<uint8_t> free(n, 0);
+  for (int i = 0; i < n; ++i) free[i] = clearance_[i] >= options_.body_radius_m;
+  ChooseRegion(free, IndoorCells(free), min, max);
+}
 
+std::vector<uint8_t> FreeSpace::BlockedCells(const std::vector<Segment>& walls) const {
+  const double c = options_.cell_m;
   // Walls: every cell a wall passes through (sampled at half a cell).
-  std::vector<uint8_t> blocked(n, 0);
+  std::vector<uint8_t> blocked(static_cast<size_t>(nx_) * ny_, 0);
   for (const Segment& s : walls) {
     const int steps = std::max(1, static_cast<int>(std::ceil(s.Length() / (0.5 * c))));
     for (int i = 0; i <= steps; ++i) {
@@ -81,6 +87,11 @@ FreeSpace::FreeSpace(const std::vector<Segment>& walls, const Eigen::Vector2d& m
     }
   }
 
+  return blocked;
+}
+
+std::vector<float> FreeSpace::Clearance(const std::vector<uint8_t>& blocked) const {
+  const int n = nx_ * ny_;
   // Clearance: the 3-4 chamfer distance transform (Borgefors 1986), two passes. It
   // underestimates diagonal distances by at most 6%, which errs on the safe side.
   std::vector<float> d(n, std::numeric_limits<float>::max() / 2);
@@ -101,12 +112,13 @@ FreeSpace::FreeSpace(const std::vector<Segment>& walls, const Eigen::Vector2d& m
       relax(i, x + 1, y, 3), relax(i, x, y + 1, 3), relax(i, x + 1, y + 1, 4),
           relax(i, x - 1, y + 1, 4);
     }
-  clearance_.resize(n);
-  for (int i = 0; i < n; ++i) clearance_[i] = static_cast<float>(d[i] * c / 3.0);
+  std::vector<float> clearance(n);
+  for (int i = 0; i < n; ++i) clearance[i] = static_cast<float>(d[i] * options_.cell_m / 3.0);
+  return clearance;
+}
 
-  std::vector<uint8_t> free(n, 0);
-  for (int i = 0; i < n; ++i) free[i] = clearance_[i] >= options_.body_radius_m;
-
+std::vector<uint8_t> FreeSpace::IndoorCells(const std::vector<uint8_t>& free) const {
+  const int n = nx_ * ny_;
   // Indoors, decided per block of 6x6 cells from its walkable cell nearest the block's
   // centre. Rays march through the grown walls one cell at a time, so they cannot slip
   // through a wall; they do pass through doors, and then meet the next room's walls.
@@ -141,6 +153,12 @@ FreeSpace::FreeSpace(const std::vector<Segment>& walls, const Eigen::Vector2d& m
         for (int x = bx; x < std::min(bx + kBlock, nx_); ++x) indoor[y * nx_ + x] = 1;
     }
 
+  return indoor;
+}
+
+void FreeSpace::ChooseRegion(const std::vector<uint8_t>& free, const std::vector<uint8_t>& indoor,
+                             const Eigen::Vector2d& min, const Eigen::Vector2d& max) {
+  const int n = nx_ * ny_;
   std::vector<uint8_t> mask(n, 0);
   for (int i = 0; i < n; ++i) mask[i] = free[i] && indoor[i];
   std::vector<int> enclosed = LargestComponent(mask, nx_, ny_);

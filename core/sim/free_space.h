@@ -78,6 +78,16 @@ class FreeSpace {
   // Whether the walkable cells of `ring` reach each other inside the window [x0, x1] x
   // [y0, y1] (cells; clipped to the grid).
   bool LocallyConnected(const std::vector<int>& ring, int x0, int y0, int x1, int y1) const;
+  // The construction's steps: every cell a wall passes through (sampled at half a cell);
+  // each cell's distance to the nearest of those, metres; the cells indoors (rays from a
+  // block's walkable cell meet walls in enough directions); and the region to walk in,
+  // the largest enclosed free region, or the plan's bounding box where it has no closed
+  // outline (cells_, walkable_, region_).
+  std::vector<uint8_t> BlockedCells(const std::vector<Segment>& walls) const;
+  std::vector<float> Clearance(const std::vector<uint8_t>& blocked) const;
+  std::vector<uint8_t> IndoorCells(const std::vector<uint8_t>& free) const;
+  void ChooseRegion(const std::vector<uint8_t>& free, const std::vector<uint8_t>& indoor,
+                    const Eigen::Vector2d& min, const Eigen::Vector2d& max);
 
   FreeSpaceOptions options_;
   Eigen::Vector2d origin_;  // corner of cell (0, 0)
