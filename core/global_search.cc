@@ -345,62 +345,59 @@ std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>
   return places;
 }
 
-std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
-                                      const std::vector<Eigen::Vector2d>& points_slam,
-                                      const std::vector<Eigen::Vector2d>& path_slam,
-                                      const ClosestWallIndex& index, const IcpOptions& icp,
-                                      const RefineOptions& options,
-                                      const std::vector<GlobalPlace>& ranked) {
-  std::vector<Eigen::Vector2d> cloud;
-  cloud.reserve(points_slam.size());
-  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-  for (const Eigen::Vector2d& p : points_slam)
-    if (p.allFinite()) cloud.push_back(p), centre += p;
-  if (cloud.empty()) return {};
-  centre /= static_cast<double>(cloud.size());
-  std::vector<GlobalPlace> refined = ranked;  // refined on these walls already
-  std::vector<Eigen::Vector2d> cloud_plan;
-  for (const GlobalPlace& place : places) {
-    GlobalPlace r = place;
-    const RegistrationResult icp_result = RegisterIcp(cloud, index, place.T_plan_slam, icp);
-    if (icp_result.converged && icp_result.T_plan_slam.t.allFinite() &&
-        std::isfinite(icp_result.T_plan_slam.theta))
-      r.T_plan_slam = icp_result.T_plan_slam;
-    RegistrationResult fit;
-    EvaluateFit(cloud, index, r.T_plan_slam, options.cap_m, icp.inlier_threshold_m, &fit,
-                &r.fit_mse);
-    r.inlier_ratio = static_cast<double>(fit.inliers) / static_cast<double>(cloud.size());
-    const std::vector<Eigen::Vector2d> path_plan = PathOnPlan(r.T_plan_slam, path_slam);
-    r.path_crossings = PathCrossings(path_plan, index.plan(), options.path_margin_m);
-    if (options.sight_reach_m > 0 || options.unseen_reach_m > 0) {
-      cloud_plan.clear();
-      for (const Eigen::Vector2d& p : cloud) cloud_plan.push_back(r.T_plan_slam * p);
-    }
-    if (options.sight_reach_m > 0) {
-      // The walls seen must have been in sight: one the plan hides from the whole walk
-      // is a miss, however well it lies on a wall (a look-alike room behind a wall).
-      const uint32_t hidden =
-          HiddenPoints(cloud_plan, path_plan, index.plan(), options.sight_reach_m,
-                       options.sight_standoff_m, options.path_margin_m);
-      r.hidden_ratio = static_cast<double>(hidden) / static_cast<double>(cloud.size());
-      r.fit_mse +=
-          std::max(0.0, r.hidden_ratio - options.sight_allowance) * options.cap_m * options.cap_m;
-    }
-    if (options.unseen_reach_m > 0) {
-      UnseenWallsOptions unseen;
-      unseen.walls.reach_m = options.unseen_reach_m;
-      unseen.walls.standoff_m = options.sight_standoff_m;
-      unseen.walls.end_margin_m = options.path_margin_m;
-      const UnseenWalls u = CountUnseenWalls(cloud_plan, path_plan, index.plan(), unseen);
-      r.unseen_expected = u.expected;
-      r.unseen_ratio = u.expected ? static_cast<double>(u.missed) / u.expected : 0.0;
-      // Few samples tell little: the excess counts over at least unseen_min_samples.
-      const double excess = std::max(0.0, u.missed - options.unseen_allowance * u.expected) /
-                            std::max<double>(u.expected, options.unseen_min_samples);
-      r.fit_mse += options.unseen_weight * excess * options.cap_m * options.cap_m;
-    }
-    refined.push_back(r);
+namespace {
+
+// One place refined on the walls: ICP from it, then its fit, the plan walls its walk goes
+// through and, where asked, the walls it leaves hidden from the walk and the plan walls in
+// sight the mesh lacks, each added to the fit as a miss. cloud_plan is scratch.
+GlobalPlace RefinePlace(const GlobalPlace& place, const std::vector<Eigen::Vector2d>& cloud,
+                        const std::vector<Eigen::Vector2d>& path_slam,
+                        const ClosestWallIndex& index, const IcpOptions& icp,
+                        const RefineOptions& options, std::vector<Eigen::Vector2d>& cloud_plan) {
+  GlobalPlace r = place;
+  const RegistrationResult icp_result = RegisterIcp(cloud, index, place.T_plan_slam, icp);
+  if (icp_result.converged && icp_result.T_plan_slam.t.allFinite() &&
+      std::isfinite(icp_result.T_plan_slam.theta))
+    r.T_plan_slam = icp_result.T_plan_slam;
+  RegistrationResult fit;
+  EvaluateFit(cloud, index, r.T_plan_slam, options.cap_m, icp.inlier_threshold_m, &fit, &r.fit_mse);
+  r.inlier_ratio = static_cast<double>(fit.inliers) / static_cast<double>(cloud.size());
+  const std::vector<Eigen::Vector2d> path_plan = PathOnPlan(r.T_plan_slam, path_slam);
+  r.path_crossings = PathCrossings(path_plan, index.plan(), options.path_margin_m);
+  if (options.sight_reach_m > 0 || options.unseen_reach_m > 0) {
+    cloud_plan.clear();
+    for (const Eigen::Vector2d& p : cloud) cloud_plan.push_back(r.T_plan_slam * p);
   }
+  if (options.sight_reach_m > 0) {
+    // The walls seen must have been in sight: one the plan hides from the whole walk
+    // is a miss, however well it lies on a wall (a look-alike room behind a wall).
+    const uint32_t hidden = HiddenPoints(cloud_plan, path_plan, index.plan(), options.sight_reach_m,
+                                         options.sight_standoff_m, options.path_margin_m);
+    r.hidden_ratio = static_cast<double>(hidden) / static_cast<double>(cloud.size());
+    r.fit_mse +=
+        std::max(0.0, r.hidden_ratio - options.sight_allowance) * options.cap_m * options.cap_m;
+  }
+  if (options.unseen_reach_m > 0) {
+    UnseenWallsOptions unseen;
+    unseen.walls.reach_m = options.unseen_reach_m;
+    unseen.walls.standoff_m = options.sight_standoff_m;
+    unseen.walls.end_margin_m = options.path_margin_m;
+    const UnseenWalls u = CountUnseenWalls(cloud_plan, path_plan, index.plan(), unseen);
+    r.unseen_expected = u.expected;
+    r.unseen_ratio = u.expected ? static_cast<double>(u.missed) / u.expected : 0.0;
+    // Few samples tell little: the excess counts over at least unseen_min_samples.
+    const double excess = std::max(0.0, u.missed - options.unseen_allowance * u.expected) /
+                          std::max<double>(u.expected, options.unseen_min_samples);
+    r.fit_mse += options.unseen_weight * excess * options.cap_m * options.cap_m;
+  }
+  return r;
+}
+
+// The places no better one stands within distinct_m and distinct_rad of (at the cloud's
+// centre), best fit first.
+std::vector<GlobalPlace> DistinctPlaces(std::vector<GlobalPlace> refined,
+                                        const Eigen::Vector2d& centre,
+                                        const RefineOptions& options) {
   std::stable_sort(refined.begin(), refined.end(), [](const GlobalPlace& a, const GlobalPlace& b) {
     return a.fit_mse < b.fit_mse;
   });
@@ -412,6 +409,11 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
     });
     if (!same) distinct.push_back(r);
   }
+  return distinct;
+}
+
+void RankPlaces(std::vector<GlobalPlace>& distinct, const std::vector<Eigen::Vector2d>& path_slam,
+                const ClosestWallIndex& index, const RefineOptions& options) {
   // A place that leaves most of the walls off the plan is no place, however it walks.
   // Among those that fit, a place is only as good as the walk it implies: those that take
   // the wearer through more walls than the fewest go last, so they can be the next place
@@ -438,6 +440,29 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
           PlanAlike(path_slam, distinct.front().T_plan_slam, distinct[i].T_plan_slam, index,
                     options.alike_reach_m, 0.3, options.path_margin_m)
               .share;
+}
+
+}  // namespace
+
+std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
+                                      const std::vector<Eigen::Vector2d>& points_slam,
+                                      const std::vector<Eigen::Vector2d>& path_slam,
+                                      const ClosestWallIndex& index, const IcpOptions& icp,
+                                      const RefineOptions& options,
+                                      const std::vector<GlobalPlace>& ranked) {
+  std::vector<Eigen::Vector2d> cloud;
+  cloud.reserve(points_slam.size());
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  for (const Eigen::Vector2d& p : points_slam)
+    if (p.allFinite()) cloud.push_back(p), centre += p;
+  if (cloud.empty()) return {};
+  centre /= static_cast<double>(cloud.size());
+  std::vector<GlobalPlace> refined = ranked;  // refined on these walls already
+  std::vector<Eigen::Vector2d> cloud_plan;
+  for (const GlobalPlace& place : places)
+    refined.push_back(RefinePlace(place, cloud, path_slam, index, icp, options, cloud_plan));
+  std::vector<GlobalPlace> distinct = DistinctPlaces(std::move(refined), centre, options);
+  RankPlaces(distinct, path_slam, index, options);
   return distinct;
 }
 
