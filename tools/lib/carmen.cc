@@ -250,22 +250,15 @@ bool ReadCarmenLog(const std::string& path, CarmenLog* log, std::string* error) 
   return true;
 }
 
-bool CarmenToSimulation(const CarmenLog& log, const std::vector<sim::TimedPose>& odometry,
-                        const std::vector<sim::TimedPose>& ground_truth,
-                        const CarmenImportOptions& o, sim::Simulation* out,
-                        CarmenImportReport* report, std::string* error) {
-  *out = {};
-  *report = {};
+namespace {
+
+// The log's clock, seconds or line numbers (report->line_clock), and the walk's: the scans'
+// times in each (a line-numbered log is paced at pace_mps). False: the ground truth is
+// not this log's.
+bool WalkClock(const CarmenLog& log, const std::vector<sim::TimedPose>& ground_truth,
+               const CarmenImportOptions& o, std::vector<double>* clock_out,
+               std::vector<double>* walk_out, CarmenImportReport* report, std::string* error) {
   const size_t n = log.scans.size();
-  if (ground_truth.size() != n) {
-    *error = "the ground truth has " + std::to_string(ground_truth.size()) + " poses for " +
-             std::to_string(n) + " scans (one per FLASER, in log order)";
-    return false;
-  }
-  if (odometry.size() < 2) {
-    *error = "the odometry needs at least two poses";
-    return false;
-  }
   // The log's clock: seconds, or line numbers where the timestamps were unusable.
   bool lines = true, seconds = true;
   for (size_t i = 0; i < n; ++i) {
@@ -280,7 +273,10 @@ bool CarmenToSimulation(const CarmenLog& log, const std::vector<sim::TimedPose>&
   }
   report->line_clock = lines && !seconds;
   // Knots: the scans' times in the log's clock and in seconds of the walk.
-  std::vector<double> clock(n), walk(n);
+  std::vector<double>& clock = *clock_out;
+  std::vector<double>& walk = *walk_out;
+  clock.assign(n, 0.0);
+  walk.assign(n, 0.0);
   for (size_t i = 0; i < n; ++i) clock[i] = ground_truth[i].t_s;
   if (report->line_clock) {
     std::vector<sim::TimedPose> paced = ground_truth;
@@ -289,17 +285,17 @@ bool CarmenToSimulation(const CarmenLog& log, const std::vector<sim::TimedPose>&
   } else {
     walk = clock;
   }
-  const Track odom(odometry), truth(ground_truth);
-  const double max_range = o.max_range_m > 0 ? o.max_range_m : log.max_reading;
+  return true;
+}
 
-  // Per scan: the odometry reading it was paired with, and the correction onto the truth.
-  std::vector<Se2> odom_at_scan(n), T_plan_slam(n);
-  for (size_t i = 0; i < n; ++i) {
-    odom_at_scan[i] = odom.LastAt(clock[i]);
-    T_plan_slam[i] = ToSe2(ground_truth[i]) * odom_at_scan[i].Inverse();
-  }
-  out->T_slam_plan_initial = T_plan_slam[0].Inverse();
-
+// Every pose period of the walk a step: the odometry's pose, the truth blended between the
+// scans' corrections, and the scans that came, as meshes; nothing while the odometry is
+// silent for more than max_odometry_gap_s.
+void WalkSteps(const CarmenLog& log, const Track& odom, const std::vector<double>& clock,
+               const std::vector<double>& walk, const std::vector<Se2>& odom_at_scan,
+               const std::vector<Se2>& T_plan_slam, double max_range, const CarmenImportOptions& o,
+               sim::Simulation* out, CarmenImportReport* report) {
+  const size_t n = log.scans.size();
   size_t next_scan = 0;
   bool silent = false;
   const auto steps = static_cast<size_t>(std::ceil((walk.back() - walk.front()) / o.pose_period_s));
@@ -341,17 +337,13 @@ bool CarmenToSimulation(const CarmenLog& log, const std::vector<sim::TimedPose>&
     out->steps.push_back(std::move(step));
   }
   report->scans = next_scan - report->silent_scans;
+}
 
-  if (!ExactPick(log.scans[0], EndPoints(log.scans[0], odom_at_scan[0], max_range, o),
-                 T_plan_slam[0], o, &out->pick)) {
-    *error =
-        "the first scan has no wall within " + std::to_string(o.pick_max_range_m) + " m to pick";
-    return false;
-  }
-  out->pick_step = 0;
-  out->pick_height_m = 1.3;
-  out->pick_error = Se2::Identity();
-
+// The walk's length and time, and how far the odometry alone drifts from the exact start.
+void MeasureWalk(const std::vector<sim::TimedPose>& ground_truth,
+                 const std::vector<Se2>& odom_at_scan, const std::vector<Se2>& T_plan_slam,
+                 const std::vector<double>& walk, CarmenImportReport* report) {
+  const size_t n = ground_truth.size();
   for (size_t i = 1; i < n; ++i)
     report->length_m += (ground_truth[i].position - ground_truth[i - 1].position).norm();
   for (size_t i = 0; i < n; ++i) {
@@ -361,8 +353,10 @@ bool CarmenToSimulation(const CarmenLog& log, const std::vector<sim::TimedPose>&
     report->odom_final_error_m = e;
   }
   report->duration_s = walk.back() - walk.front();
-  out->length_m = report->length_m;
-  out->duration_s = report->duration_s;
+}
+
+std::string Describe(const CarmenImportOptions& o, size_t n, double max_range,
+                     const CarmenImportReport* report) {
   std::ostringstream d;
   d.precision(3);
   d << o.name << ": " << n << " scans, " << report->triangles << " wall triangles ("
@@ -376,7 +370,55 @@ bool CarmenToSimulation(const CarmenLog& log, const std::vector<sim::TimedPose>&
   d << (report->line_clock
             ? ", clock: line numbers, paced at " + std::to_string(o.pace_mps) + " m/s"
             : ", clock: seconds");
-  out->description = d.str();
+  return d.str();
+}
+
+}  // namespace
+
+bool CarmenToSimulation(const CarmenLog& log, const std::vector<sim::TimedPose>& odometry,
+                        const std::vector<sim::TimedPose>& ground_truth,
+                        const CarmenImportOptions& o, sim::Simulation* out,
+                        CarmenImportReport* report, std::string* error) {
+  *out = {};
+  *report = {};
+  const size_t n = log.scans.size();
+  if (ground_truth.size() != n) {
+    *error = "the ground truth has " + std::to_string(ground_truth.size()) + " poses for " +
+             std::to_string(n) + " scans (one per FLASER, in log order)";
+    return false;
+  }
+  if (odometry.size() < 2) {
+    *error = "the odometry needs at least two poses";
+    return false;
+  }
+  std::vector<double> clock, walk;
+  if (!WalkClock(log, ground_truth, o, &clock, &walk, report, error)) return false;
+  const Track odom(odometry);
+  const double max_range = o.max_range_m > 0 ? o.max_range_m : log.max_reading;
+
+  // Per scan: the odometry reading it was paired with, and the correction onto the truth.
+  std::vector<Se2> odom_at_scan(n), T_plan_slam(n);
+  for (size_t i = 0; i < n; ++i) {
+    odom_at_scan[i] = odom.LastAt(clock[i]);
+    T_plan_slam[i] = ToSe2(ground_truth[i]) * odom_at_scan[i].Inverse();
+  }
+  out->T_slam_plan_initial = T_plan_slam[0].Inverse();
+
+  WalkSteps(log, odom, clock, walk, odom_at_scan, T_plan_slam, max_range, o, out, report);
+  if (!ExactPick(log.scans[0], EndPoints(log.scans[0], odom_at_scan[0], max_range, o),
+                 T_plan_slam[0], o, &out->pick)) {
+    *error =
+        "the first scan has no wall within " + std::to_string(o.pick_max_range_m) + " m to pick";
+    return false;
+  }
+  out->pick_step = 0;
+  out->pick_height_m = 1.3;
+  out->pick_error = Se2::Identity();
+
+  MeasureWalk(ground_truth, odom_at_scan, T_plan_slam, walk, report);
+  out->length_m = report->length_m;
+  out->duration_s = report->duration_s;
+  out->description = Describe(o, n, max_range, report);
   return true;
 }
 
