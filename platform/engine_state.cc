@@ -47,6 +47,72 @@ v1::StateSnapshot Engine::SaveState() const {
   return s;
 }
 
+namespace {
+
+// Coordinates as the codec bounds the headset's (slam frame), twice that on the plan.
+bool Within(const Eigen::Vector2d& v, double limit) {
+  return v.allFinite() && v.cwiseAbs().maxCoeff() <= limit;
+}
+
+using SnapshotMeshes =
+    std::vector<std::pair<const v1::StateSnapshot::Mesh*, std::vector<WallPoint>>>;
+
+// The snapshot's wall store, checked whole before anything is kept; why not, if refused.
+std::string ReadSnapshotMeshes(const v1::StateSnapshot& s, size_t max_wall_points, double max_abs,
+                               SnapshotMeshes* meshes) {
+  size_t total = 0;
+  for (const v1::StateSnapshot::Mesh& m : s.meshes()) total += m.points_size() / 2;
+  if (total > max_wall_points)
+    return std::to_string(total) + " wall points, more than limits.max_wall_points";
+  for (const v1::StateSnapshot::Mesh& m : s.meshes()) {
+    if (m.points_size() % 2 != 0 || m.points_size() != m.normals_size())
+      return "with mesh " + std::to_string(m.mesh_id()) + " malformed";
+    std::vector<WallPoint> points(static_cast<size_t>(m.points_size() / 2));
+    for (size_t i = 0; i < points.size(); ++i) {
+      const int k = static_cast<int>(2 * i);
+      points[i].p = {m.points(k), m.points(k + 1)};
+      points[i].n = {m.normals(k), m.normals(k + 1)};
+      if (!Within(points[i].p.cast<double>(), max_abs) || !Within(points[i].n.cast<double>(), 2))
+        return "with mesh " + std::to_string(m.mesh_id()) + " not finite or out of range";
+    }
+    meshes->emplace_back(&m, std::move(points));
+  }
+  return {};
+}
+
+// The snapshot's alignment and belief, checked; why not, if refused.
+std::string ReadTrackerState(const v1::StateSnapshot& s, double max_abs, TrackerState* t) {
+  const v1::Alignment& a = s.alignment();
+  t->alignment.T_plan_slam = {a.t_plan_slam().theta(), {a.t_plan_slam().x(), a.t_plan_slam().y()}};
+  t->alignment.version = a.version();
+  t->alignment.stamp_ns = a.stamp_ns();
+  switch (a.source()) {
+    case v1::Alignment::WALL_PICK: t->alignment.source = AlignmentSource::kWallPick; break;
+    case v1::Alignment::FLIP: t->alignment.source = AlignmentSource::kFlip; break;
+    case v1::Alignment::REGISTRATION: t->alignment.source = AlignmentSource::kRegistration; break;
+    case v1::Alignment::GLOBAL_SEARCH: t->alignment.source = AlignmentSource::kGlobalSearch; break;
+    default: return "with an alignment of unknown source";
+  }
+  t->next_version = s.next_version();
+  if (s.covariance_size() != 9) return "without the belief's covariance";
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) t->P(r, c) = s.covariance(3 * r + c);
+  t->pivot = {s.pivot_x(), s.pivot_y()};
+  if (s.has_pick()) t->pick_plan_point = Eigen::Vector2d(s.pick_x(), s.pick_y());
+  if (s.samples_size() % 4 != 0) return "with belief samples malformed";
+  for (int i = 0; i + 3 < s.samples_size(); i += 4)
+    t->samples.push_back({{s.samples(i), {s.samples(i + 1), s.samples(i + 2)}}, s.samples(i + 3)});
+  t->elsewhere = s.elsewhere();
+  t->checked = s.checked();
+  if (!Within(t->alignment.T_plan_slam.t, 2 * max_abs) || !Within(t->pivot, 2 * max_abs) ||
+      (t->pick_plan_point && !Within(*t->pick_plan_point, 2 * max_abs)) ||
+      !(t->P.cwiseAbs().maxCoeff() <= 1e6) || !(t->elsewhere >= 0 && t->elsewhere <= 1))
+    return "with an alignment or its belief out of range";
+  return {};
+}
+
+}  // namespace
+
 std::string Engine::RestoreState(const v1::StateSnapshot& s) {
   if (s.device_id() != config().dds().device_id())
     return "of device '" + s.device_id() + "', not '" + config().dds().device_id() + "'";
@@ -74,57 +140,15 @@ std::string Engine::RestoreState(const v1::StateSnapshot& s) {
   if (s.plan_digest() != plans_.current().digest)
     return refuse("of plan " + s.plan_path() + " as it was before it changed");
   // The wall store first, checked whole before anything is kept.
-  // Coordinates as the codec bounds the headset's (slam frame), twice that on the plan.
   const double max_abs = config().limits().max_abs_coordinate_m();
-  auto within = [](const Eigen::Vector2d& v, double limit) {
-    return v.allFinite() && v.cwiseAbs().maxCoeff() <= limit;
-  };
-  size_t total = 0;
-  for (const v1::StateSnapshot::Mesh& m : s.meshes()) total += m.points_size() / 2;
-  if (total > config().limits().max_wall_points())
-    return refuse(std::to_string(total) + " wall points, more than limits.max_wall_points");
-  std::vector<std::pair<const v1::StateSnapshot::Mesh*, std::vector<WallPoint>>> meshes;
-  for (const v1::StateSnapshot::Mesh& m : s.meshes()) {
-    if (m.points_size() % 2 != 0 || m.points_size() != m.normals_size())
-      return refuse("with mesh " + std::to_string(m.mesh_id()) + " malformed");
-    std::vector<WallPoint> points(static_cast<size_t>(m.points_size() / 2));
-    for (size_t i = 0; i < points.size(); ++i) {
-      const int k = static_cast<int>(2 * i);
-      points[i].p = {m.points(k), m.points(k + 1)};
-      points[i].n = {m.normals(k), m.normals(k + 1)};
-      if (!within(points[i].p.cast<double>(), max_abs) || !within(points[i].n.cast<double>(), 2))
-        return refuse("with mesh " + std::to_string(m.mesh_id()) + " not finite or out of range");
-    }
-    meshes.emplace_back(&m, std::move(points));
-  }
+  SnapshotMeshes meshes;
+  if (const std::string e =
+          ReadSnapshotMeshes(s, config().limits().max_wall_points(), max_abs, &meshes);
+      !e.empty())
+    return refuse(e);
   if (s.alignment().version() > 0) {
     TrackerState t;
-    const v1::Alignment& a = s.alignment();
-    t.alignment.T_plan_slam = {a.t_plan_slam().theta(), {a.t_plan_slam().x(), a.t_plan_slam().y()}};
-    t.alignment.version = a.version();
-    t.alignment.stamp_ns = a.stamp_ns();
-    switch (a.source()) {
-      case v1::Alignment::WALL_PICK: t.alignment.source = AlignmentSource::kWallPick; break;
-      case v1::Alignment::FLIP: t.alignment.source = AlignmentSource::kFlip; break;
-      case v1::Alignment::REGISTRATION: t.alignment.source = AlignmentSource::kRegistration; break;
-      case v1::Alignment::GLOBAL_SEARCH: t.alignment.source = AlignmentSource::kGlobalSearch; break;
-      default: return refuse("with an alignment of unknown source");
-    }
-    t.next_version = s.next_version();
-    if (s.covariance_size() != 9) return refuse("without the belief's covariance");
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) t.P(r, c) = s.covariance(3 * r + c);
-    t.pivot = {s.pivot_x(), s.pivot_y()};
-    if (s.has_pick()) t.pick_plan_point = Eigen::Vector2d(s.pick_x(), s.pick_y());
-    if (s.samples_size() % 4 != 0) return refuse("with belief samples malformed");
-    for (int i = 0; i + 3 < s.samples_size(); i += 4)
-      t.samples.push_back({{s.samples(i), {s.samples(i + 1), s.samples(i + 2)}}, s.samples(i + 3)});
-    t.elsewhere = s.elsewhere();
-    t.checked = s.checked();
-    if (!within(t.alignment.T_plan_slam.t, 2 * max_abs) || !within(t.pivot, 2 * max_abs) ||
-        (t.pick_plan_point && !within(*t.pick_plan_point, 2 * max_abs)) ||
-        !(t.P.cwiseAbs().maxCoeff() <= 1e6) || !(t.elsewhere >= 0 && t.elsewhere <= 1))
-      return refuse("with an alignment or its belief out of range");
+    if (const std::string e = ReadTrackerState(s, max_abs, &t); !e.empty()) return refuse(e);
     if (const std::string e = tracker_.RestoreState(t); !e.empty()) return refuse("with " + e);
   }
   store_.Clear();
