@@ -156,9 +156,7 @@ void PrintSummary(size_t sent, const HeadsetLink& link, const DemoScore& score,
   std::printf("\nsummary\n");
   std::printf("  poses sent / plan poses received   %zu / %zu\n", sent, received);
   if (!errors.empty()) {
-    double sum = 0;
-    for (double e : errors) sum += e;
-    std::printf("  error mean / p95 / max             %.3f / %.3f / %.3f m\n", sum / errors.size(),
+    std::printf("  error mean / p95 / max             %.3f / %.3f / %.3f m\n", Mean(errors),
                 Percentile(errors, 0.95), *std::max_element(errors.begin(), errors.end()));
     std::printf("  final error                        %.3f m\n", errors.back());
     std::printf("  error with the wall pick only      %.3f m (first pose)\n", errors.front());

@@ -29,13 +29,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The mean of a non-empty v.
-double Mean(const std::vector<double>& v) {
-  double sum = 0;
-  for (double x : v) sum += x;
-  return sum / static_cast<double>(v.size());
-}
-
 struct SuiteOptions {
   std::vector<std::string> plans;  // files or directories (searched for *.geojson)
   int seeds = 3;

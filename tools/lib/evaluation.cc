@@ -293,12 +293,6 @@ void ScorePoses(const std::map<int64_t, v1::GroundTruthPose>& truth, const Repla
   }
 }
 
-double Mean(const std::vector<double>& v) {
-  double sum = 0;
-  for (double x : v) sum += x;
-  return sum / static_cast<double>(v.size());
-}
-
 // The report's figures from its scored track.
 void Summarize(const std::vector<int64_t>& resumed, bool best_fit, EvalReport* report) {
   const std::vector<EvalPose>& t = report->track;
@@ -367,6 +361,12 @@ Se2 BestFit(const std::map<int64_t, Pose2>& slam_poses,
 }
 
 }  // namespace
+
+double Mean(const std::vector<double>& v) {
+  double sum = 0;
+  for (double x : v) sum += x;
+  return sum / static_cast<double>(v.size());
+}
 
 double Percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;

@@ -142,6 +142,8 @@ bool Evaluate(const v1::FloorposedConfig& config, const std::string& recording, 
 
 // The q-quantile (0..1) of v, nearest rank; 0 for an empty v.
 double Percentile(std::vector<double> v, double q);
+// The mean of a non-empty v.
+double Mean(const std::vector<double>& v);
 
 // A run's losses of tracking counted: followed long enough to tell (LossScore::timed),
 // back within kBackAfterLossS, and the poses RELIABLE more than 1 m off before back.
