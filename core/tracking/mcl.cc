@@ -20,9 +20,7 @@ MclTracker::MclTracker(MclOptions options) : options_(std::move(options)) {}
 
 void MclTracker::SetPlan(std::shared_ptr<const ClosestWallIndex> index) {
   index_ = std::move(index);
-  if (index_)
-    recovery_ = Recovery(options_.recovery, options_.measurement, *index_,
-                         options_.publish.within_m, kPlaceRad);
+  if (index_) recovery_ = Recovery(options_.recovery, options_.measurement, *index_);
   Reset();
 }
 
@@ -34,8 +32,7 @@ void MclTracker::ChangeFloor(std::shared_ptr<const ClosestWallIndex> index) {
   ++belief_version_;
   start_.checked = false;
   last_update_ns_.reset();
-  recovery_ = Recovery(options_.recovery, options_.measurement, *index_, options_.publish.within_m,
-                       kPlaceRad);  // this floor's walls
+  recovery_ = Recovery(options_.recovery, options_.measurement, *index_);  // this floor's walls
 }
 
 void MclTracker::Reset() {
