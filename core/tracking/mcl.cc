@@ -20,7 +20,9 @@ MclTracker::MclTracker(MclOptions options) : options_(std::move(options)) {}
 
 void MclTracker::SetPlan(std::shared_ptr<const ClosestWallIndex> index) {
   index_ = std::move(index);
-  if (index_) recovery_ = Recovery(options_.recovery, options_.measurement, *index_);
+  if (index_)
+    recovery_ = Recovery(options_.recovery, options_.measurement, *index_,
+                         options_.publish.within_m, kPlaceRad);
   Reset();
 }
 
@@ -32,7 +34,8 @@ void MclTracker::ChangeFloor(std::shared_ptr<const ClosestWallIndex> index) {
   ++belief_version_;
   start_.checked = false;
   last_update_ns_.reset();
-  recovery_ = Recovery(options_.recovery, options_.measurement, *index_);  // this floor's walls
+  recovery_ = Recovery(options_.recovery, options_.measurement, *index_, options_.publish.within_m,
+                       kPlaceRad);  // this floor's walls
 }
 
 void MclTracker::Reset() {
@@ -293,7 +296,7 @@ bool MclTracker::FinishUpdate(MclUpdateResult result, int64_t stamp_ns) {
       s.T_plan_slam = options_.motion.Sample(
           s.T_plan_slam, s.T_plan_slam * odometry_.position.value_or(Eigen::Vector2d::Zero()),
           sigmas, rng_);
-  recovery_.Observe(result.fit, result.exponent, result.dt_s);
+  recovery_.Observe(result.fit, result.predictive_fit, result.exponent, result.dt_s);
   places_ = result.places;
   start_.checked = true;
   if (recovery_.relocalized() && !recovery_.searched()) {  // only SearchDue's check reads it

@@ -92,13 +92,14 @@ struct MclUpdate {
 struct MclUpdateResult {
   Belief belief;
   Se2 published;
-  double fit = 0;          // the belief's mean log-likelihood per point (before weighing)
-  double exponent = 0;     // ...and the tempering exponent it was weighed with
-  double mode_mass = 0;    // of the published place
-  size_t places = 0;       // places holding at least 5% of the belief
-  RegistrationResult icp;  // the polish of the published place
-  bool polished = false;   // ...taken
-  bool offered = false;    // ...or the place it reached offered to the belief
+  double fit = 0;             // the belief's mean log-likelihood per point (before weighing)
+  double predictive_fit = 0;  // ...its predictive likelihood per point (BeliefFit)
+  double exponent = 0;        // ...and the tempering exponent it was weighed with
+  double mode_mass = 0;       // of the published place
+  size_t places = 0;          // places holding at least 5% of the belief
+  RegistrationResult icp;     // the polish of the published place
+  bool polished = false;      // ...taken
+  bool offered = false;       // ...or the place it reached offered to the belief
   double dt_s = 0;
   uint64_t belief_version = 0;
 };

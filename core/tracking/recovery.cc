@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "core/random.h"
 
@@ -11,7 +12,6 @@ namespace {
 constexpr int kSteps = 2000;  // midpoint rule over [0, reach]
 
 double Logit(double p) { return std::log(p / (1 - p)); }
-double Logistic(double x) { return 1 / (1 + std::exp(-x)); }
 
 }  // namespace
 
@@ -26,54 +26,112 @@ double ExpectedLogLikelihood(const MeasurementModel& model, double reach_m) {
   return e;
 }
 
-double RandomLogLikelihood(const MeasurementModel& model, const ClosestWallIndex& index) {
+namespace {
+
+// Random points of the plan's bounding box (seeded): the distances of those within the
+// index's reach of a wall, and how many were drawn.
+struct RandomDraw {
+  std::vector<double> distances;
+  int drawn = 0;
+};
+
+RandomDraw DrawRandomPoints(const ClosestWallIndex& index) {
   const FloorPlan& plan = index.plan();
-  const double reach = index.max_distance_m();
   SplitMix64 rng(0x72616e64);
-  double e = 0;
-  int n = 0;
-  for (int i = 0; i < 20 * kSteps && n < kSteps; ++i) {
+  RandomDraw draw;
+  for (; draw.drawn < 20 * kSteps && static_cast<int>(draw.distances.size()) < kSteps;
+       ++draw.drawn) {
     const Eigen::Vector2d p(rng.Uniform(plan.min.x(), plan.max.x()),
                             rng.Uniform(plan.min.y(), plan.max.y()));
-    if (const auto hit = index.Query(p)) {
-      e += model.PointLogLikelihood(hit->distance, reach);
-      ++n;
-    }
+    if (const auto hit = index.Query(p)) draw.distances.push_back(hit->distance);
   }
-  return n > 0 ? e / n : model.PointLogLikelihood(2 * reach, reach);
+  return draw;
+}
+
+}  // namespace
+
+double RandomLogLikelihood(const MeasurementModel& model, const ClosestWallIndex& index) {
+  const double reach = index.max_distance_m();
+  const RandomDraw draw = DrawRandomPoints(index);
+  if (draw.distances.empty()) return model.PointLogLikelihood(2 * reach, reach);
+  double e = 0;
+  for (const double d : draw.distances) e += model.PointLogLikelihood(d, reach);
+  return e / static_cast<double>(draw.distances.size());
+}
+
+double DistinctPlaces(const ClosestWallIndex& index, double place_m, double place_rad) {
+  const FloorPlan& plan = index.plan();
+  const RandomDraw draw = DrawRandomPoints(index);
+  const Eigen::Vector2d size = plan.max - plan.min;
+  const double area =
+      size.x() * size.y() * static_cast<double>(draw.distances.size()) / std::max(1, draw.drawn);
+  const double discs = area / (M_PI * place_m * place_m);
+  return std::max(1.0, discs * M_PI / place_rad);
 }
 
 Recovery::Recovery(const RecoveryOptions& options, const MeasurementModel& model,
-                   const ClosestWallIndex& index)
+                   const ClosestWallIndex& index, double place_m, double place_rad)
     : options_(options),
       expected_(ExpectedLogLikelihood(model, index.max_distance_m())),
-      random_(RandomLogLikelihood(model, index)) {
+      random_(RandomLogLikelihood(model, index)),
+      log_places_(std::log(DistinctPlaces(index, place_m, place_rad))) {
   Reset();
 }
 
 void Recovery::Reset() {
-  log_odds_ = Logit(std::clamp(options_.start_doubt, 1e-6, 1 - 1e-6));
+  log_odds_ = right_log_odds_ = kNone;
+  Doubt(std::clamp(options_.start_doubt, 1e-6, 1 - 1e-6));
   fit_ = expected_;
+  fit_sum_ = exponent_sum_ = 0;
   searched_ = relocalized_ = false;
 }
 
 void Recovery::Resume(double elsewhere) {
   log_odds_ = Logit(std::clamp(elsewhere, 1e-9, 1 - 1e-9));
+  right_log_odds_ = kNone;
   fit_ = expected_;
+  fit_sum_ = exponent_sum_ = 0;
   searched_ = true;
 }
 
-void Recovery::Observe(double mean_log_likelihood, double exponent, double dt_s) {
-  if (!std::isfinite(mean_log_likelihood)) return;
-  fit_ = mean_log_likelihood;
-  // A loss since the last update, then the evidence of this one.
-  double p = Logistic(log_odds_);
-  p += (1 - p) * (1 - std::exp(-std::max(0.0, dt_s) / options_.lost_s));
-  log_odds_ = Logit(std::clamp(p, 1e-9, 1 - 1e-9)) + exponent * (random_ - mean_log_likelihood);
-  log_odds_ = std::clamp(log_odds_, -30.0, 30.0);
+void Recovery::Searched() {
+  // "Here" takes the mass of "elsewhere at a place that fits": here' = here + right.
+  log_odds_ -= std::log1p(std::exp(right_log_odds_));
+  log_odds_ = std::clamp(log_odds_, kNone, -kNone);
+  right_log_odds_ = kNone;
+  searched_ = true;
 }
 
-double Recovery::Elsewhere() const { return Logistic(log_odds_); }
+void Recovery::Doubt(double p) {
+  // Of the mass "here" gives up, one place in log_places_ fits as a right place.
+  const double here = 1 / (1 + std::exp(log_odds_) + std::exp(right_log_odds_));
+  const double moved = here * p;
+  const double right = here * std::exp(right_log_odds_) + moved * std::exp(-log_places_);
+  const double random = here * std::exp(log_odds_) + moved * (1 - std::exp(-log_places_));
+  log_odds_ = std::clamp(std::log(random / (here - moved)), kNone, -kNone);
+  right_log_odds_ = std::clamp(std::log(right / (here - moved)), kNone, -kNone);
+}
+
+void Recovery::Observe(double mean_log_likelihood, double predictive, double exponent,
+                       double dt_s) {
+  if (!std::isfinite(mean_log_likelihood) || !std::isfinite(predictive)) return;
+  fit_ = mean_log_likelihood;
+  // A loss since the last update, then the evidence of this one.
+  Doubt(1 - std::exp(-std::max(0.0, dt_s) / options_.lost_s));
+  log_odds_ = std::clamp(log_odds_ + exponent * (random_ - mean_log_likelihood), kNone, -kNone);
+  // A right place fits as the model expects, or as the walls have fitted since the start
+  // where the building is less like its plan.
+  fit_sum_ += exponent * predictive;
+  exponent_sum_ += exponent;
+  const double right =
+      exponent_sum_ > 0 ? std::min(expected_, fit_sum_ / exponent_sum_) : expected_;
+  right_log_odds_ = std::clamp(right_log_odds_ + exponent * (right - predictive), kNone, -kNone);
+}
+
+double Recovery::Elsewhere() const {
+  const double odds = std::exp(log_odds_) + std::exp(right_log_odds_);
+  return odds / (1 + odds);
+}
 
 bool Recovery::SearchDue(double since_s) const {
   return since_s >= options_.search_interval_s &&

@@ -1,18 +1,24 @@
-// Whether the wearer is at any of the belief's places at all: a filter over two
-// hypotheses, "here" (the belief) and "elsewhere" (the belief lost the wearer: a wrong
-// start, a SLAM jump). Under "elsewhere" the plan is placed at random under the walls, and
-// a wall point lies as far from the nearest plan wall as a random point of the building
-// does (measured on the plan: RandomLogLikelihood); under "here" it fits as the belief
-// says. Each update
-// weighs the two by the same tempered likelihood the belief uses, after the chance of a
+// Whether the wearer is at any of the belief's places at all: a filter over three
+// hypotheses. "Here": the wearer is at one of the belief's places, and the walls fit as the
+// belief says. "Elsewhere" (the belief lost the wearer: a wrong start, a SLAM jump): the
+// wearer is at one fixed place the belief does not hold, one of the plan's DistinctPlaces.
+// With the chance of one in that many it is the place the walls fit as a right place does:
+// as the model expects (ExpectedLogLikelihood), or as they have fitted since the start
+// where that is lower (a building less like its plan fits its right place less well).
+// Otherwise it is a place that fits them as a random place of the building does
+// (RandomLogLikelihood). Walls that fit worse than a right place thus say "elsewhere" once
+// the shortfall outweighs the odds of one place in many, even where they fit better than a
+// random place: a near miss (a heading wrong after a jump, a look-alike room). Each update
+// weighs the three by the same tempered likelihood the belief uses, after the chance of a
 // loss since the last (one per lost_s). A start (pick, place, restore) begins at
 // start_doubt.
 //
 // The probability of "elsewhere" is published as mass the belief's samples do not hold,
 // and while it is high a search of the whole plan reseeds the belief (augmented MCL,
 // Probabilistic Robotics table 8.3, with samples drawn from the places the search finds,
-// as sensor resetting does, Lenser and Veloso 2000). A building unlike its plan lowers
-// the fit of the right place, but not to that of a random one: it is not read as a loss.
+// as sensor resetting does, Lenser and Veloso 2000). A search settles the place that fits:
+// the places it finds join the belief, and where it finds none there is none, so that
+// share of "elsewhere" becomes the belief's.
 #pragma once
 
 #include "core/closest_wall_index.h"
@@ -32,16 +38,18 @@ struct RecoveryOptions {
 class Recovery {
  public:
   Recovery() = default;
+  // A place is a disc of place_m about the wearer and place_rad either side of a heading.
   Recovery(const RecoveryOptions& options, const MeasurementModel& model,
-           const ClosestWallIndex& index);
+           const ClosestWallIndex& index, double place_m, double place_rad);
 
   // Starts over at start_doubt (a new pick, place or plan).
   void Reset();
   // A search of the whole plan has been offered to the belief since the start. A wrong
   // start (a pick off by a room) fits its walls better than a random place does, as a
   // right one does: only the other places that fit tell the two apart, so every start is
-  // checked by one search.
-  void Searched() { searched_ = true; }
+  // checked by one search. The places it found join the belief: "elsewhere at a place
+  // that fits" is the belief's now.
+  void Searched();
   // A relocalization starts a new SLAM frame: the belief spreads about where it was, and
   // the start is checked by one search as any other is (a frame that jumped further than
   // the spread fits the walls better than a random place does, too).
@@ -56,9 +64,12 @@ class Recovery {
   // (a restart of the daemon: the SLAM frame and the wearer went on).
   void Resume(double elsewhere);
   bool searched() const { return searched_; }
-  // One update: the belief's mean log-likelihood per wall point, the tempering exponent
-  // it was weighed with, dt_s after the last.
-  void Observe(double mean_log_likelihood, double exponent, double dt_s);
+  // One update: the belief's mean log-likelihood per wall point and its predictive one
+  // (BeliefFit), the tempering exponent it was weighed with, dt_s after the last. Each
+  // alternative is weighed on the fit its own reference is of: a random place's mean
+  // log, and a right place's fit as the belief's, which a spread belief lowers only as
+  // much as its places do.
+  void Observe(double mean_log_likelihood, double predictive, double exponent, double dt_s);
   // The probability that the wearer is at none of the belief's places.
   double Elsewhere() const;
   // Whether another search of the plan is due since_s after the last: searches come at a
@@ -75,11 +86,19 @@ class Recovery {
   bool Fits() const { return fit_ >= MidFit(); }
 
  private:
+  static constexpr double kNone = -30;  // the log odds of a hypothesis ruled out
+  // Moves a share p of "here" to "elsewhere" (a loss, or the doubt of a start).
+  void Doubt(double p);
+
   RecoveryOptions options_;
-  double expected_ = 0;  // mean log-likelihood per point of a right alignment...
-  double random_ = 0;    // ...and of a random one
-  double log_odds_ = 0;  // of elsewhere against here
-  double fit_ = 0;       // the latest
+  double expected_ = 0;            // mean log-likelihood per point of a right alignment...
+  double random_ = 0;              // ...and of a random one
+  double log_places_ = 0;          // log of the plan's distinct places
+  double log_odds_ = 0;            // of elsewhere at a random place against here...
+  double right_log_odds_ = kNone;  // ...and of elsewhere at a place that fits as a right one
+  double fit_ = 0;                 // the latest
+  double fit_sum_ = 0;             // of the fits since the start, each times its exponent...
+  double exponent_sum_ = 0;        // ...and of the exponents
   bool searched_ = false;
   bool relocalized_ = false;
 };
@@ -90,5 +109,8 @@ double ExpectedLogLikelihood(const MeasurementModel& model, double reach_m);
 // ...and of a random one: the mean over random points of the plan within the index's
 // reach of a wall (seeded: the same plan gives the same value).
 double RandomLogLikelihood(const MeasurementModel& model, const ClosestWallIndex& index);
+// How many distinct places the plan holds: its area within the index's reach of a wall, in
+// discs of place_m, times the headings in steps of 2 place_rad (at least 1).
+double DistinctPlaces(const ClosestWallIndex& index, double place_m, double place_rad);
 
 }  // namespace floorpose::tracking

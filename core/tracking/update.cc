@@ -34,12 +34,19 @@ std::vector<Mode> Places(const Belief& belief, const Eigen::Vector2d& wearer_sla
   return places;
 }
 
+// The belief's fit per point to the walls it is weighed on, before weighing.
+struct BeliefFit {
+  double mean_log = 0;    // the mean over its samples, by prior weight, of their mean logs
+  double predictive = 0;  // the log of the weighted mean tempered likelihood, over the exponent
+};
+
 // Weighs every sample by the walls new since the last update (the whole window when
-// none are marked new), what was in sight and the walk; returns the belief's fit per
-// point before weighing, which the recovery filter reads.
-double WeighSamples(Belief& belief, const MclUpdate& u, const std::vector<Eigen::Vector2d>& cloud,
-                    const std::vector<Eigen::Vector2d>& points, double exponent,
-                    const ClosestWallIndex& index, const MclOptions& options) {
+// none are marked new), what was in sight and the walk; returns the belief's fit, which
+// the recovery filter reads.
+BeliefFit WeighSamples(Belief& belief, const MclUpdate& u,
+                       const std::vector<Eigen::Vector2d>& cloud,
+                       const std::vector<Eigen::Vector2d>& points, double exponent,
+                       const ClosestWallIndex& index, const MclOptions& options) {
   const double reach = index.max_distance_m();
   // The fit the recovery filter weighs is predictive: of the walls the belief has not
   // been weighed on yet, under the belief before this update. The walls that shaped the
@@ -53,15 +60,24 @@ double WeighSamples(Belief& belief, const MclUpdate& u, const std::vector<Eigen:
   // The walls new since the last update weigh the belief, at the window's new share of
   // evidence: a wall counts as it comes in, not spread over the window's length.
   const std::vector<Eigen::Vector2d>& weighed = predictive ? fresh : points;
-  double fit = 0;
+  BeliefFit fit;
+  std::vector<double> terms(belief.size());
   for (size_t i = 0; i < belief.size(); ++i) {
     Sample& s = belief.samples()[i];
     const double mll = options.measurement.MeanLogLikelihood(weighed, s.T_plan_slam, index, reach);
-    fit += prior[i] * mll;
+    fit.mean_log += prior[i] * mll;
+    terms[i] = std::log(std::max(prior[i], 1e-300)) + exponent * mll;
     const SightFit sight =
         SightLogLikelihood(options.measurement, u.sight_slam, nearest, s.T_plan_slam, index);
     s.log_weight += exponent * (mll + sight.Mean()) +
                     options.motion.PathLogPrior(u.path_slam, s.T_plan_slam, index);
+  }
+  fit.predictive = fit.mean_log;
+  if (exponent > 0 && !terms.empty()) {
+    const double top = *std::max_element(terms.begin(), terms.end());
+    double sum = 0;
+    for (const double t : terms) sum += std::exp(t - top);
+    fit.predictive = (top + std::log(sum)) / exponent;
   }
   return fit;
 }
@@ -127,7 +143,9 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
   const std::vector<Eigen::Vector2d> points = ThinCloud(cloud, 0.1, options.weigh_points);
   out.exponent = u.evidence * std::min(options.measurement.independent_points,
                                        static_cast<double>(points.size()));
-  out.fit = WeighSamples(belief, u, cloud, points, out.exponent, index, options);
+  const BeliefFit fit = WeighSamples(belief, u, cloud, points, out.exponent, index, options);
+  out.fit = fit.mean_log;
+  out.predictive_fit = fit.predictive;
   belief.Normalize();
   if (belief.EffectiveSize() < 0.5 * static_cast<double>(belief.size()) ||
       belief.size() > options.samples.max_samples)

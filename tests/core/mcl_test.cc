@@ -150,20 +150,56 @@ TEST(RecoveryTest, AFitLikeARandomPlaceKeepsTheDoubtAndARightOneClearsIt) {
   const double random = RandomLogLikelihood(m, index);
   const double expected = ExpectedLogLikelihood(m, index.max_distance_m());
   EXPECT_LT(random, expected);
-  Recovery right({}, m, index);
+  Recovery right({}, m, index, 1.0, kPlaceRad);
   EXPECT_NEAR(right.Elsewhere(), 0.5, 1e-9) << "a start is doubted";
   EXPECT_FALSE(right.searched());
-  right.Observe(expected, 10.0, 1.0);
-  EXPECT_LT(right.Elsewhere(), 1e-6);
+  right.Observe(expected, expected, 10.0, 1.0);
+  EXPECT_LT(right.Elsewhere(), 0.01)
+      << "left: the odds that another place of the plan fits as well";
   right.Searched();
+  EXPECT_LT(right.Elsewhere(), 1e-6) << "a search found no other";
   right.Reset();
   EXPECT_FALSE(right.searched()) << "every start is checked by a search of its own";
-  Recovery wrong({}, m, index);
-  for (int i = 0; i < 5; ++i) wrong.Observe(random, 1.0, 1.0);
+  Recovery wrong({}, m, index, 1.0, kPlaceRad);
+  for (int i = 0; i < 5; ++i) wrong.Observe(random, random, 1.0, 1.0);
   EXPECT_GT(wrong.Elsewhere(), 0.5) << "a fit no better than chance never clears the doubt";
   // A plan half unlike the building: worse than expected, far better than chance.
-  Recovery stale({}, m, index);
-  for (int i = 0; i < 5; ++i) stale.Observe(0.5 * (expected + random), 1.0, 1.0);
+  Recovery stale({}, m, index, 1.0, kPlaceRad);
+  for (int i = 0; i < 5; ++i)
+    stale.Observe(0.5 * (expected + random), 0.5 * (expected + random), 1.0, 1.0);
+  EXPECT_LT(stale.Elsewhere(), 0.01);
+}
+
+TEST(RecoveryTest, TheDistinctPlacesAreTheAreaInDiscsTimesTheHeadings) {
+  // 10 m x 7 m, every point within the index's reach (3 m) of a wall.
+  const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
+  EXPECT_NEAR(DistinctPlaces(index, 1.0, kPlaceRad), 70 / M_PI * M_PI / kPlaceRad, 1e-6);
+  EXPECT_NEAR(DistinctPlaces(index, 2.0, kPlaceRad), 70 / (4 * M_PI) * M_PI / kPlaceRad, 1e-6);
+  EXPECT_EQ(DistinctPlaces(index, 100.0, M_PI), 1.0) << "never fewer than one";
+}
+
+TEST(RecoveryTest, ANearMissIsDoubtedUntilASearchHandsItsPlaceToTheBelief) {
+  MeasurementModel m;
+  const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
+  const double expected = ExpectedLogLikelihood(m, index.max_distance_m());
+  const double random = RandomLogLikelihood(m, index);
+  Recovery r({}, m, index, 1.0, kPlaceRad);
+  r.Searched();
+  for (int i = 0; i < 20; ++i) r.Observe(expected, expected, 0.5, 1.0);
+  ASSERT_LT(r.Elsewhere(), 1e-3);
+  // Then the walls fit worse than they did, though better than at a random place: a
+  // heading wrong after a jump. Another place of the plan would fit them as before.
+  const double near_miss = random + 0.3 * (expected - random);
+  int updates = 0;
+  while (r.Elsewhere() < 0.5 && updates < 100) r.Observe(near_miss, near_miss, 0.5, 1.0), ++updates;
+  EXPECT_LT(updates, 40) << "doubted within 40 updates";
+  // A search finds the places that fit; they join the belief, which takes their share.
+  r.Searched();
+  EXPECT_LT(r.Elsewhere(), 0.01);
+  // A building less like its plan from the start sets its own level: no doubt from it.
+  Recovery stale({}, m, index, 1.0, kPlaceRad);
+  stale.Searched();
+  for (int i = 0; i < 100; ++i) stale.Observe(near_miss, near_miss, 0.5, 1.0);
   EXPECT_LT(stale.Elsewhere(), 0.01);
 }
 
@@ -173,7 +209,7 @@ TEST(RecoveryTest, SearchesComeAsOftenAsTheWearerMayBeElsewhere) {
   RecoveryOptions o;
   o.search_share = 0.2;  // every 3 s at 20%
   o.search_interval_s = 3.0;
-  Recovery r(o, m, index);
+  Recovery r(o, m, index, 1.0, kPlaceRad);
   ASSERT_NEAR(r.Elsewhere(), 0.5, 1e-9);
   EXPECT_FALSE(r.SearchDue(2.9)) << "never more often than search_interval_s";
   EXPECT_TRUE(r.SearchDue(3.0));
@@ -181,7 +217,7 @@ TEST(RecoveryTest, SearchesComeAsOftenAsTheWearerMayBeElsewhere) {
   // percent: a search is due after 0.2 * 3 / Elsewhere() seconds.
   const double mid =
       0.5 * (ExpectedLogLikelihood(m, index.max_distance_m()) + RandomLogLikelihood(m, index));
-  while (r.Elsewhere() > 0.02) r.Observe(mid, 0.5, 1.0);
+  while (r.Elsewhere() > 0.02) r.Observe(mid, mid, 0.5, 1.0);
   const double due_s = o.search_share * o.search_interval_s / r.Elsewhere();
   EXPECT_GT(due_s, 30.0);
   EXPECT_FALSE(r.SearchDue(0.99 * due_s));
@@ -220,11 +256,11 @@ TEST(ReliabilityTest, TheReasonNamesTheTermThatKeepsTheProbabilityDown) {
 TEST(RecoveryTest, TheLatestFitIsReadAgainstTheMidpointOfRightAndRandom) {
   MeasurementModel m;
   const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
-  Recovery r({}, m, index);
+  Recovery r({}, m, index, 1.0, kPlaceRad);
   EXPECT_TRUE(r.Fits()) << "a start fits as expected until walls say otherwise";
-  r.Observe(r.MidFit() - 0.01, 0.5, 1.0);
+  r.Observe(r.MidFit() - 0.01, r.MidFit() - 0.01, 0.5, 1.0);
   EXPECT_FALSE(r.Fits());
-  r.Observe(r.MidFit() + 0.01, 0.5, 1.0);
+  r.Observe(r.MidFit() + 0.01, r.MidFit() + 0.01, 0.5, 1.0);
   EXPECT_TRUE(r.Fits());
 }
 
@@ -592,7 +628,7 @@ MclUpdateResult UpdateOffBy(const RoomWalk& room, const Se2& offset) {
   MclUpdate u;
   u.wearer_slam = room.truth.Inverse() * at;
   u.evidence = 1.0 / options.window_s;
-  u.mid_fit = Recovery({}, options.measurement, *room.index).MidFit();
+  u.mid_fit = Recovery({}, options.measurement, *room.index, 1.0, kPlaceRad).MidFit();
   const Se2 start = Se2{0, at} * offset * Se2{0, -at} * room.truth;
   SplitMix64 rng(6);
   u.belief.AddGaussian(start, PlaceCovariance(0.05, Deg(0.5)), at, 300, 0.0, rng);
