@@ -96,7 +96,7 @@ void Recovery::Resume(double elsewhere) {
 
 void Recovery::Searched() {
   // "Here" takes the mass of "elsewhere at a place that fits": here' = here + right.
-  log_odds_ -= std::log1p(std::exp(right_log_odds_));
+  log_odds_ -= std::log1p(RightOdds());
   log_odds_ = std::clamp(log_odds_, kNone, -kNone);
   right_log_odds_ = kNone;
   searched_ = true;
@@ -104,9 +104,9 @@ void Recovery::Searched() {
 
 void Recovery::Doubt(double p) {
   // Of the mass "here" gives up, one place in log_places_ fits as a right place.
-  const double here = 1 / (1 + std::exp(log_odds_) + std::exp(right_log_odds_));
+  const double here = 1 / (1 + std::exp(log_odds_) + RightOdds());
   const double moved = here * p;
-  const double right = here * std::exp(right_log_odds_) + moved * std::exp(-log_places_);
+  const double right = here * RightOdds() + moved * std::exp(-log_places_);
   const double random = here * std::exp(log_odds_) + moved * (1 - std::exp(-log_places_));
   log_odds_ = std::clamp(std::log(random / (here - moved)), kNone, -kNone);
   right_log_odds_ = std::clamp(std::log(right / (here - moved)), kNone, -kNone);
@@ -128,9 +128,14 @@ void Recovery::Observe(double mean_log_likelihood, double predictive, double exp
   right_log_odds_ = std::clamp(right_log_odds_ + exponent * (right - predictive), kNone, -kNone);
 }
 
+double Recovery::RightOdds() const {
+  return right_log_odds_ > kNone ? std::exp(right_log_odds_) : 0.0;
+}
+
 double Recovery::Elsewhere() const {
-  const double odds = std::exp(log_odds_) + std::exp(right_log_odds_);
-  return odds / (1 + odds);
+  // The log odds of both shares of "elsewhere" together, against "here".
+  const double log_odds = log_odds_ + std::log1p(RightOdds() * std::exp(-log_odds_));
+  return 1 / (1 + std::exp(-log_odds));
 }
 
 bool Recovery::SearchDue(double since_s) const {

@@ -89,6 +89,8 @@ class Recovery {
   static constexpr double kNone = -30;  // the log odds of a hypothesis ruled out
   // Moves a share p of "here" to "elsewhere" (a loss, or the doubt of a start).
   void Doubt(double p);
+  // The odds of "elsewhere at a place that fits" against "here"; 0 once ruled out.
+  double RightOdds() const;
 
   RecoveryOptions options_;
   double expected_ = 0;            // mean log-likelihood per point of a right alignment...
