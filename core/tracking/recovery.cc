@@ -48,33 +48,40 @@ RandomDraw DrawRandomPoints(const ClosestWallIndex& index) {
   return draw;
 }
 
-}  // namespace
-
-double RandomLogLikelihood(const MeasurementModel& model, const ClosestWallIndex& index) {
+double MeanLogLikelihood(const MeasurementModel& model, const ClosestWallIndex& index,
+                         const RandomDraw& draw) {
   const double reach = index.max_distance_m();
-  const RandomDraw draw = DrawRandomPoints(index);
   if (draw.distances.empty()) return model.PointLogLikelihood(2 * reach, reach);
   double e = 0;
   for (const double d : draw.distances) e += model.PointLogLikelihood(d, reach);
   return e / static_cast<double>(draw.distances.size());
 }
 
-double DistinctPlaces(const ClosestWallIndex& index, double place_m, double place_rad) {
-  const FloorPlan& plan = index.plan();
-  const RandomDraw draw = DrawRandomPoints(index);
-  const Eigen::Vector2d size = plan.max - plan.min;
+double Places(const ClosestWallIndex& index, const RandomDraw& draw, double place_m,
+              double place_rad) {
+  const Eigen::Vector2d size = index.plan().max - index.plan().min;
   const double area =
       size.x() * size.y() * static_cast<double>(draw.distances.size()) / std::max(1, draw.drawn);
   const double discs = area / (M_PI * place_m * place_m);
   return std::max(1.0, discs * M_PI / place_rad);
 }
 
+}  // namespace
+
+double RandomLogLikelihood(const MeasurementModel& model, const ClosestWallIndex& index) {
+  return MeanLogLikelihood(model, index, DrawRandomPoints(index));
+}
+
+double DistinctPlaces(const ClosestWallIndex& index, double place_m, double place_rad) {
+  return Places(index, DrawRandomPoints(index), place_m, place_rad);
+}
+
 Recovery::Recovery(const RecoveryOptions& options, const MeasurementModel& model,
                    const ClosestWallIndex& index, double place_m, double place_rad)
-    : options_(options),
-      expected_(ExpectedLogLikelihood(model, index.max_distance_m())),
-      random_(RandomLogLikelihood(model, index)),
-      log_places_(std::log(DistinctPlaces(index, place_m, place_rad))) {
+    : options_(options), expected_(ExpectedLogLikelihood(model, index.max_distance_m())) {
+  const RandomDraw draw = DrawRandomPoints(index);  // one draw for both
+  random_ = MeanLogLikelihood(model, index, draw);
+  log_places_ = std::log(Places(index, draw, place_m, place_rad));
   Reset();
 }
 
@@ -103,7 +110,7 @@ void Recovery::Searched() {
 }
 
 void Recovery::Doubt(double p) {
-  // Of the mass "here" gives up, one place in log_places_ fits as a right place.
+  // Of the mass "here" gives up, one share in exp(log_places_) fits as a right place.
   const double here = 1 / (1 + std::exp(log_odds_) + RightOdds());
   const double moved = here * p;
   const double right = here * RightOdds() + moved * std::exp(-log_places_);
