@@ -65,6 +65,7 @@ class ClosestWallIndex {
 
   const FloorPlan& plan() const { return plan_; }
   double max_distance_m() const { return options_.max_distance_m; }
+  const Options& options() const { return options_; }
   size_t MemoryBytes() const;
   size_t cells() const { return cell_begin_.size() - 1; }
 

@@ -248,167 +248,149 @@ struct Row {
   nlohmann::ordered_json extra = nlohmann::ordered_json::object();  // more fields of its line
 };
 
-int RunBenchRegistration(const BenchOptions& o) {
-  if (o.repetitions < 1) {
-    spdlog::error("--repetitions must be at least 1");
-    return 2;
-  }
-  std::string plan_path = o.plan, error;
-  if (plan_path.empty()) {
-    const auto found = LargestDataPlan(&error);
-    if (!found) {
-      spdlog::error("{}", error);
-      return 2;
-    }
-    plan_path = *found;
-  }
-  const FloorPlanParse parse = platform::LoadFloorPlan(plan_path);
-  if (!parse.ok()) {
-    spdlog::error("{}", parse.error);
-    return 1;
-  }
-  int copies = 1;
-  const FloorPlan plan = Tile(parse.plan, o.min_segments, &copies);
-  const ClosestWallIndex::Options index_options;
-  const ClosestWallIndex index(plan, index_options);
-  const RegistrationOptions defaults;
-  const double max_corr = defaults.icp.max_correspondence_m;
+// The rows measured, in order; with --json each is printed as it comes.
+class Rows {
+ public:
+  Rows(bool json, size_t segments) : json_(json), segments_(segments) {}
 
-  std::vector<Row> rows;
-  auto add = [&](Row row) {
-    if (o.json) {
+  void Add(Row row) {
+    if (json_) {
       nlohmann::ordered_json line = {{"method", row.method},
                                      {"points", row.points},
                                      {"median_ms", row.median_ms},
                                      {"runs", row.runs},
-                                     {"segments", plan.segments.size()}};
+                                     {"segments", segments_}};
       line.update(row.extra);
       std::printf("%s\n",
                   line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
       std::fflush(stdout);
     }
-    rows.push_back(std::move(row));
-  };
-
-  SplitMix64 rng(kSeed);
-  const Se2 T_slam_plan{0.7, {-12.0, 31.0}};  // any transform: slam and plan differ
-  const Se2 truth = T_slam_plan.Inverse();
-  Cloud largest;
-  for (size_t n : {size_t{1000}, size_t{10000}, size_t{100000}}) {
-    const Cloud cloud = SampleWalls(plan, n, T_slam_plan, rng);
-    // The initial guess: the truth turned and shifted about the cloud's centre.
-    const Se2 turn{kErrorRad, cloud.centre_plan - Se2{kErrorRad, {0, 0}}.R() * cloud.centre_plan +
-                                  Eigen::Vector2d(kErrorM, kErrorM) / std::sqrt(2.0)};
-    const Se2 initial = turn * truth;
-    // The result's error at the cloud's centre (cm) and in rotation (degrees).
-    auto error_cm = [&](const Se2& T) {
-      return 100 * ((T * truth.Inverse()) * cloud.centre_plan - cloud.centre_plan).norm();
-    };
-    auto error_deg = [&](const Se2& T) {
-      return std::abs(WrapAngle(T.theta - truth.theta)) * 180 / M_PI;
-    };
-    uint32_t icp_iterations = 0;
-    for (RegistrationMethod m :
-         {RegistrationMethod::kIcp, RegistrationMethod::kIk, RegistrationMethod::kHough}) {
-      RegistrationOptions options = defaults;
-      options.method = m;
-      RegistrationResult r;
-      const double ms = MedianMs(o.repetitions, [&] {
-        r = Register(cloud.points, cloud.normals, index, initial, options);
-      });
-      if (m == RegistrationMethod::kIcp) icp_iterations = r.iterations;
-      char text[128];
-      std::snprintf(text, sizeof text, "%4u iterations, %.2f cm, %.3f deg off", r.iterations,
-                    error_cm(r.T_plan_slam), error_deg(r.T_plan_slam));
-      add({ToString(m),
-           n,
-           ms,
-           o.repetitions,
-           text,
-           {{"iterations", r.iterations},
-            {"error_cm", error_cm(r.T_plan_slam)},
-            {"error_deg", error_deg(r.T_plan_slam)}}});
-    }
-    // The baseline, and the same loop on the index to separate the query's share. At
-    // 100k points brute force takes seconds a run: one run is enough to see it.
-    for (bool brute : {false, true}) {
-      Se2 T;
-      const int iterations = static_cast<int>(icp_iterations);
-      const int runs = brute && n >= 100000 ? 1 : o.repetitions;
-      const double ms = MedianMs(runs, [&] {
-        T = brute ? PlainIcp(cloud.points, initial, iterations, max_corr,
-                             [&](const Eigen::Vector2d& p) {
-                               return BruteForceClosestWall(plan, p, index_options.max_distance_m);
-                             })
-                  : PlainIcp(cloud.points, initial, iterations, max_corr,
-                             [&](const Eigen::Vector2d& p) { return index.Query(p); });
-      });
-      char text[128];
-      std::snprintf(text, sizeof text, "%4d iterations, %.2f cm, %.3f deg off", iterations,
-                    error_cm(T), error_deg(T));
-      add({brute ? "icp_loop_bruteforce" : "icp_loop_index",
-           n,
-           ms,
-           runs,
-           text,
-           {{"iterations", iterations}, {"error_cm", error_cm(T)}, {"error_deg", error_deg(T)}}});
-    }
-    if (n == 100000) largest = cloud;
+    rows_.push_back(std::move(row));
   }
+  const std::vector<Row>& rows() const { return rows_; }
 
-  // Closest-wall queries at the wall points of the largest cloud (where ICP asks).
-  std::vector<Eigen::Vector2d> queries;
-  for (const Eigen::Vector2d& p : largest.points) queries.push_back(truth * p);
+ private:
+  bool json_;
+  size_t segments_;
+  std::vector<Row> rows_;
+};
+
+// A row for a registration result: its iterations and its error against the truth at the
+// cloud's centre (cm) and in rotation (degrees).
+Row ResultRow(std::string method, size_t n, double ms, int runs, int iterations, const Se2& T,
+              const Se2& truth, const Eigen::Vector2d& centre_plan) {
+  const double cm = 100 * ((T * truth.Inverse()) * centre_plan - centre_plan).norm();
+  const double deg = std::abs(WrapAngle(T.theta - truth.theta)) * 180 / M_PI;
+  char text[128];
+  std::snprintf(text, sizeof text, "%4d iterations, %.2f cm, %.3f deg off", iterations, cm, deg);
+  return {std::move(method),
+          n,
+          ms,
+          runs,
+          text,
+          {{"iterations", iterations}, {"error_cm", cm}, {"error_deg", deg}}};
+}
+
+// Every registration method on one cloud, then the plain ICP loop for as many iterations
+// as icp took, on the index and by brute force (the query's share of the time).
+void BenchRegistrations(const Cloud& cloud, const Se2& truth, const FloorPlan& plan,
+                        const ClosestWallIndex& index, const BenchOptions& o, Rows& rows) {
+  const size_t n = cloud.points.size();
+  const RegistrationOptions defaults;
+  // The initial guess: the truth turned and shifted about the cloud's centre.
+  const Se2 turn{kErrorRad, cloud.centre_plan - Se2{kErrorRad, {0, 0}}.R() * cloud.centre_plan +
+                                Eigen::Vector2d(kErrorM, kErrorM) / std::sqrt(2.0)};
+  const Se2 initial = turn * truth;
+  int icp_iterations = 0;
+  for (RegistrationMethod m :
+       {RegistrationMethod::kIcp, RegistrationMethod::kIk, RegistrationMethod::kHough}) {
+    RegistrationOptions options = defaults;
+    options.method = m;
+    RegistrationResult r;
+    const double ms = MedianMs(
+        o.repetitions, [&] { r = Register(cloud.points, cloud.normals, index, initial, options); });
+    if (m == RegistrationMethod::kIcp) icp_iterations = static_cast<int>(r.iterations);
+    rows.Add(ResultRow(ToString(m), n, ms, o.repetitions, static_cast<int>(r.iterations),
+                       r.T_plan_slam, truth, cloud.centre_plan));
+  }
+  // At 100k points brute force takes seconds a run: one run is enough to see it.
+  const double max_corr = defaults.icp.max_correspondence_m;
+  const double max_distance = index.options().max_distance_m;
   for (bool brute : {false, true}) {
-    // Brute force is slow: a tenth of the queries.
+    Se2 T;
+    const int runs = brute && n >= 100000 ? 1 : o.repetitions;
+    const double ms = MedianMs(runs, [&] {
+      T = brute ? PlainIcp(cloud.points, initial, icp_iterations, max_corr,
+                           [&](const Eigen::Vector2d& p) {
+                             return BruteForceClosestWall(plan, p, max_distance);
+                           })
+                : PlainIcp(cloud.points, initial, icp_iterations, max_corr,
+                           [&](const Eigen::Vector2d& p) { return index.Query(p); });
+    });
+    rows.Add(ResultRow(brute ? "icp_loop_bruteforce" : "icp_loop_index", n, ms, runs,
+                       icp_iterations, T, truth, cloud.centre_plan));
+  }
+}
+
+// Closest-wall queries at the given points (where ICP asks), on the index and by brute
+// force (a tenth of them: it is slow).
+void BenchQueries(const std::vector<Eigen::Vector2d>& queries, const FloorPlan& plan,
+                  const ClosestWallIndex& index, const BenchOptions& o, Rows& rows) {
+  const double max_distance = index.options().max_distance_m;
+  for (bool brute : {false, true}) {
     const size_t count = brute ? queries.size() / 10 : queries.size();
     size_t found = 0;
     const double ms = MedianMs(o.repetitions, [&] {
       found = 0;
       for (size_t i = 0; i < count; ++i)
-        found += (brute ? BruteForceClosestWall(plan, queries[i], index_options.max_distance_m)
+        found += (brute ? BruteForceClosestWall(plan, queries[i], max_distance)
                         : index.Query(queries[i]))
                      .has_value();
     });
     char text[128];
     const double ns = 1e6 * ms / static_cast<double>(count);
     std::snprintf(text, sizeof text, "%.1f ns per query (%zu queries a run)", ns, count);
-    add({brute ? "query_bruteforce" : "query_index",
-         count,
-         ms,
-         o.repetitions,
-         text,
-         {{"ns_per_query", ns}}});
+    rows.Add({brute ? "query_bruteforce" : "query_index",
+              count,
+              ms,
+              o.repetitions,
+              text,
+              {{"ns_per_query", ns}}});
   }
+}
 
-  // Index memory and build time for a building of 230 x 100 m.
+// Index memory and build time for a building of 230 x 100 m.
+void BenchIndexBuild(const ClosestWallIndex::Options& index_options, const BenchOptions& o,
+                     Rows& rows) {
   const FloorPlan building = SyntheticBuilding();
   size_t memory = 0;
   const int build_runs = std::max(1, o.repetitions / 2);
   const double build_ms = MedianMs(
       build_runs, [&] { memory = ClosestWallIndex(building, index_options).MemoryBytes(); });
-  {
-    char text[192];
-    std::snprintf(text, sizeof text,
-                  "%.1f MB for %s (%zu segments, %.0f x %.0f m), cell %.2f m, max distance %.1f m",
-                  memory / 1e6, building.id.c_str(), building.segments.size(),
-                  building.max.x() - building.min.x(), building.max.y() - building.min.y(),
-                  index_options.cell_m, index_options.max_distance_m);
-    add({"index_build",
-         0,
-         build_ms,
-         build_runs,
-         text,
-         {{"memory_bytes", memory},
-          {"plan", building.id},
-          {"plan_segments", building.segments.size()},
-          {"cell_m", index_options.cell_m},
-          {"max_distance_m", index_options.max_distance_m}}});
-  }
-  if (o.json) return 0;
+  char text[192];
+  std::snprintf(text, sizeof text,
+                "%.1f MB for %s (%zu segments, %.0f x %.0f m), cell %.2f m, max distance %.1f m",
+                memory / 1e6, building.id.c_str(), building.segments.size(),
+                building.max.x() - building.min.x(), building.max.y() - building.min.y(),
+                index_options.cell_m, index_options.max_distance_m);
+  rows.Add({"index_build",
+            0,
+            build_ms,
+            build_runs,
+            text,
+            {{"memory_bytes", memory},
+             {"plan", building.id},
+             {"plan_segments", building.segments.size()},
+             {"cell_m", index_options.cell_m},
+             {"max_distance_m", index_options.max_distance_m}}});
+}
 
+void PrintRegistrationTable(const std::string& plan_path, const FloorPlan& original,
+                            const FloorPlan& plan, int copies, const ClosestWallIndex& index,
+                            const std::vector<Row>& rows) {
+  const ClosestWallIndex::Options& index_options = index.options();
   std::printf("floorpose bench registration\n");
-  std::printf("plan:     %s: %zu segments", plan_path.c_str(), parse.plan.segments.size());
+  std::printf("plan:     %s: %zu segments", plan_path.c_str(), original.segments.size());
   if (copies > 1)
     std::printf(", tiled %d copies side by side along x, %.0f m apart", copies, kTileGapM);
   std::printf(" -> %zu segments, %.1f x %.1f m\n", plan.segments.size(),
@@ -432,6 +414,45 @@ int RunBenchRegistration(const BenchOptions& o) {
   for (const Row& r : rows)
     std::printf("%-20s %8zu %12.3f %5d  %s\n", r.method.c_str(), r.points, r.median_ms, r.runs,
                 r.extra_text.c_str());
+}
+
+int RunBenchRegistration(const BenchOptions& o) {
+  if (o.repetitions < 1) {
+    spdlog::error("--repetitions must be at least 1");
+    return 2;
+  }
+  std::string plan_path = o.plan, error;
+  if (plan_path.empty()) {
+    const auto found = LargestDataPlan(&error);
+    if (!found) {
+      spdlog::error("{}", error);
+      return 2;
+    }
+    plan_path = *found;
+  }
+  const FloorPlanParse parse = platform::LoadFloorPlan(plan_path);
+  if (!parse.ok()) {
+    spdlog::error("{}", parse.error);
+    return 1;
+  }
+  int copies = 1;
+  const FloorPlan plan = Tile(parse.plan, o.min_segments, &copies);
+  const ClosestWallIndex index(plan, ClosestWallIndex::Options{});
+  Rows rows(o.json, plan.segments.size());
+  SplitMix64 rng(kSeed);
+  const Se2 T_slam_plan{0.7, {-12.0, 31.0}};  // any transform: slam and plan differ
+  const Se2 truth = T_slam_plan.Inverse();
+  Cloud largest;
+  for (size_t n : {size_t{1000}, size_t{10000}, size_t{100000}}) {
+    Cloud cloud = SampleWalls(plan, n, T_slam_plan, rng);
+    BenchRegistrations(cloud, truth, plan, index, o, rows);
+    if (n == 100000) largest = std::move(cloud);
+  }
+  std::vector<Eigen::Vector2d> queries;
+  for (const Eigen::Vector2d& p : largest.points) queries.push_back(truth * p);
+  BenchQueries(queries, plan, index, o, rows);
+  BenchIndexBuild(index.options(), o, rows);
+  if (!o.json) PrintRegistrationTable(plan_path, parse.plan, plan, copies, index, rows.rows());
   return 0;
 }
 
