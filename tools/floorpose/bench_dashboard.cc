@@ -96,6 +96,145 @@ void ReadEvents(int port, const std::atomic<bool>& stop, BrowserStats* stats, st
   });
 }
 
+// Each wearer walks a circle of 2 m about a point of the plan, at 1 m/s.
+struct Wearer {
+  std::string id;
+  Eigen::Vector2d centre;
+  double phase;
+};
+
+std::vector<Wearer> PlaceWearers(const FloorPlan& plan, int devices) {
+  SplitMix64 rng(7);
+  std::vector<Wearer> wearers;
+  for (int k = 0; k < devices; ++k)
+    wearers.push_back(
+        {"hl-" + std::to_string(k),
+         {rng.Uniform(plan.min.x(), plan.max.x()), rng.Uniform(plan.min.y(), plan.max.y())},
+         rng.Uniform(0, 2 * M_PI)});
+  return wearers;
+}
+
+// What the wearers sent, and what the dashboard process took meanwhile.
+struct Sent {
+  size_t poses = 0, failed = 0;
+  std::map<std::string, int64_t> last;  // per wearer, its last pose's stamp
+  double seconds = 0;
+  double peak_rss_mb = 0;
+  ProcSample before, after;
+};
+
+// The wearers' plan poses, in turn at rate_hz each, and a status about once a second each.
+Sent SendPoses(const BenchDashboardOptions& o, const FloorPlan& plan, std::vector<Wearer>& wearers,
+               platform::Participant& participant, const ChildProcess& dashboard) {
+  platform::Writer poses(participant, Topic::kPlanPose);
+  platform::Writer statuses(participant, Topic::kStatus);
+  for (auto end = Clock::now() + std::chrono::seconds(10);
+       poses.MatchedReaders() == 0 && Clock::now() < end;)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  Sent sent;
+  sent.before = SampleProcess(dashboard.pid());
+  const auto start = Clock::now();
+  const auto period = std::chrono::duration<double>(1.0 / (o.rate_hz * o.devices));
+  for (size_t tick = 0;; ++tick) {
+    const auto at = start + std::chrono::duration_cast<Clock::duration>(period * tick);
+    if (at - start > std::chrono::duration<double>(o.seconds)) break;
+    std::this_thread::sleep_until(at);
+    Wearer& w = wearers[tick % wearers.size()];
+    const double t = std::chrono::duration<double>(Clock::now() - start).count();
+    const double a = w.phase + t / 2.0;
+    v1::PlanPose p;
+    p.set_x(w.centre.x() + 2 * std::cos(a));
+    p.set_y(w.centre.y() + 2 * std::sin(a));
+    p.set_heading(a + M_PI / 2);
+    p.set_source_stamp_ns(platform::WallClockNs());
+    p.set_alignment_version(1);
+    p.mutable_reliability()->set_flag(v1::Reliability::RELIABLE);
+    p.mutable_reliability()->set_probability(0.97);
+    p.mutable_reliability()->set_reason("registered");
+    const platform::Envelope e{w.id, poses.NextSeq(), p.source_stamp_ns(), p.SerializeAsString(),
+                               0};
+    if (poses.Write(e)) {
+      ++sent.poses;
+      sent.last[w.id] = p.source_stamp_ns();
+    } else {
+      ++sent.failed;
+    }
+    if (tick % static_cast<size_t>(std::max(1.0, o.rate_hz)) == 0) {  // about 1 Hz a wearer
+      v1::DaemonStatus s;
+      s.set_state(v1::DaemonStatus::TRACKING);
+      s.set_plan_id(plan.id);
+      statuses.Write({w.id, statuses.NextSeq(), p.source_stamp_ns(), s.SerializeAsString(), 0});
+    }
+    if (tick % 100 == 0)
+      sent.peak_rss_mb = std::max(sent.peak_rss_mb, SampleProcess(dashboard.pid()).rss_mb);
+  }
+  sent.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  sent.after = SampleProcess(dashboard.pid());
+  sent.peak_rss_mb = std::max(sent.peak_rss_mb, sent.after.rss_mb);
+  return sent;
+}
+
+// What every browser showed, all together.
+struct Shown {
+  std::vector<double> latency_ms;
+  size_t points = 0, up_to_date = 0, frames = 0, bytes = 0;
+};
+
+Shown Tally(const std::vector<BrowserStats>& browsers, const Sent& sent) {
+  Shown shown;
+  for (const BrowserStats& b : browsers) {
+    shown.latency_ms.insert(shown.latency_ms.end(), b.latency_ms.begin(), b.latency_ms.end());
+    for (const auto& [id, n] : b.points) shown.points += n;
+    for (const auto& [id, stamp] : sent.last)
+      shown.up_to_date += b.last_stamp.count(id) && b.last_stamp.at(id) == stamp;
+    shown.frames += b.frames;
+    shown.bytes += b.bytes;
+  }
+  return shown;
+}
+
+void PrintDashboardBench(const BenchDashboardOptions& o, const Sent& sent, const Shown& shown) {
+  const double s = sent.seconds;
+  const double cpu_percent = 100.0 * (sent.after.cpu_s - sent.before.cpu_s) / s;
+  const size_t expected = sent.poses * static_cast<size_t>(o.browsers);
+  const size_t pairs = sent.last.size() * static_cast<size_t>(o.browsers);
+  const std::vector<double>& latency = shown.latency_ms;
+  if (o.json) {
+    std::printf("%s\n", json{{"devices", o.devices},
+                             {"rate_hz", o.rate_hz},
+                             {"browsers", o.browsers},
+                             {"seconds", s},
+                             {"poses_sent", sent.poses},
+                             {"poses_failed", sent.failed},
+                             {"trail_points_expected", expected},
+                             {"trail_points_shown", shown.points},
+                             {"browsers_up_to_date", shown.up_to_date},
+                             {"wearers_x_browsers", pairs},
+                             {"latency_ms_p50", Percentile(latency, 0.5)},
+                             {"latency_ms_p99", Percentile(latency, 0.99)},
+                             {"latency_ms_max", Percentile(latency, 1.0)},
+                             {"frames_per_s_per_browser", shown.frames / s / o.browsers},
+                             {"kb_per_s_per_browser", shown.bytes / 1024.0 / s / o.browsers},
+                             {"cpu_percent", cpu_percent},
+                             {"rss_mb_peak", sent.peak_rss_mb}}
+                            .dump()
+                            .c_str());
+    return;
+  }
+  std::printf("%d wearers at %.1f Hz for %.0f s, %d browsers\n", o.devices, o.rate_hz, s,
+              o.browsers);
+  std::printf("  poses sent %zu (failed %zu); trail points shown %zu of %zu\n", sent.poses,
+              sent.failed, shown.points, expected);
+  std::printf("  browsers ending on every wearer's last pose: %zu of %zu\n", shown.up_to_date,
+              pairs);
+  std::printf("  latency DDS -> dashboard -> browser: p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
+              Percentile(latency, 0.5), Percentile(latency, 0.99), Percentile(latency, 1.0));
+  std::printf("  per browser: %.1f frames/s, %.1f kB/s\n", shown.frames / s / o.browsers,
+              shown.bytes / 1024.0 / s / o.browsers);
+  std::printf("  dashboard: cpu %.1f%% of one core, rss %.1f MB (peak)\n", cpu_percent,
+              sent.peak_rss_mb);
+}
+
 int RunBenchDashboard(const BenchDashboardOptions& o) {
   const std::string plan_path = o.plan.empty() ? DefaultDemoPlan() : o.plan;
   const FloorPlanParse plan = platform::LoadFloorPlan(plan_path);
@@ -117,14 +256,7 @@ int RunBenchDashboard(const BenchDashboardOptions& o) {
     spdlog::error("floorpose dashboard did not come up; see {}", log.string());
     return 1;
   }
-
   platform::Participant participant(domain, platform::LoopbackCycloneConfig());
-  platform::Writer poses(participant, Topic::kPlanPose);
-  platform::Writer statuses(participant, Topic::kStatus);
-  for (auto end = Clock::now() + std::chrono::seconds(10);
-       poses.MatchedReaders() == 0 && Clock::now() < end;)
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-
   std::atomic<bool> stop{false};
   std::mutex mu;
   std::vector<BrowserStats> browsers(static_cast<size_t>(o.browsers));
@@ -134,113 +266,19 @@ int RunBenchDashboard(const BenchDashboardOptions& o) {
     std::lock_guard lock(mu);
     if (std::all_of(browsers.begin(), browsers.end(), [](auto& b) { return b.connected; })) break;
   }
-
-  // Each wearer walks a circle of 2 m about a point of the plan, at 1 m/s.
-  SplitMix64 rng(7);
-  struct Wearer {
-    std::string id;
-    Eigen::Vector2d centre;
-    double phase;
-  };
-  std::vector<Wearer> wearers;
-  for (int k = 0; k < o.devices; ++k)
-    wearers.push_back({"hl-" + std::to_string(k),
-                       {rng.Uniform(plan.plan.min.x(), plan.plan.max.x()),
-                        rng.Uniform(plan.plan.min.y(), plan.plan.max.y())},
-                       rng.Uniform(0, 2 * M_PI)});
-  const ProcSample before = SampleProcess(dashboard.pid());
-  const auto start = Clock::now();
-  const auto period = std::chrono::duration<double>(1.0 / (o.rate_hz * o.devices));
-  size_t sent = 0, failed = 0;
-  std::map<std::string, int64_t> last_sent;
-  double peak_rss = 0;
-  for (size_t tick = 0;; ++tick) {
-    const auto at = start + std::chrono::duration_cast<Clock::duration>(period * tick);
-    if (at - start > std::chrono::duration<double>(o.seconds)) break;
-    std::this_thread::sleep_until(at);
-    Wearer& w = wearers[tick % wearers.size()];
-    const double t = std::chrono::duration<double>(Clock::now() - start).count();
-    const double a = w.phase + t / 2.0;
-    v1::PlanPose p;
-    p.set_x(w.centre.x() + 2 * std::cos(a));
-    p.set_y(w.centre.y() + 2 * std::sin(a));
-    p.set_heading(a + M_PI / 2);
-    p.set_source_stamp_ns(platform::WallClockNs());
-    p.set_alignment_version(1);
-    p.mutable_reliability()->set_flag(v1::Reliability::RELIABLE);
-    p.mutable_reliability()->set_probability(0.97);
-    p.mutable_reliability()->set_reason("registered");
-    const platform::Envelope e{w.id, poses.NextSeq(), p.source_stamp_ns(), p.SerializeAsString(),
-                               0};
-    if (poses.Write(e)) {
-      ++sent;
-      last_sent[w.id] = p.source_stamp_ns();
-    } else {
-      ++failed;
-    }
-    if (tick % static_cast<size_t>(std::max(1.0, o.rate_hz)) == 0) {  // about 1 Hz a wearer
-      v1::DaemonStatus s;
-      s.set_state(v1::DaemonStatus::TRACKING);
-      s.set_plan_id(plan.plan.id);
-      statuses.Write({w.id, statuses.NextSeq(), p.source_stamp_ns(), s.SerializeAsString(), 0});
-    }
-    if (tick % 100 == 0) peak_rss = std::max(peak_rss, SampleProcess(dashboard.pid()).rss_mb);
-  }
-  const double walk_s = std::chrono::duration<double>(Clock::now() - start).count();
-  const ProcSample after = SampleProcess(dashboard.pid());
+  std::vector<Wearer> wearers = PlaceWearers(plan.plan, o.devices);
+  const Sent sent = SendPoses(o, plan.plan, wearers, participant, dashboard);
   std::this_thread::sleep_for(std::chrono::seconds(1));  // the last frames
   stop = true;
   for (auto& r : readers) r.join();
   dashboard.Terminate(std::chrono::seconds(5));
   fs::remove(log, ec);
-
-  std::vector<double> latency;
-  size_t shown = 0, up_to_date = 0, frames = 0, bytes = 0;
-  for (const BrowserStats& b : browsers) {
-    latency.insert(latency.end(), b.latency_ms.begin(), b.latency_ms.end());
-    for (const auto& [id, n] : b.points) shown += n;
-    for (const auto& [id, stamp] : last_sent)
-      up_to_date += b.last_stamp.count(id) && b.last_stamp.at(id) == stamp;
-    frames += b.frames;
-    bytes += b.bytes;
-  }
-  const double cpu_percent = 100.0 * (after.cpu_s - before.cpu_s) / walk_s;
-  const size_t expected = sent * browsers.size();
-  if (o.json) {
-    std::printf("%s\n", json{{"devices", o.devices},
-                             {"rate_hz", o.rate_hz},
-                             {"browsers", o.browsers},
-                             {"seconds", walk_s},
-                             {"poses_sent", sent},
-                             {"poses_failed", failed},
-                             {"trail_points_expected", expected},
-                             {"trail_points_shown", shown},
-                             {"browsers_up_to_date", up_to_date},
-                             {"wearers_x_browsers", last_sent.size() * browsers.size()},
-                             {"latency_ms_p50", Percentile(latency, 0.5)},
-                             {"latency_ms_p99", Percentile(latency, 0.99)},
-                             {"latency_ms_max", Percentile(latency, 1.0)},
-                             {"frames_per_s_per_browser", frames / walk_s / o.browsers},
-                             {"kb_per_s_per_browser", bytes / 1024.0 / walk_s / o.browsers},
-                             {"cpu_percent", cpu_percent},
-                             {"rss_mb_peak", std::max(peak_rss, after.rss_mb)}}
-                            .dump()
-                            .c_str());
-  } else {
-    std::printf("%d wearers at %.1f Hz for %.0f s, %d browsers\n", o.devices, o.rate_hz, walk_s,
-                o.browsers);
-    std::printf("  poses sent %zu (failed %zu); trail points shown %zu of %zu\n", sent, failed,
-                shown, expected);
-    std::printf("  browsers ending on every wearer's last pose: %zu of %zu\n", up_to_date,
-                last_sent.size() * browsers.size());
-    std::printf("  latency DDS -> dashboard -> browser: p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
-                Percentile(latency, 0.5), Percentile(latency, 0.99), Percentile(latency, 1.0));
-    std::printf("  per browser: %.1f frames/s, %.1f kB/s\n", frames / walk_s / o.browsers,
-                bytes / 1024.0 / walk_s / o.browsers);
-    std::printf("  dashboard: cpu %.1f%% of one core, rss %.1f MB (peak)\n", cpu_percent,
-                std::max(peak_rss, after.rss_mb));
-  }
-  return shown == expected && up_to_date == last_sent.size() * browsers.size() ? 0 : 1;
+  const Shown shown = Tally(browsers, sent);
+  PrintDashboardBench(o, sent, shown);
+  return shown.points == sent.poses * browsers.size() &&
+                 shown.up_to_date == sent.last.size() * browsers.size()
+             ? 0
+             : 1;
 }
 
 }  // namespace
