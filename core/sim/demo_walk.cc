@@ -30,6 +30,125 @@ int64_t ChunkKey(const Eigen::Vector2d& p, double chunk_m) {
   return (ix + (1 << 20)) * (1 << 21) + (iy + (1 << 20));
 }
 
+// Ground truth: constant speed along the polyline, heading along the motion.
+std::vector<Pose2> TruthAlong(const std::vector<Eigen::Vector2d>& waypoints, double step) {
+  std::vector<Pose2> truth;
+  size_t leg = 0;
+  double along = 0.0;
+  while (leg + 1 < waypoints.size()) {
+    const Eigen::Vector2d d = waypoints[leg + 1] - waypoints[leg];
+    const double len = d.norm();
+    if (along >= len) {
+      along -= len;
+      ++leg;
+      continue;
+    }
+    truth.push_back({waypoints[leg] + d * (along / len), std::atan2(d.y(), d.x()), 1.6});
+    along += step;
+  }
+  truth.push_back({waypoints.back(), truth.empty() ? 0.0 : truth.back().heading, 1.6});
+  return truth;
+}
+
+// The headset's spatial mesh: wall pieces seen are grouped in chunks of chunk_m, and a
+// chunk that saw new pieces is meshed again (ADDED, then UPDATED) at most every
+// update_after_s, in the SLAM frame of that moment.
+class Mesher {
+ public:
+  Mesher(const std::vector<Piece>& pieces, const DemoWalkOptions& o) : pieces_(pieces), o_(o) {}
+
+  // The pieces within sensor range of the wearer.
+  void See(const Eigen::Vector2d& wearer_plan) {
+    for (size_t i = 0; i < pieces_.size(); ++i) {
+      const Eigen::Vector2d mid = 0.5 * (pieces_[i].a + pieces_[i].b);
+      if ((mid - wearer_plan).norm() > o_.sensor_range_m) continue;
+      const int64_t key = ChunkKey(mid, o_.chunk_m);
+      if (chunk_pieces_[key].insert(i).second) dirty_.insert(key);
+    }
+  }
+
+  // The chunks due at now_s, meshed in the SLAM frame T_slam_plan.
+  void Emit(double now_s, const Se2& T_slam_plan, SplitMix64& rng, std::vector<SimMesh>* out) {
+    for (auto it = dirty_.begin(); it != dirty_.end();) {
+      const int64_t key = *it;
+      const bool known = chunk_ids_.count(key) > 0;
+      if (known && now_s - chunk_emitted_s_[key] < o_.update_after_s) {
+        ++it;
+        continue;
+      }
+      if (!known) chunk_ids_[key] = chunk_ids_.size() + 1;
+      chunk_emitted_s_[key] = now_s;
+      SimMesh mesh;
+      mesh.id = chunk_ids_[key];
+      mesh.change = known ? MeshChange::kUpdated : MeshChange::kAdded;
+      Mesh(chunk_pieces_[key], T_slam_plan, rng, &mesh);
+      out->push_back(std::move(mesh));
+      it = dirty_.erase(it);
+    }
+  }
+
+ private:
+  // Each piece a quad from floor to wall height, split at mid height (four triangles), and
+  // a patch of floor near the walls: horizontal, to be filtered out.
+  void Mesh(const std::set<size_t>& pieces, const Se2& T_slam_plan, SplitMix64& rng,
+            SimMesh* mesh) const {
+    auto vertex = [&](const Eigen::Vector2d& p_plan, double z) {
+      const Eigen::Vector2d p = T_slam_plan * p_plan;
+      mesh->vertices_slam.emplace_back(
+          static_cast<float>(p.x() + o_.vertex_noise_m * rng.Gaussian()),
+          static_cast<float>(p.y() + o_.vertex_noise_m * rng.Gaussian()),
+          static_cast<float>(z + o_.vertex_noise_m * rng.Gaussian()));
+      return static_cast<uint32_t>(mesh->vertices_slam.size() - 1);
+    };
+    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+    for (size_t i : pieces) {
+      const Piece& p = pieces_[i];
+      centre += 0.5 * (p.a + p.b);
+      const double h = o_.wall_height_m;
+      const uint32_t a0 = vertex(p.a, 0), b0 = vertex(p.b, 0);
+      const uint32_t a1 = vertex(p.a, h / 2), b1 = vertex(p.b, h / 2);
+      const uint32_t a2 = vertex(p.a, h), b2 = vertex(p.b, h);
+      for (uint32_t t : {a0, b0, b1, a0, b1, a1, a1, b1, b2, a1, b2, a2})
+        mesh->triangles.push_back(t);
+    }
+    centre /= static_cast<double>(pieces.size());
+    const uint32_t f0 = vertex(centre + Eigen::Vector2d(-0.5, -0.5), 0);
+    const uint32_t f1 = vertex(centre + Eigen::Vector2d(0.5, -0.5), 0);
+    const uint32_t f2 = vertex(centre + Eigen::Vector2d(0.5, 0.5), 0);
+    const uint32_t f3 = vertex(centre + Eigen::Vector2d(-0.5, 0.5), 0);
+    for (uint32_t t : {f0, f1, f2, f0, f2, f3}) mesh->triangles.push_back(t);
+  }
+
+  const std::vector<Piece>& pieces_;
+  const DemoWalkOptions& o_;
+  std::map<int64_t, std::set<size_t>> chunk_pieces_;  // pieces seen per chunk
+  std::map<int64_t, double> chunk_emitted_s_;
+  std::map<int64_t, uint64_t> chunk_ids_;
+  std::set<int64_t> dirty_;
+};
+
+// The wall pick: the plan wall nearest the start, its normal facing the wearer; in the
+// SLAM frame T0 with the options' point and normal errors.
+WallPick NearestWallPick(const FloorPlan& plan, const Eigen::Vector2d& start, const Se2& T0,
+                         const DemoWalkOptions& o, SplitMix64& rng) {
+  WallPick pick;
+  double best = 1e300;
+  for (const Segment& s : plan.segments) {
+    const Eigen::Vector2d c = ClosestPointOnSegment(s, start);
+    if ((c - start).norm() < best) {
+      best = (c - start).norm();
+      pick.plan_point = c;
+      pick.plan_normal = s.Normal();
+      if (pick.plan_normal.dot(start - c) < 0) pick.plan_normal = -pick.plan_normal;
+    }
+  }
+  const double normal_error = o.pick_normal_error_rad * rng.Gaussian();
+  pick.slam_point =
+      T0 * pick.plan_point + o.pick_point_error_m * Eigen::Vector2d(rng.Gaussian(), rng.Gaussian());
+  pick.slam_normal = Se2{T0.theta + normal_error, {0, 0}}.R() * pick.plan_normal;
+  return pick;
+}
+
 }  // namespace
 
 DemoWalk SimulateDemoWalk(const FloorPlan& plan, const std::vector<Eigen::Vector2d>& waypoints,
@@ -38,40 +157,12 @@ DemoWalk SimulateDemoWalk(const FloorPlan& plan, const std::vector<Eigen::Vector
   if (waypoints.size() < 2) return walk;
   SplitMix64 rng(o.seed);
   const std::vector<Piece> pieces = CutPieces(plan, o.piece_m);
-
-  // Ground truth: constant speed along the polyline, heading along the motion.
-  std::vector<Pose2> truth;
-  {
-    const double step = o.speed_mps * o.pose_period_s;
-    size_t leg = 0;
-    double along = 0.0;
-    Eigen::Vector2d pos = waypoints[0];
-    while (leg + 1 < waypoints.size()) {
-      const Eigen::Vector2d d = waypoints[leg + 1] - waypoints[leg];
-      const double len = d.norm();
-      if (along >= len) {
-        along -= len;
-        ++leg;
-        continue;
-      }
-      pos = waypoints[leg] + d * (along / len);
-      truth.push_back({pos, std::atan2(d.y(), d.x()), 1.6});
-      along += step;
-    }
-    truth.push_back({waypoints.back(), truth.empty() ? 0.0 : truth.back().heading, 1.6});
-  }
-
+  const std::vector<Pose2> truth = TruthAlong(waypoints, o.speed_mps * o.pose_period_s);
   // SLAM: integrate the true body-frame increments with a scale error and heading bias.
   Se2 T_slam_plan{o.initial_theta_rad, o.initial_offset_m};
   walk.T_slam_plan_initial = T_slam_plan;
   Pose2 slam = Apply(T_slam_plan, truth[0]);
-
-  std::map<int64_t, std::set<size_t>> chunk_pieces;  // pieces seen per chunk
-  std::map<int64_t, double> chunk_emitted_s;
-  std::map<int64_t, uint64_t> chunk_ids;
-  std::map<int64_t, Se2> chunk_frame;  // T_slam_plan when the chunk was last meshed
-  std::set<int64_t> dirty;
-
+  Mesher mesher(pieces, o);
   for (size_t k = 0; k < truth.size(); ++k) {
     if (k > 0) {
       const Pose2& a = truth[k - 1];
@@ -92,80 +183,12 @@ DemoWalk SimulateDemoWalk(const FloorPlan& plan, const std::vector<Eigen::Vector
     step.stamp_ns = static_cast<int64_t>(std::llround(k * o.pose_period_s * 1e9));
     step.true_plan = truth[k];
     step.slam = slam;
-
-    // What the headset sees now: wall pieces within range.
-    for (size_t i = 0; i < pieces.size(); ++i) {
-      const Eigen::Vector2d mid = 0.5 * (pieces[i].a + pieces[i].b);
-      if ((mid - truth[k].position).norm() > o.sensor_range_m) continue;
-      const int64_t key = ChunkKey(mid, o.chunk_m);
-      if (chunk_pieces[key].insert(i).second) dirty.insert(key);
-    }
-    const double now_s = k * o.pose_period_s;
-    if (k % o.poses_per_mesh_update == 0) {
-      for (auto it = dirty.begin(); it != dirty.end();) {
-        const int64_t key = *it;
-        const bool known = chunk_ids.count(key) > 0;
-        if (known && now_s - chunk_emitted_s[key] < o.update_after_s) {
-          ++it;
-          continue;
-        }
-        if (!known) chunk_ids[key] = chunk_ids.size() + 1;
-        chunk_emitted_s[key] = now_s;
-        chunk_frame[key] = T_slam_plan;
-        SimMesh mesh;
-        mesh.id = chunk_ids[key];
-        mesh.change = known ? MeshChange::kUpdated : MeshChange::kAdded;
-        auto vertex = [&](const Eigen::Vector2d& p_plan, double z) {
-          const Eigen::Vector2d p = T_slam_plan * p_plan;
-          mesh.vertices_slam.emplace_back(
-              static_cast<float>(p.x() + o.vertex_noise_m * rng.Gaussian()),
-              static_cast<float>(p.y() + o.vertex_noise_m * rng.Gaussian()),
-              static_cast<float>(z + o.vertex_noise_m * rng.Gaussian()));
-          return static_cast<uint32_t>(mesh.vertices_slam.size() - 1);
-        };
-        Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-        for (size_t i : chunk_pieces[key]) {
-          const Piece& p = pieces[i];
-          centre += 0.5 * (p.a + p.b);
-          // A quad from floor to wall height, split at mid height: four triangles.
-          const double h = o.wall_height_m;
-          const uint32_t a0 = vertex(p.a, 0), b0 = vertex(p.b, 0);
-          const uint32_t a1 = vertex(p.a, h / 2), b1 = vertex(p.b, h / 2);
-          const uint32_t a2 = vertex(p.a, h), b2 = vertex(p.b, h);
-          for (uint32_t t : {a0, b0, b1, a0, b1, a1, a1, b1, b2, a1, b2, a2})
-            mesh.triangles.push_back(t);
-        }
-        // A patch of floor near the walls: horizontal, to be filtered out.
-        centre /= static_cast<double>(chunk_pieces[key].size());
-        const uint32_t f0 = vertex(centre + Eigen::Vector2d(-0.5, -0.5), 0);
-        const uint32_t f1 = vertex(centre + Eigen::Vector2d(0.5, -0.5), 0);
-        const uint32_t f2 = vertex(centre + Eigen::Vector2d(0.5, 0.5), 0);
-        const uint32_t f3 = vertex(centre + Eigen::Vector2d(-0.5, 0.5), 0);
-        for (uint32_t t : {f0, f1, f2, f0, f2, f3}) mesh.triangles.push_back(t);
-        step.meshes.push_back(std::move(mesh));
-        it = dirty.erase(it);
-      }
-    }
+    mesher.See(truth[k].position);
+    if (k % o.poses_per_mesh_update == 0)
+      mesher.Emit(k * o.pose_period_s, T_slam_plan, rng, &step.meshes);
     walk.steps.push_back(std::move(step));
   }
-
-  // The wall pick: the plan wall nearest the start, its normal facing the wearer.
-  const Eigen::Vector2d start = truth[0].position;
-  double best = 1e300;
-  for (const Segment& s : plan.segments) {
-    const Eigen::Vector2d c = ClosestPointOnSegment(s, start);
-    if ((c - start).norm() < best) {
-      best = (c - start).norm();
-      walk.pick.plan_point = c;
-      walk.pick.plan_normal = s.Normal();
-      if (walk.pick.plan_normal.dot(start - c) < 0) walk.pick.plan_normal = -walk.pick.plan_normal;
-    }
-  }
-  const Se2& T0 = walk.T_slam_plan_initial;
-  const double normal_error = o.pick_normal_error_rad * rng.Gaussian();
-  walk.pick.slam_point = T0 * walk.pick.plan_point +
-                         o.pick_point_error_m * Eigen::Vector2d(rng.Gaussian(), rng.Gaussian());
-  walk.pick.slam_normal = Se2{T0.theta + normal_error, {0, 0}}.R() * walk.pick.plan_normal;
+  walk.pick = NearestWallPick(plan, truth[0].position, walk.T_slam_plan_initial, o, rng);
   return walk;
 }
 
