@@ -92,36 +92,20 @@ void AddGeometry(OGRGeometryH g, double scale, std::vector<Segment>* out, int de
   }
 }
 
-}  // namespace
-
-bool ImportPlan(const std::string& path, const PlanImportOptions& options, FloorPlan* plan,
-                PlanImportReport* report, std::string* error) {
-  *report = {};
-  GDALAllRegister();
-  CPLPushErrorHandler(CPLQuietErrorHandler);
-  GDALDatasetH ds =
-      GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr);
-  const std::string gdal_error = CPLGetLastErrorMsg();
-  CPLPopErrorHandler();
-  if (!ds) {
-    *error = path + ": not a vector file GDAL can read" +
-             (gdal_error.empty() ? std::string() : " (" + gdal_error + ")");
-    return false;
-  }
-  auto close = std::unique_ptr<void, void (*)(void*)>(ds, [](void* d) { GDALClose(d); });
-  const std::string driver = GDALGetDriverShortName(GDALGetDatasetDriver(ds));
-
-  if (options.units == "m") {
+// The scale to metres: --units, else a DXF's $INSUNITS, else metres.
+bool ChooseUnits(const std::string& path, const std::string& driver, const std::string& units,
+                 PlanImportReport* report, std::string* error) {
+  if (units == "m") {
     report->scale = 1.0;
     report->units = "metres (--units)";
-  } else if (options.units == "cm") {
+  } else if (units == "cm") {
     report->scale = 0.01;
     report->units = "centimetres (--units)";
-  } else if (options.units == "mm") {
+  } else if (units == "mm") {
     report->scale = 0.001;
     report->units = "millimetres (--units)";
-  } else if (!options.units.empty()) {
-    *error = "unknown units '" + options.units + "' (m, cm or mm)";
+  } else if (!units.empty()) {
+    *error = "unknown units '" + units + "' (m, cm or mm)";
     return false;
   } else if (driver == "DXF") {
     const std::optional<int> code = DxfInsUnits(path);
@@ -137,16 +121,17 @@ bool ImportPlan(const std::string& path, const PlanImportOptions& options, Floor
   } else {
     report->units = "metres (the file's coordinates)";
   }
+  return true;
+}
 
-  // Which layers are kept, as what: --layer-map, else --layer as walls, else the AIA
-  // names when the file uses them, else everything as walls.
-  std::vector<std::pair<LineKind, std::string>> map = options.layer_map;
-  for (const std::string& l : options.layers) map.emplace_back(LineKind::kWall, l);
-  const bool chosen = !map.empty();
-  struct Entity {
-    std::string layer;
-    std::vector<Segment> segments;
-  };
+// A feature's segments, in metres, and its layer: a CAD file's "Layer" field, else the
+// GDAL layer it is in.
+struct Entity {
+  std::string layer;
+  std::vector<Segment> segments;
+};
+
+std::vector<Entity> ReadEntities(GDALDatasetH ds, PlanImportReport* report) {
   std::vector<Entity> entities;
   std::set<std::string> seen;
   for (int l = 0; l < GDALDatasetGetLayerCount(ds); ++l) {
@@ -168,23 +153,41 @@ bool ImportPlan(const std::string& path, const PlanImportOptions& options, Floor
     }
   }
   report->layers_seen.assign(seen.begin(), seen.end());
+  return entities;
+}
+
+// Which layers are kept, as what: --layer-map, else --layer as walls, else the AIA names
+// when the file uses them, else (an empty map) everything as walls. A layer asked for
+// that the file lacks is an error.
+bool ChooseLayers(const std::string& path, const PlanImportOptions& options,
+                  const PlanImportReport& report,
+                  std::vector<std::pair<LineKind, std::string>>* map, std::string* error) {
+  *map = options.layer_map;
+  for (const std::string& l : options.layers) map->emplace_back(LineKind::kWall, l);
   auto in_file = [&](const std::string& pattern) {
-    return std::any_of(seen.begin(), seen.end(),
+    return std::any_of(report.layers_seen.begin(), report.layers_seen.end(),
                        [&](const std::string& l) { return LayerMatches(pattern, l); });
   };
-  if (!chosen) {
+  if (map->empty()) {
     for (const auto& [prefix, kind] : kAiaLayers)
-      if (in_file(prefix + std::string("*"))) map.emplace_back(kind, prefix + std::string("*"));
-  } else {
-    for (const auto& [kind, pattern] : map) {
-      if (in_file(pattern)) continue;
-      *error = path + ": no layer '" + pattern + "' (layers: ";
-      for (size_t i = 0; i < report->layers_seen.size(); ++i)
-        *error += (i ? ", " : "") + report->layers_seen[i];
-      *error += ")";
-      return false;
-    }
+      if (in_file(prefix + std::string("*"))) map->emplace_back(kind, prefix + std::string("*"));
+    return true;
   }
+  for (const auto& [kind, pattern] : *map) {
+    if (in_file(pattern)) continue;
+    *error = path + ": no layer '" + pattern + "' (layers: ";
+    for (size_t i = 0; i < report.layers_seen.size(); ++i)
+      *error += (i ? ", " : "") + report.layers_seen[i];
+    *error += ")";
+    return false;
+  }
+  return true;
+}
+
+// The entities' segments on the chosen layers, each of its layer's kind.
+std::vector<PlanLine> ClassifyLines(const std::vector<Entity>& entities,
+                                    const std::vector<std::pair<LineKind, std::string>>& map,
+                                    PlanImportReport* report) {
   std::vector<PlanLine> lines;
   for (const Entity& e : entities) {
     std::optional<LineKind> kind;
@@ -198,6 +201,32 @@ bool ImportPlan(const std::string& path, const PlanImportOptions& options, Floor
     for (const Segment& s : e.segments) lines.push_back({s, *kind});
   }
   report->segments = lines.size();
+  return lines;
+}
+
+}  // namespace
+
+bool ImportPlan(const std::string& path, const PlanImportOptions& options, FloorPlan* plan,
+                PlanImportReport* report, std::string* error) {
+  *report = {};
+  GDALAllRegister();
+  CPLPushErrorHandler(CPLQuietErrorHandler);
+  GDALDatasetH ds =
+      GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr);
+  const std::string gdal_error = CPLGetLastErrorMsg();
+  CPLPopErrorHandler();
+  if (!ds) {
+    *error = path + ": not a vector file GDAL can read" +
+             (gdal_error.empty() ? std::string() : " (" + gdal_error + ")");
+    return false;
+  }
+  auto close = std::unique_ptr<void, void (*)(void*)>(ds, [](void* d) { GDALClose(d); });
+  const std::string driver = GDALGetDriverShortName(GDALGetDatasetDriver(ds));
+  if (!ChooseUnits(path, driver, options.units, report, error)) return false;
+  const std::vector<Entity> entities = ReadEntities(ds, report);
+  std::vector<std::pair<LineKind, std::string>> map;
+  if (!ChooseLayers(path, options, *report, &map, error)) return false;
+  const std::vector<PlanLine> lines = ClassifyLines(entities, map, report);
   FloorPlanParse parsed = MakeFloorPlan(std::filesystem::path(path).stem().string(), lines, {});
   if (!parsed.ok()) {
     *error = path + ": " + parsed.error + " on the chosen layers";
