@@ -216,6 +216,96 @@ void OgrPolylines(OGRGeometryH g, std::vector<Polyline>* out, int depth = 0) {
     OgrPolylines(OGR_G_GetGeometryRef(g, i), out, depth + 1);
 }
 
+// IMDF levels by feature id: ordinal, and an id from the short name (else "L<ordinal>").
+std::map<std::string, RawLevel> ImdfLevels(const Json& level_doc) {
+  std::map<std::string, RawLevel> by_id;
+  for (const Json& f : level_doc["features"]) {
+    if (!f.is_object() || !f.contains("id") || !f["id"].is_string()) continue;
+    const Json props = f.value("properties", Json::object());
+    RawLevel l;
+    l.ordinal = props.contains("ordinal") && props["ordinal"].is_number()
+                    ? props["ordinal"].get<double>()
+                    : 0.0;
+    std::string shortname;
+    if (props.contains("short_name") && props["short_name"].is_object())
+      shortname = ImdfName(Json{{"name", props["short_name"]}});
+    l.id = shortname.empty() ? "L" + std::to_string(static_cast<int>(l.ordinal)) : shortname;
+    for (char& c : l.id)
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
+    by_id[f["id"]] = std::move(l);
+  }
+  return by_id;
+}
+
+// Each feature of an IMDF file to take(level, properties, polylines), or counted as skipped
+// (no known level_id, or no geometry).
+template <typename Take>
+void ForEachOnLevel(const Json& doc, std::map<std::string, RawLevel>& by_id,
+                    BuildingImportReport* report, const Take& take) {
+  for (const Json& f : doc["features"]) {
+    const Json props = f.is_object() ? f.value("properties", Json::object()) : Json::object();
+    const std::string level = props.contains("level_id") && props["level_id"].is_string()
+                                  ? props["level_id"].get<std::string>()
+                                  : std::string();
+    std::vector<Polyline> lines;
+    if (f.is_object() && f.contains("geometry")) GeoJsonPolylines(f["geometry"], &lines);
+    if (!by_id.count(level) || lines.empty()) {
+      ++report->skipped_features;
+      continue;
+    }
+    take(by_id[level], props, std::move(lines));
+  }
+}
+
+// An edge as a key independent of its direction, to about 1 cm (degrees times 1e7).
+using EdgeKey = std::tuple<std::pair<long long, long long>, std::pair<long long, long long>>;
+EdgeKey KeyOf(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  auto q = [](double v) { return std::llround(v * 1e7); };
+  auto ka = std::make_pair(q(a.x()), q(a.y())), kb = std::make_pair(q(b.x()), q(b.y()));
+  return std::make_tuple(std::min(ka, kb), std::max(ka, kb));
+}
+
+// A unit's outline as lines of its kind, broken where an edge is open floor.
+void AddUnitOutline(const Polyline& ring, LineKind kind, bool walkway,
+                    std::map<EdgeKey, int>& walkway_edges, RawLevel& l) {
+  Polyline piece;
+  for (size_t i = 0; i < ring.size(); ++i) {
+    const bool open = walkway && i > 0 && walkway_edges[KeyOf(ring[i - 1], ring[i])] > 1;
+    if (open || i == 0) {
+      if (piece.size() >= 2) l.lines.emplace_back(piece, kind);
+      piece.clear();
+    }
+    piece.push_back(ring[i]);
+  }
+  if (piece.size() >= 2) l.lines.emplace_back(piece, kind);
+}
+
+// IMDF units: outlines are walls (stairs and elevators their own kinds), except an edge
+// two walkways share (open floor); a named unit is a room.
+void AddImdfUnits(const Json& unit_doc, std::map<std::string, RawLevel>& by_id,
+                  BuildingImportReport* report) {
+  std::map<EdgeKey, int> walkway_edges;
+  for (const Json& f : unit_doc["features"]) {
+    const Json props = f.is_object() ? f.value("properties", Json::object()) : Json::object();
+    if (props.value("category", "") != "walkway" || !f.contains("geometry")) continue;
+    std::vector<Polyline> rings;
+    GeoJsonPolylines(f["geometry"], &rings);
+    for (const Polyline& r : rings)
+      for (size_t i = 1; i < r.size(); ++i) ++walkway_edges[KeyOf(r[i - 1], r[i])];
+  }
+  ForEachOnLevel(unit_doc, by_id, report,
+                 [&](RawLevel& l, const Json& props, std::vector<Polyline> rings) {
+                   const std::string category = props.value("category", "");
+                   const LineKind kind = category == "stairs"     ? LineKind::kStairs
+                                         : category == "elevator" ? LineKind::kElevator
+                                                                  : LineKind::kWall;
+                   for (const Polyline& r : rings)
+                     AddUnitOutline(r, kind, category == "walkway", walkway_edges, l);
+                   const std::string name = ImdfName(props);
+                   if (!name.empty()) l.rooms.emplace_back(name, rings.front());
+                 });
+}
+
 }  // namespace
 
 bool IsImdf(const std::string& path) {
@@ -241,86 +331,20 @@ bool ImportImdf(const std::string& path, double storey_m, std::vector<ImportedLe
     *error = path + ": an IMDF archive needs level.geojson and unit.geojson";
     return false;
   }
-  std::map<std::string, RawLevel> by_id;
-  for (const Json& f : level_doc["features"]) {
-    if (!f.is_object() || !f.contains("id") || !f["id"].is_string()) continue;
-    const Json props = f.value("properties", Json::object());
-    RawLevel l;
-    l.ordinal = props.contains("ordinal") && props["ordinal"].is_number()
-                    ? props["ordinal"].get<double>()
-                    : 0.0;
-    std::string shortname;
-    if (props.contains("short_name") && props["short_name"].is_object())
-      shortname = ImdfName(Json{{"name", props["short_name"]}});
-    l.id = shortname.empty() ? "L" + std::to_string(static_cast<int>(l.ordinal)) : shortname;
-    for (char& c : l.id)
-      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
-    by_id[f["id"]] = std::move(l);
-  }
-  // Each feature of a file to its level, or counted as skipped.
-  auto each = [&](const Json& doc, const auto& take) {
-    for (const Json& f : doc["features"]) {
-      const Json props = f.is_object() ? f.value("properties", Json::object()) : Json::object();
-      const std::string level = props.contains("level_id") && props["level_id"].is_string()
-                                    ? props["level_id"].get<std::string>()
-                                    : std::string();
-      std::vector<Polyline> lines;
-      if (f.is_object() && f.contains("geometry")) GeoJsonPolylines(f["geometry"], &lines);
-      if (!by_id.count(level) || lines.empty()) {
-        ++report->skipped_features;
-        continue;
-      }
-      take(by_id[level], props, std::move(lines));
-    }
-  };
-  // Units: outlines are walls, except an edge two walkways share (open floor).
-  auto key = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-    auto q = [](double v) { return std::llround(v * 1e7); };  // about 1 cm
-    auto ka = std::make_pair(q(a.x()), q(a.y())), kb = std::make_pair(q(b.x()), q(b.y()));
-    return std::make_tuple(std::min(ka, kb), std::max(ka, kb));
-  };
-  std::map<std::tuple<std::pair<long long, long long>, std::pair<long long, long long>>, int>
-      walkway_edges;
-  for (const Json& f : unit_doc["features"]) {
-    const Json props = f.is_object() ? f.value("properties", Json::object()) : Json::object();
-    if (props.value("category", "") != "walkway" || !f.contains("geometry")) continue;
-    std::vector<Polyline> rings;
-    GeoJsonPolylines(f["geometry"], &rings);
-    for (const Polyline& r : rings)
-      for (size_t i = 1; i < r.size(); ++i) ++walkway_edges[key(r[i - 1], r[i])];
-  }
-  each(unit_doc, [&](RawLevel& l, const Json& props, std::vector<Polyline> rings) {
-    const std::string category = props.value("category", "");
-    const LineKind kind = category == "stairs"     ? LineKind::kStairs
-                          : category == "elevator" ? LineKind::kElevator
-                                                   : LineKind::kWall;
-    const bool walkway = category == "walkway";
-    for (const Polyline& r : rings) {
-      Polyline piece;
-      for (size_t i = 0; i < r.size(); ++i) {
-        const bool open = walkway && i > 0 && walkway_edges[key(r[i - 1], r[i])] > 1;
-        if (open || i == 0) {
-          if (piece.size() >= 2) l.lines.emplace_back(piece, kind);
-          piece.clear();
-        }
-        piece.push_back(r[i]);
-      }
-      if (piece.size() >= 2) l.lines.emplace_back(piece, kind);
-    }
-    const std::string name = ImdfName(props);
-    if (!name.empty()) l.rooms.emplace_back(name, rings.front());
-  });
+  std::map<std::string, RawLevel> by_id = ImdfLevels(level_doc);
+  AddImdfUnits(unit_doc, by_id, report);
   Json doc;
   if (features("opening.geojson", &doc))
-    each(doc, [&](RawLevel& l, const Json& props, std::vector<Polyline> lines) {
-      const std::string category = props.value("category", "");
-      const LineKind kind = category == "emergencyexit" || category == "pedestrian.principal"
-                                ? LineKind::kExit
-                                : LineKind::kDoor;
-      for (Polyline& p : lines) l.lines.emplace_back(std::move(p), kind);
-    });
+    ForEachOnLevel(
+        doc, by_id, report, [&](RawLevel& l, const Json& props, std::vector<Polyline> lines) {
+          const std::string category = props.value("category", "");
+          const LineKind kind = category == "emergencyexit" || category == "pedestrian.principal"
+                                    ? LineKind::kExit
+                                    : LineKind::kDoor;
+          for (Polyline& p : lines) l.lines.emplace_back(std::move(p), kind);
+        });
   if (features("fixture.geojson", &doc))
-    each(doc, [&](RawLevel& l, const Json&, std::vector<Polyline> rings) {
+    ForEachOnLevel(doc, by_id, report, [&](RawLevel& l, const Json&, std::vector<Polyline> rings) {
       for (Polyline& p : rings) l.lines.emplace_back(std::move(p), LineKind::kWall);
     });
   std::vector<RawLevel> raw;
