@@ -82,100 +82,112 @@ bool LoadConfig(const std::string& path, v1::FloorposedConfig* config, std::stri
   return true;
 }
 
-std::string ValidateConfig(const v1::FloorposedConfig& c) {
-  if (!ParseHeadsetFrame(c.headset_frame()))
-    return "headset_frame must be \"unity\" or \"zup\", not \"" + c.headset_frame() + "\"";
-  if (c.dds().domain_id() > 232) return "dds.domain_id must be 0..232";
-  if (!(c.floors().change_margin_m() > 0 && c.floors().change_margin_m() <= 10 &&
-        c.floors().change_hold_s() >= 0 && c.floors().change_hold_s() <= 600))
-    return "floors.change_margin_m must be in (0, 10] and floors.change_hold_s in [0, 600]";
-  {
-    const v1::DdsSecurityConfig& s = c.dds().security();
-    const std::string files[] = {s.identity_ca(),    s.identity_certificate(), s.private_key(),
-                                 s.permissions_ca(), s.governance(),           s.permissions()};
-    const auto set = std::count_if(std::begin(files), std::end(files),
-                                   [](const std::string& f) { return !f.empty(); });
-    if (set != 0 && set != 6)
-      return "dds.security needs all of identity_ca, identity_certificate, private_key, "
-             "permissions_ca, governance and permissions, or none";
-  }
-  if (c.dds().device_id().empty()) return "dds.device_id must not be empty";
-  {
-    const v1::TrackingConfig& m = c.tracking();
-    for (const auto& [value, name] :
-         {std::pair{m.measurement().sigma_m(), "tracking.measurement.sigma_m"},
-          std::pair{m.measurement().independent_points(),
-                    "tracking.measurement.independent_points"},
-          std::pair{m.measurement().window_s(), "tracking.measurement.window_s"},
-          std::pair{m.wheel().window_s(), "tracking.wheel.window_s"},
-          std::pair{m.measurement().update_interval_s(), "tracking.measurement.update_interval_s"},
-          std::pair{m.recovery().pick_sigma_m(), "tracking.recovery.pick_sigma_m"},
-          std::pair{m.recovery().pick_sigma_deg(), "tracking.recovery.pick_sigma_deg"},
-          std::pair{m.recovery().lost_s(), "tracking.recovery.lost_s"},
-          std::pair{m.recovery().search_interval_s(), "tracking.recovery.search_interval_s"},
-          std::pair{m.motion().lost_after_s(), "tracking.motion.lost_after_s"}})
-      if (!(value > 0 && std::isfinite(value))) return std::string(name) + " must be positive";
-    if (!(m.recovery().start_doubt() > 0 && m.recovery().start_doubt() < 1))
-      return "tracking.recovery.start_doubt must be in (0, 1)";
-    if (!(m.motion().through_wall() > 0 && m.motion().through_wall() <= 1))
-      return "tracking.motion.through_wall must be in (0, 1]";
-    if (!(m.measurement().clutter() > 0 && m.measurement().clutter() < 1))
-      return "tracking.measurement.clutter must be in (0, 1)";
-    if (!(m.samples().min_samples() >= 1 &&
-          m.samples().min_samples() <= m.samples().max_samples() &&
-          m.samples().max_samples() <= 100000))
-      return "tracking.samples must have 1 <= min_samples <= max_samples <= 100000";
-    if (!(m.publish().degraded() >= 0 && m.publish().degraded() <= m.publish().reliable() &&
-          m.publish().reliable() <= 1))
-      return "tracking.publish must have 0 <= degraded <= reliable <= 1";
-  }
-  if (!(c.walls().density_per_m2() > 0 && c.walls().density_per_m2() <= 10000))
-    return "walls.density_per_m2 must be in (0, 10000]";
-  if (!(c.walls().max_normal_up() > 0 && c.walls().max_normal_up() < 1))
-    return "walls.max_normal_up must be in (0, 1)";
-  if (!(c.icp().max_correspondence_m() > 0)) return "icp.max_correspondence_m must be positive";
-  if (c.icp().levels() > 8) return "icp.levels must be at most 8";
-  if (!(c.walls().voxel_m() > 0)) return "tracking.snapshot_voxel_m must be positive";
-  if (!(c.status_period_s() > 0)) return "status_period_s must be positive";
-  if (!(c.snapshot_period_s() > 0)) return "snapshot_period_s must be positive";
+namespace {
+
+std::string ValidateDds(const v1::DdsConfig& d) {
+  if (d.domain_id() > 232) return "dds.domain_id must be 0..232";
+  const v1::DdsSecurityConfig& s = d.security();
+  const std::string files[] = {s.identity_ca(),    s.identity_certificate(), s.private_key(),
+                               s.permissions_ca(), s.governance(),           s.permissions()};
+  const auto set = std::count_if(std::begin(files), std::end(files),
+                                 [](const std::string& f) { return !f.empty(); });
+  if (set != 0 && set != 6)
+    return "dds.security needs all of identity_ca, identity_certificate, private_key, "
+           "permissions_ca, governance and permissions, or none";
+  if (d.device_id().empty()) return "dds.device_id must not be empty";
+  return {};
+}
+
+std::string ValidateTracking(const v1::TrackingConfig& m) {
   for (const auto& [value, name] :
-       {std::pair{c.tracking().motion().relocalization_m(), "tracking.motion.relocalization_m"},
-        std::pair{c.tracking().motion().relocalization_deg(), "tracking.motion.relocalization_deg"},
-        std::pair{c.tracking().motion().position_m_per_sqrt_m(),
-                  "tracking.motion.position_m_per_sqrt_m"},
-        std::pair{c.tracking().motion().heading_deg_per_sqrt_m(),
-                  "tracking.motion.heading_deg_per_sqrt_m"},
-        std::pair{c.tracking().motion().heading_per_turn(), "tracking.motion.heading_per_turn"},
-        std::pair{c.tracking().wheel().heading_deg_per_sqrt_m(),
-                  "tracking.wheel.heading_deg_per_sqrt_m"},
-        std::pair{c.tracking().wheel().heading_per_turn(), "tracking.wheel.heading_per_turn"}}) {
+       {std::pair{m.measurement().sigma_m(), "tracking.measurement.sigma_m"},
+        std::pair{m.measurement().independent_points(), "tracking.measurement.independent_points"},
+        std::pair{m.measurement().window_s(), "tracking.measurement.window_s"},
+        std::pair{m.wheel().window_s(), "tracking.wheel.window_s"},
+        std::pair{m.measurement().update_interval_s(), "tracking.measurement.update_interval_s"},
+        std::pair{m.recovery().pick_sigma_m(), "tracking.recovery.pick_sigma_m"},
+        std::pair{m.recovery().pick_sigma_deg(), "tracking.recovery.pick_sigma_deg"},
+        std::pair{m.recovery().lost_s(), "tracking.recovery.lost_s"},
+        std::pair{m.recovery().search_interval_s(), "tracking.recovery.search_interval_s"},
+        std::pair{m.motion().lost_after_s(), "tracking.motion.lost_after_s"}})
+    if (!(value > 0 && std::isfinite(value))) return std::string(name) + " must be positive";
+  for (const auto& [value, name] :
+       {std::pair{m.motion().relocalization_m(), "tracking.motion.relocalization_m"},
+        std::pair{m.motion().relocalization_deg(), "tracking.motion.relocalization_deg"},
+        std::pair{m.motion().position_m_per_sqrt_m(), "tracking.motion.position_m_per_sqrt_m"},
+        std::pair{m.motion().heading_deg_per_sqrt_m(), "tracking.motion.heading_deg_per_sqrt_m"},
+        std::pair{m.motion().heading_per_turn(), "tracking.motion.heading_per_turn"},
+        std::pair{m.wheel().heading_deg_per_sqrt_m(), "tracking.wheel.heading_deg_per_sqrt_m"},
+        std::pair{m.wheel().heading_per_turn(), "tracking.wheel.heading_per_turn"}})
     if (!(value >= 0 && std::isfinite(value))) return std::string(name) + " must be >= 0";
-  }
+  if (!(m.recovery().start_doubt() > 0 && m.recovery().start_doubt() < 1))
+    return "tracking.recovery.start_doubt must be in (0, 1)";
+  if (!(m.motion().through_wall() > 0 && m.motion().through_wall() <= 1))
+    return "tracking.motion.through_wall must be in (0, 1]";
+  if (!(m.measurement().clutter() > 0 && m.measurement().clutter() < 1))
+    return "tracking.measurement.clutter must be in (0, 1)";
+  if (!(m.samples().min_samples() >= 1 && m.samples().min_samples() <= m.samples().max_samples() &&
+        m.samples().max_samples() <= 100000))
+    return "tracking.samples must have 1 <= min_samples <= max_samples <= 100000";
+  if (!(m.publish().degraded() >= 0 && m.publish().degraded() <= m.publish().reliable() &&
+        m.publish().reliable() <= 1))
+    return "tracking.publish must have 0 <= degraded <= reliable <= 1";
+  return {};
+}
+
+// The wall points and the registration of them.
+std::string ValidateWallsAndIcp(const v1::WallExtractionConfig& w, const v1::IcpConfig& icp) {
+  if (!(w.density_per_m2() > 0 && w.density_per_m2() <= 10000))
+    return "walls.density_per_m2 must be in (0, 10000]";
+  if (!(w.max_normal_up() > 0 && w.max_normal_up() < 1))
+    return "walls.max_normal_up must be in (0, 1)";
+  if (!(w.voxel_m() > 0)) return "walls.voxel_m must be positive";
+  if (!(icp.max_correspondence_m() > 0)) return "icp.max_correspondence_m must be positive";
+  if (icp.levels() > 8) return "icp.levels must be at most 8";
+  if (!(icp.degeneracy_ratio() >= 0 && icp.degeneracy_ratio() < 1))
+    return "icp.degeneracy_ratio must be in [0, 1)";
+  return {};
+}
+
+// What the daemon serves besides poses: routes, the explored map, alerts.
+std::string ValidateServices(const v1::FloorposedConfig& c) {
   for (const auto& [value, name] :
        {std::pair{c.routes().body_radius_m(), "routes.body_radius_m"},
         std::pair{c.routes().cell_m(), "routes.cell_m"},
         std::pair{c.explored().cell_m(), "explored.cell_m"},
         std::pair{c.explored().publish_period_s(), "explored.publish_period_s"},
         std::pair{c.explored().max_ray_m(), "explored.max_ray_m"},
-        std::pair{c.explored().max_door_m(), "explored.max_door_m"}}) {
+        std::pair{c.explored().max_door_m(), "explored.max_door_m"}})
     if (!(value > 0 && value <= 1000)) return std::string(name) + " must be in (0, 1000]";
-  }
   for (const auto& [value, name] : {std::pair{c.alerts().motion_m(), "alerts.motion_m"},
                                     std::pair{c.alerts().no_motion_s(), "alerts.no_motion_s"},
-                                    std::pair{c.alerts().pre_alert_s(), "alerts.pre_alert_s"}}) {
+                                    std::pair{c.alerts().pre_alert_s(), "alerts.pre_alert_s"}})
     if (!(value > 0 && value <= 3600)) return std::string(name) + " must be in (0, 3600]";
-  }
   if (c.alerts().pre_alert_s() > c.alerts().no_motion_s())
     return "alerts.pre_alert_s must not be longer than alerts.no_motion_s";
   if (!(c.routes().snap_m() >= 0 && c.routes().snap_m() <= 100))
     return "routes.snap_m must be in [0, 100]";
   if (c.routes().cell_m() < 0.01 || c.explored().cell_m() < 0.01)
     return "routes.cell_m and explored.cell_m must be at least 0.01";
-  if (!(c.icp().degeneracy_ratio() >= 0 && c.icp().degeneracy_ratio() < 1))
-    return "icp.degeneracy_ratio must be in [0, 1)";
+  return {};
+}
+
+}  // namespace
+
+std::string ValidateConfig(const v1::FloorposedConfig& c) {
+  if (!ParseHeadsetFrame(c.headset_frame()))
+    return "headset_frame must be \"unity\" or \"zup\", not \"" + c.headset_frame() + "\"";
+  if (!(c.floors().change_margin_m() > 0 && c.floors().change_margin_m() <= 10 &&
+        c.floors().change_hold_s() >= 0 && c.floors().change_hold_s() <= 600))
+    return "floors.change_margin_m must be in (0, 10] and floors.change_hold_s in [0, 600]";
+  if (!(c.status_period_s() > 0)) return "status_period_s must be positive";
+  if (!(c.snapshot_period_s() > 0)) return "snapshot_period_s must be positive";
   const std::string& l = c.log_level();
   if (l != "trace" && l != "debug" && l != "info" && l != "warn" && l != "error")
     return "log_level must be trace, debug, info, warn or error";
+  for (const std::string& invalid : {ValidateDds(c.dds()), ValidateTracking(c.tracking()),
+                                     ValidateWallsAndIcp(c.walls(), c.icp()), ValidateServices(c)})
+    if (!invalid.empty()) return invalid;
   return {};
 }
 

@@ -134,7 +134,7 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"walls { max_normal_up: 1.5 }", "max_normal_up"},
            Case{"icp { max_correspondence_m: -1 }", "max_correspondence_m"},
            Case{"icp { levels: 20 }", "levels"},
-           Case{"tracking { snapshot_voxel_m: 0 }", "snapshot_voxel_m"},
+           Case{"walls { voxel_m: 0 }", "walls.voxel_m"},
            Case{"tracking { motion { through_wall: 0 } }", "through_wall"},
            Case{"tracking { measurement { clutter: 1 } }", "clutter"},
            Case{"tracking { measurement { window_s: nan } }", "measurement.window_s"},
