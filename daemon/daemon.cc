@@ -164,10 +164,6 @@ std::string Daemon::StatusLine() const {
 }
 
 void Daemon::IoLoop() {
-  struct Input {
-    Topic topic;
-    platform::Envelope envelope;
-  };
   std::vector<Input> batch;
   while (true) {
     waiter_->Wait(std::chrono::milliseconds(100));
@@ -182,57 +178,8 @@ void Daemon::IoLoop() {
       posted.swap(posted_);
     }
     for (auto& f : posted) f();
-    // One batch from all inputs, in stamp order (platform::InputBefore), the order
-    // `floorpose eval` takes a recording in: a pose is corrected with the walls and the
-    // pick that came before it. The readers are taken in turn, and again until a turn
-    // takes nothing: a message that arrives during a turn, after its reader was taken,
-    // may come after messages sent later on another topic that the same turn did take
-    // (a pose missed while a wall pick sent after it was taken, under load); Cyclone
-    // delivers one peer's messages in the order they were sent, so once a whole turn
-    // finds nothing new, nothing sent before a message of the batch is still missing.
-    // A peer that never pauses ends the turns after kMaxTurns; its batch is then one
-    // turn short of exact, as it would be with a single turn.
-    constexpr int kMaxTurns = 8;
-    batch.clear();
-    for (int turn = 0; turn < kMaxTurns; ++turn) {
-      const size_t before = batch.size();
-      for (auto* reader : {pose_reader_.get(), mesh_reader_.get(), command_reader_.get()})
-        for (auto& e : reader->Take(256)) batch.push_back({reader->topic(), std::move(e)});
-      if (batch.size() == before) break;
-    }
-    std::stable_sort(batch.begin(), batch.end(), [](const Input& a, const Input& b) {
-      return platform::InputBefore(a.topic, a.envelope.stamp_ns, b.topic, b.envelope.stamp_ns);
-    });
-    auto handle = [&](const Input& in) {
-      switch (in.topic) {
-        case Topic::kCommand: engine_->OnCommand(in.envelope); break;
-        case Topic::kMeshDelta: engine_->OnMeshDelta(in.envelope); break;
-        default: engine_->OnHeadsetPose(in.envelope); break;
-      }
-    };
-    if (deterministic_) {
-      for (const Input& in : batch) {
-        if (!running_) break;
-        handle(in);
-        AfterInput();
-      }
-    } else {
-      // The wearer first: the batch's poses (and commands, in their order) are answered
-      // before its meshes become wall points, and a registration is applied and the next
-      // one scheduled after them; a pose that arrives meanwhile is answered before the next
-      // mesh. Registrations run on the worker, so neither order changes what they see by
-      // more than a batch; a pose no longer waits for wall extraction, a store snapshot or
-      // a PlanTrack (floorpose bench daemon, p99 latency).
-      for (const Input& in : batch)
-        if (in.topic != Topic::kMeshDelta) handle(in);
-      for (const Input& in : batch) {
-        if (in.topic != Topic::kMeshDelta) continue;
-        if (!running_) break;  // SIGTERM does not wait for a flood of meshes
-        for (auto& e : pose_reader_->Take(256)) handle({Topic::kHeadsetPose, std::move(e)});
-        handle(in);
-      }
-      AfterInput();
-    }
+    TakeBatch(&batch);
+    HandleBatch(batch);
     ApplyFinished(false);
     // The team: at a person's pace, a bounded take a turn is plenty.
     for (auto* reader : {marker_reader_.get(), team_pose_reader_.get(), team_status_reader_.get()})
@@ -241,18 +188,78 @@ void Daemon::IoLoop() {
     SaveMarkers();
     const int64_t now = platform::MonotonicNs();
     MaybeSnapshot(now, false);
-    if (now >= next_status_ns_) {
-      // What DDS lost or rejected since the last status, counted in this one.
-      for (auto* reader : {pose_reader_.get(), mesh_reader_.get(), command_reader_.get()}) {
-        const platform::Reader::Losses l = reader->TakeLosses();
-        engine_->OnDdsLosses(reader->topic(), l.lost, l.rejected);
-      }
-      engine_->PublishStatus({});
-      next_status_ns_ = now + static_cast<int64_t>(config_.status_period_s() * 1e9);
-      std::lock_guard lock(status_mu_);
-      status_line_ = engine_->StatusLine();
-    }
+    if (now >= next_status_ns_) PublishStatus(now);
   }
+}
+
+void Daemon::TakeBatch(std::vector<Input>* batch) {
+  // One batch from all inputs, in stamp order (platform::InputBefore), the order
+  // `floorpose eval` takes a recording in: a pose is corrected with the walls and the
+  // pick that came before it. The readers are taken in turn, and again until a turn
+  // takes nothing: a message that arrives during a turn, after its reader was taken,
+  // may come after messages sent later on another topic that the same turn did take
+  // (a pose missed while a wall pick sent after it was taken, under load); Cyclone
+  // delivers one peer's messages in the order they were sent, so once a whole turn
+  // finds nothing new, nothing sent before a message of the batch is still missing.
+  // A peer that never pauses ends the turns after kMaxTurns; its batch is then one
+  // turn short of exact, as it would be with a single turn.
+  constexpr int kMaxTurns = 8;
+  batch->clear();
+  for (int turn = 0; turn < kMaxTurns; ++turn) {
+    const size_t before = batch->size();
+    for (auto* reader : {pose_reader_.get(), mesh_reader_.get(), command_reader_.get()})
+      for (auto& e : reader->Take(256)) batch->push_back({reader->topic(), std::move(e)});
+    if (batch->size() == before) break;
+  }
+  std::stable_sort(batch->begin(), batch->end(), [](const Input& a, const Input& b) {
+    return platform::InputBefore(a.topic, a.envelope.stamp_ns, b.topic, b.envelope.stamp_ns);
+  });
+}
+
+void Daemon::Handle(const Input& in) {
+  switch (in.topic) {
+    case Topic::kCommand: engine_->OnCommand(in.envelope); break;
+    case Topic::kMeshDelta: engine_->OnMeshDelta(in.envelope); break;
+    default: engine_->OnHeadsetPose(in.envelope); break;
+  }
+}
+
+void Daemon::HandleBatch(const std::vector<Input>& batch) {
+  if (deterministic_) {
+    for (const Input& in : batch) {
+      if (!running_) break;
+      Handle(in);
+      AfterInput();
+    }
+    return;
+  }
+  // The wearer first: the batch's poses (and commands, in their order) are answered
+  // before its meshes become wall points, and a registration is applied and the next
+  // one scheduled after them; a pose that arrives meanwhile is answered before the next
+  // mesh. Registrations run on the worker, so neither order changes what they see by
+  // more than a batch; a pose no longer waits for wall extraction, a store snapshot or
+  // a PlanTrack (floorpose bench daemon, p99 latency).
+  for (const Input& in : batch)
+    if (in.topic != Topic::kMeshDelta) Handle(in);
+  for (const Input& in : batch) {
+    if (in.topic != Topic::kMeshDelta) continue;
+    if (!running_) break;  // SIGTERM does not wait for a flood of meshes
+    for (auto& e : pose_reader_->Take(256)) Handle({Topic::kHeadsetPose, std::move(e)});
+    Handle(in);
+  }
+  AfterInput();
+}
+
+void Daemon::PublishStatus(int64_t now_ns) {
+  // What DDS lost or rejected since the last status, counted in this one.
+  for (auto* reader : {pose_reader_.get(), mesh_reader_.get(), command_reader_.get()}) {
+    const platform::Reader::Losses l = reader->TakeLosses();
+    engine_->OnDdsLosses(reader->topic(), l.lost, l.rejected);
+  }
+  engine_->PublishStatus({});
+  next_status_ns_ = now_ns + static_cast<int64_t>(config_.status_period_s() * 1e9);
+  std::lock_guard lock(status_mu_);
+  status_line_ = engine_->StatusLine();
 }
 
 void Daemon::AfterInput() {

@@ -36,7 +36,18 @@ class Daemon {
   std::string StatusLine() const;
 
  private:
+  // The wearer's inputs of one io turn.
+  struct Input {
+    platform::Topic topic;
+    platform::Envelope envelope;
+  };
   void IoLoop();
+  void TakeBatch(std::vector<Input>* batch);
+  void HandleBatch(const std::vector<Input>& batch);
+  void Handle(const Input& in);
+  // The daemon's status, with what DDS lost since the last one; the next is due a
+  // status period after now_ns.
+  void PublishStatus(int64_t now_ns);
   void WorkerLoop();
   // After each input: start a due registration; in deterministic mode wait for it, so
   // the next pose sees its result exactly as `floorpose eval` would.
