@@ -168,6 +168,77 @@ std::string ReadGeoreference(const Json& doc, std::optional<Georeference>* out) 
   return {};
 }
 
+// Every line of a GeoJSON document as read, and what it belongs to: a LineKind, or the
+// room of that index (kRoomTag - index) for the outline of a room or unit.
+struct TaggedLines {
+  static constexpr int kRoomTag = -1;
+  std::vector<Segment> raw;
+  std::vector<int> tags;
+  std::vector<std::string> room_names;
+
+  // One feature's lines. properties.kind says what they are (core/floor_plan.h, LineKind):
+  // walls when it says nothing; a room or unit is an outline with a name; other features
+  // (labels, furniture) carry no lines of the plan. Returns an error or empty.
+  std::string AddFeature(const Json& f) {
+    if (!f.is_object()) return "feature is not an object";
+    if (!f.contains("geometry") || f["geometry"].is_null()) return {};
+    int tag = static_cast<int>(LineKind::kWall);
+    const Json* props =
+        f.contains("properties") && f["properties"].is_object() ? &f["properties"] : nullptr;
+    if (props && props->contains("kind") && (*props)["kind"].is_string()) {
+      const std::string kind = (*props)["kind"];
+      LineKind k;
+      if (kind == "room" || kind == "unit") {
+        tag = kRoomTag - static_cast<int>(room_names.size());
+        const bool named = props->contains("name") && (*props)["name"].is_string();
+        room_names.push_back(named ? (*props)["name"].get<std::string>() : std::string());
+      } else if (ParseLineKind(kind, &k)) {
+        tag = static_cast<int>(k);
+      } else {
+        return {};
+      }
+    }
+    const size_t before = raw.size();
+    std::string e = AddGeometry(f["geometry"], &raw, 0);
+    tags.resize(raw.size(), tag);
+    if (tag <= kRoomTag && raw.size() == before) room_names.pop_back();
+    return e;
+  }
+
+  // A FeatureCollection, a Feature or a bare geometry (walls). Returns an error or empty.
+  std::string AddDocument(const Json& doc) {
+    if (!doc.is_object() || !doc.contains("type") || !doc["type"].is_string())
+      return "top level is not a GeoJSON object";
+    if (doc["type"] == "FeatureCollection") {
+      if (!doc.contains("features") || !doc["features"].is_array())
+        return "FeatureCollection without features";
+      for (size_t i = 0; i < doc["features"].size(); ++i)
+        if (const std::string e = AddFeature(doc["features"][i]); !e.empty())
+          return "feature " + std::to_string(i) + ": " + e;
+      return {};
+    }
+    if (doc["type"] == "Feature") return AddFeature(doc);
+    std::string e = AddGeometry(doc, &raw, 0);
+    tags.resize(raw.size(), static_cast<int>(LineKind::kWall));
+    return e;
+  }
+
+  // The plan's lines and rooms (each outline its segments' points in order).
+  void Split(std::vector<PlanLine>* lines, std::vector<PlanRoom>* rooms) {
+    rooms->assign(room_names.size(), {});
+    for (size_t i = 0; i < raw.size(); ++i) {
+      if (tags[i] >= 0) {
+        lines->push_back({raw[i], static_cast<LineKind>(tags[i])});
+        continue;
+      }
+      PlanRoom& room = (*rooms)[static_cast<size_t>(kRoomTag - tags[i])];
+      if (room.outline.empty()) room.outline.push_back(raw[i].a);
+      room.outline.push_back(raw[i].b);
+    }
+    for (size_t i = 0; i < rooms->size(); ++i) (*rooms)[i].name = std::move(room_names[i]);
+  }
+};
+
 }  // namespace
 
 bool ReadFile(const std::string& path, size_t max_bytes, std::string* contents,
@@ -205,63 +276,13 @@ FloorPlanParse ParseGeoJsonFloorPlan(std::string_view text, std::string id) {
     out.error = "GeoJSON: not valid JSON";
     return out;
   }
-  // Every line as read, and what it belongs to: a LineKind, or the room of that index
-  // (kRoomTag - index) for the outline of a room or unit.
-  std::vector<Segment> raw;
-  std::vector<int> tags;
-  std::vector<std::string> room_names;
-  constexpr int kRoomTag = -1;
-  auto add_feature = [&](const Json& f) -> std::string {
-    if (!f.is_object()) return "feature is not an object";
-    if (!f.contains("geometry") || f["geometry"].is_null()) return {};
-    // properties.kind says what the lines are (core/floor_plan.h, LineKind): walls when
-    // it says nothing; a room or unit is an outline with a name; other features (labels,
-    // furniture) carry no lines of the plan.
-    int tag = static_cast<int>(LineKind::kWall);
-    const Json* props =
-        f.contains("properties") && f["properties"].is_object() ? &f["properties"] : nullptr;
-    if (props && props->contains("kind") && (*props)["kind"].is_string()) {
-      const std::string kind = (*props)["kind"];
-      LineKind k;
-      if (kind == "room" || kind == "unit") {
-        tag = kRoomTag - static_cast<int>(room_names.size());
-        const bool named = props->contains("name") && (*props)["name"].is_string();
-        room_names.push_back(named ? (*props)["name"].get<std::string>() : std::string());
-      } else if (ParseLineKind(kind, &k)) {
-        tag = static_cast<int>(k);
-      } else {
-        return {};
-      }
-    }
-    const size_t before = raw.size();
-    std::string e = AddGeometry(f["geometry"], &raw, 0);
-    tags.resize(raw.size(), tag);
-    if (tag <= kRoomTag && raw.size() == before) room_names.pop_back();
-    return e;
-  };
-  std::string error;
-  if (!doc.is_object() || !doc.contains("type") || !doc["type"].is_string()) {
-    error = "top level is not a GeoJSON object";
-  } else if (doc["type"] == "FeatureCollection") {
-    if (!doc.contains("features") || !doc["features"].is_array()) {
-      error = "FeatureCollection without features";
-    } else {
-      for (size_t i = 0; i < doc["features"].size() && error.empty(); ++i) {
-        error = add_feature(doc["features"][i]);
-        if (!error.empty()) error = "feature " + std::to_string(i) + ": " + error;
-      }
-    }
-  } else if (doc["type"] == "Feature") {
-    error = add_feature(doc);
-  } else {
-    error = AddGeometry(doc, &raw, 0);
-    tags.resize(raw.size(), static_cast<int>(LineKind::kWall));
-  }
+  TaggedLines read;
+  std::string error = read.AddDocument(doc);
   std::string frame;
   std::optional<Georeference> georeference;
-  if (error.empty() && IsLonLat(doc, raw)) {
+  if (error.empty() && IsLonLat(doc, read.raw)) {
     georeference.emplace();
-    error = ProjectLonLat(doc, &raw, &frame, &*georeference);
+    error = ProjectLonLat(doc, &read.raw, &frame, &*georeference);
   } else if (error.empty()) {
     error = ReadGeoreference(doc, &georeference);
   }
@@ -270,17 +291,8 @@ FloorPlanParse ParseGeoJsonFloorPlan(std::string_view text, std::string id) {
     return out;
   }
   std::vector<PlanLine> lines;
-  std::vector<PlanRoom> rooms(room_names.size());
-  for (size_t i = 0; i < raw.size(); ++i) {
-    if (tags[i] >= 0) {
-      lines.push_back({raw[i], static_cast<LineKind>(tags[i])});
-      continue;
-    }
-    PlanRoom& room = rooms[static_cast<size_t>(kRoomTag - tags[i])];
-    if (room.outline.empty()) room.outline.push_back(raw[i].a);
-    room.outline.push_back(raw[i].b);
-  }
-  for (size_t i = 0; i < rooms.size(); ++i) rooms[i].name = std::move(room_names[i]);
+  std::vector<PlanRoom> rooms;
+  read.Split(&lines, &rooms);
   out = MakeFloorPlan(std::move(id), lines, std::move(rooms));
   out.frame = std::move(frame);
   if (out.ok()) out.georeference = georeference;
