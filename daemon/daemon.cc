@@ -120,9 +120,9 @@ bool Daemon::JoinDds(std::string* error) {
 }
 
 void Daemon::ResumeFromStateDir(const std::string& state_dir) {
-  snapshot_path_ = platform::SnapshotPath(state_dir, config_.dds().device_id());
+  snapshots_ = std::make_unique<SnapshotKeeper>(
+      platform::SnapshotPath(state_dir, config_.dds().device_id()), config_.snapshot_period_s());
   ResumeFromSnapshot();
-  snapshot_thread_ = std::thread([this] { SnapshotLoop(); });
   markers_path_ = (std::filesystem::path(state_dir) / "markers.pb").string();
   std::string markers_error;
   if (!engine_->crew().markers().Load(markers_path_, &markers_error))
@@ -143,14 +143,9 @@ void Daemon::Stop() {
   io_thread_.join();
   worker_thread_.join();
   if (plan_thread_.joinable()) plan_thread_.join();  // a plan being built is dropped
-  if (snapshot_thread_.joinable()) {
+  if (snapshots_) {
     MaybeSnapshot(platform::MonotonicNs(), /*force=*/true);
-    {
-      std::lock_guard lock(snapshot_mu_);
-      snapshot_stop_ = true;
-    }
-    snapshot_cv_.notify_all();
-    snapshot_thread_.join();  // writes what is pending first
+    snapshots_->Finish();
   }
   engine_->PublishStatus("stopping");
   const auto& c = engine_->counters();
@@ -340,12 +335,13 @@ void Daemon::SaveMarkers() {
 }
 
 void Daemon::ResumeFromSnapshot() {
+  const std::string& path = snapshots_->path();
   v1::StateSnapshot snapshot;
   std::string error;
   const uint64_t max_bytes = uint64_t{config_.limits().max_snapshot_mb()} << 20;
-  switch (platform::ReadStateFile(snapshot_path_, &snapshot, &error, max_bytes)) {
+  switch (platform::ReadStateFile(path, &snapshot, &error, max_bytes)) {
     case platform::StateRead::kMissing:
-      spdlog::info("no snapshot at {}: starting clean", snapshot_path_);
+      spdlog::info("no snapshot at {}: starting clean", path);
       return;
     case platform::StateRead::kBad: break;
     case platform::StateRead::kOk:
@@ -357,9 +353,8 @@ void Daemon::ResumeFromSnapshot() {
         spdlog::info(
             "resumed from {} (written {:.1f} s ago): alignment version {}, {} meshes, "
             "{} wall points",
-            snapshot_path_, age_s, snapshot.alignment().version(), s.live_meshes(),
-            s.wall_points());
-        saved_version_ = snapshot.alignment().version();
+            path, age_s, snapshot.alignment().version(), s.live_meshes(), s.wall_points());
+        snapshots_->Resumed(snapshot.alignment().version());
         engine_->PublishAlignment();
         return;
       }
@@ -367,55 +362,19 @@ void Daemon::ResumeFromSnapshot() {
       break;
   }
   std::string aside_error;
-  const std::string aside = platform::SetAside(snapshot_path_, &aside_error);
-  spdlog::warn("snapshot {} not trusted: {}; {}; starting clean", snapshot_path_, error,
+  const std::string aside = platform::SetAside(path, &aside_error);
+  spdlog::warn("snapshot {} not trusted: {}; {}; starting clean", path, error,
                aside.empty() ? aside_error : "set aside as " + aside);
 }
 
 void Daemon::MaybeSnapshot(int64_t now_ns, bool force) {
-  if (snapshot_path_.empty()) return;
-  // A new alignment within a second (it is what a restart must not lose), new walls only
-  // every snapshot_period_s (a restart re-scans them anyway), anything on force.
+  if (!snapshots_) return;
   const uint64_t version = engine_->alignment().version;
   const uint64_t deltas = engine_->counters().mesh_deltas_in();
-  const bool new_alignment = version != saved_version_, new_walls = deltas != saved_deltas_;
-  if (!new_alignment && !new_walls) return;
-  const int64_t period_ns = static_cast<int64_t>(config_.snapshot_period_s() * 1e9);
-  const int64_t due_ns =
-      last_snapshot_ns_ + (new_alignment ? std::min<int64_t>(1'000'000'000, period_ns) : period_ns);
-  if (!force && now_ns < due_ns) return;
+  if (!snapshots_->Due(version, deltas, now_ns, force)) return;
   v1::StateSnapshot snapshot = engine_->SaveState();
   snapshot.set_written_unix_ns(platform::WallClockNs());
-  saved_version_ = version;
-  saved_deltas_ = deltas;
-  last_snapshot_ns_ = now_ns;
-  {
-    std::lock_guard lock(snapshot_mu_);
-    snapshot_ = std::move(snapshot);
-  }
-  snapshot_cv_.notify_one();
-}
-
-void Daemon::SnapshotLoop() {
-  while (true) {
-    v1::StateSnapshot snapshot;
-    {
-      std::unique_lock lock(snapshot_mu_);
-      snapshot_cv_.wait(lock, [&] { return snapshot_stop_ || snapshot_.has_value(); });
-      if (!snapshot_) return;  // stopping with nothing left to write
-      snapshot = std::move(*snapshot_);
-      snapshot_.reset();
-    }
-    std::string error;
-    const int64_t t0 = platform::MonotonicNs();
-    if (platform::WriteStateFile(snapshot_path_, snapshot, &error)) {
-      spdlog::debug("snapshot: alignment version {}, {} meshes, written in {:.1f} ms",
-                    snapshot.alignment().version(), snapshot.meshes_size(),
-                    static_cast<double>(platform::MonotonicNs() - t0) * 1e-6);
-    } else {
-      spdlog::warn("snapshot not written: {}", error);
-    }
-  }
+  snapshots_->Write(std::move(snapshot), version, deltas, now_ns);
 }
 
 }  // namespace floorpose

@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "daemon/snapshot_keeper.h"
 #include "floorpose/v1/config.pb.h"
 #include "platform/dds.h"
 #include "platform/engine.h"
@@ -55,16 +56,15 @@ class Daemon {
   void ApplyFinished(bool wait);
   void Publish(platform::Topic topic, const google::protobuf::Message& msg);
   // Crash safety: resume from the snapshot at start (a bad one is set aside), and hand a
-  // new one to the snapshot thread after a new alignment or, periodically, new walls.
+  // new one to the SnapshotKeeper when it is due (a new alignment, or new walls).
   void ResumeFromSnapshot();
   // The participant, the readers and writers of the wearer's topics and, where the
   // permissions grant them, the team's; false: why in *error.
   bool JoinDds(std::string* error);
-  // The state directory's snapshot (the belief goes on) and markers, and the thread that
-  // keeps the snapshot.
+  // The state directory's snapshot (the belief goes on), the keeper that writes the next
+  // ones, and the markers.
   void ResumeFromStateDir(const std::string& state_dir);
   void MaybeSnapshot(int64_t now_ns, bool force);
-  void SnapshotLoop();
 
   v1::FloorposedConfig config_;
   bool deterministic_;
@@ -86,24 +86,16 @@ class Daemon {
   std::optional<platform::Done> done_;
   bool stop_ = false;
 
-  // Io thread -> snapshot thread: the latest snapshot to write (latest wins).
   std::unique_ptr<platform::StateDirLock> state_lock_;  // held while the daemon runs
   // Plans loaded by command are built on plan_thread_; what then goes on on the io thread
   // waits in posted_ (Engine::SetOffload).
   std::thread plan_thread_;
   std::mutex posted_mu_;
   std::vector<std::function<void()>> posted_;
-  std::string snapshot_path_;   // empty: no snapshots
   std::string markers_path_;    // state_dir/markers.pb; empty: not kept
   uint64_t saved_markers_ = 0;  // MarkerBoard::revision() last saved
   void SaveMarkers();
-  std::mutex snapshot_mu_;
-  std::condition_variable snapshot_cv_;
-  std::optional<v1::StateSnapshot> snapshot_;
-  bool snapshot_stop_ = false;
-  uint64_t saved_version_ = 0, saved_deltas_ = 0;  // what the latest snapshot had seen
-  int64_t last_snapshot_ns_ = INT64_MIN / 2;       // monotonic; none yet
-  std::thread snapshot_thread_;
+  std::unique_ptr<SnapshotKeeper> snapshots_;  // null: no state directory
 
   std::atomic<bool> running_{false};
   std::atomic<int64_t> io_heartbeat_ns_{0};
