@@ -134,11 +134,7 @@ void Daemon::ResumeFromStateDir(const std::string& state_dir) {
 
 void Daemon::Stop() {
   if (!running_.exchange(false)) return;
-  {
-    std::lock_guard lock(mu_);
-    stop_ = true;
-  }
-  cv_.notify_all();
+  jobs_.Stop();
   waiter_->Wake();
   io_thread_.join();
   worker_thread_.join();
@@ -162,10 +158,7 @@ void Daemon::IoLoop() {
   std::vector<Input> batch;
   while (true) {
     waiter_->Wait(std::chrono::milliseconds(100));
-    {
-      std::lock_guard lock(mu_);
-      if (stop_) break;
-    }
+    if (jobs_.stopped()) break;
     io_heartbeat_ns_ = platform::MonotonicNs();
     std::vector<std::function<void()>> posted;
     {
@@ -260,23 +253,14 @@ void Daemon::PublishStatus(int64_t now_ns) {
 void Daemon::AfterInput() {
   ApplyFinished(false);
   if (auto job = engine_->TakeDueJob()) {
-    {
-      std::lock_guard lock(mu_);
-      job_ = std::move(job);
-    }
-    cv_.notify_one();
+    jobs_.Put(std::move(*job));
     if (deterministic_) ApplyFinished(true);
   }
 }
 
 void Daemon::ApplyFinished(bool wait) {
-  std::optional<platform::Done> done;
-  {
-    std::unique_lock lock(mu_);
-    if (wait) cv_.wait(lock, [&] { return stop_ || done_.has_value(); });
-    done.swap(done_);
-  }
-  if (done) engine_->OnRegistrationDone(std::move(*done));
+  if (std::optional<platform::Done> done = jobs_.TakeDone(wait))
+    engine_->OnRegistrationDone(std::move(*done));
 }
 
 void Daemon::WorkerLoop() {
@@ -287,21 +271,8 @@ void Daemon::WorkerLoop() {
   // gives this thread a tenth of the io thread's weight).
   if (setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), 10) != 0)
     spdlog::debug("registration worker keeps its priority: {}", std::strerror(errno));
-  while (true) {
-    platform::Job job;
-    {
-      std::unique_lock lock(mu_);
-      cv_.wait(lock, [&] { return stop_ || job_.has_value(); });
-      if (stop_) return;
-      job = std::move(*job_);
-      job_.reset();
-    }
-    platform::Done done = platform::RunJob(std::move(job), platform::MonotonicNs);
-    {
-      std::lock_guard lock(mu_);
-      done_ = std::move(done);
-    }
-    cv_.notify_all();
+  while (std::optional<platform::Job> job = jobs_.Take()) {
+    jobs_.Finish(platform::RunJob(std::move(*job), platform::MonotonicNs));
     waiter_->Wake();
   }
 }

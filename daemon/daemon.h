@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "daemon/job_slot.h"
 #include "daemon/snapshot_keeper.h"
 #include "floorpose/v1/config.pb.h"
 #include "platform/dds.h"
@@ -79,12 +80,7 @@ class Daemon {
   std::unique_ptr<platform::Engine> engine_;  // io thread only
   int64_t next_status_ns_ = 0;
 
-  // Io thread <-> worker: one job slot, one result slot (latest wins).
-  std::mutex mu_;
-  std::condition_variable cv_;
-  std::optional<platform::Job> job_;
-  std::optional<platform::Done> done_;
-  bool stop_ = false;
+  JobSlot jobs_;  // io thread <-> worker
 
   std::unique_ptr<platform::StateDirLock> state_lock_;  // held while the daemon runs
   // Plans loaded by command are built on plan_thread_; what then goes on on the io thread
