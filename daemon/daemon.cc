@@ -55,7 +55,7 @@ bool Daemon::Start(std::string* error) {
           std::lock_guard lock(posted_mu_);
           posted_.push_back(done);
         }
-        waiter_->Wake();
+        dds_.waiter->Wake();
       });
     });
   }
@@ -73,25 +73,29 @@ bool Daemon::Start(std::string* error) {
 bool Daemon::JoinDds(std::string* error) {
   try {
     const std::optional<platform::DdsSecurity> security = platform::ToDdsSecurity(config_);
-    participant_ = std::make_unique<platform::Participant>(
+    dds_.participant = std::make_unique<platform::Participant>(
         config_.dds().domain_id(), config_.dds().cyclonedds_uri(), security ? &*security : nullptr);
     // Inputs from the default partition (clients written from docs/protocol.md) and the
     // device's own (a headset identity may publish only there: docs/security.md).
     const std::vector<std::string> inputs = {"",
                                              platform::DevicePartition(config_.dds().device_id())};
-    mesh_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kMeshDelta, inputs);
-    pose_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kHeadsetPose, inputs);
-    command_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kCommand, inputs);
-    plan_pose_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kPlanPose);
-    alignment_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kAlignment);
-    status_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kStatus);
-    track_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kPlanTrack);
-    reply_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kCommandReply);
-    explored_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kExplored);
-    waiter_ = std::make_unique<platform::Waiter>(*participant_);
-    waiter_->Attach(*mesh_reader_);
-    waiter_->Attach(*pose_reader_);
-    waiter_->Attach(*command_reader_);
+    dds_.mesh_reader =
+        std::make_unique<platform::Reader>(*dds_.participant, Topic::kMeshDelta, inputs);
+    dds_.pose_reader =
+        std::make_unique<platform::Reader>(*dds_.participant, Topic::kHeadsetPose, inputs);
+    dds_.command_reader =
+        std::make_unique<platform::Reader>(*dds_.participant, Topic::kCommand, inputs);
+    dds_.plan_pose_writer = std::make_unique<platform::Writer>(*dds_.participant, Topic::kPlanPose);
+    dds_.alignment_writer =
+        std::make_unique<platform::Writer>(*dds_.participant, Topic::kAlignment);
+    dds_.status_writer = std::make_unique<platform::Writer>(*dds_.participant, Topic::kStatus);
+    dds_.track_writer = std::make_unique<platform::Writer>(*dds_.participant, Topic::kPlanTrack);
+    dds_.reply_writer = std::make_unique<platform::Writer>(*dds_.participant, Topic::kCommandReply);
+    dds_.explored_writer = std::make_unique<platform::Writer>(*dds_.participant, Topic::kExplored);
+    dds_.waiter = std::make_unique<platform::Waiter>(*dds_.participant);
+    dds_.waiter->Attach(*dds_.mesh_reader);
+    dds_.waiter->Attach(*dds_.pose_reader);
+    dds_.waiter->Attach(*dds_.command_reader);
   } catch (const std::exception& e) {
     *error = std::string("DDS: ") + e.what();
     return false;
@@ -99,22 +103,22 @@ bool Daemon::JoinDds(std::string* error) {
   try {
     // The team's topics. On a secured domain whose permissions predate them, the daemon
     // still positions its wearer, without alerts, markers and teammates.
-    alert_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kAlert);
-    marker_writer_ = std::make_unique<platform::Writer>(*participant_, Topic::kMarker);
-    marker_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kMarker);
-    team_pose_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kPlanPose);
-    team_status_reader_ = std::make_unique<platform::Reader>(*participant_, Topic::kStatus);
-    waiter_->Attach(*marker_reader_);
+    dds_.alert_writer = std::make_unique<platform::Writer>(*dds_.participant, Topic::kAlert);
+    dds_.marker_writer = std::make_unique<platform::Writer>(*dds_.participant, Topic::kMarker);
+    dds_.marker_reader = std::make_unique<platform::Reader>(*dds_.participant, Topic::kMarker);
+    dds_.team_pose_reader = std::make_unique<platform::Reader>(*dds_.participant, Topic::kPlanPose);
+    dds_.team_status_reader = std::make_unique<platform::Reader>(*dds_.participant, Topic::kStatus);
+    dds_.waiter->Attach(*dds_.marker_reader);
   } catch (const std::exception& e) {
     spdlog::warn(
         "DDS: {}: the team's topics are not granted, so no alerts, markers or teammates "
         "(tools/make-dds-security.sh grants them)",
         e.what());
-    alert_writer_.reset();
-    marker_writer_.reset();
-    marker_reader_.reset();
-    team_pose_reader_.reset();
-    team_status_reader_.reset();
+    dds_.alert_writer.reset();
+    dds_.marker_writer.reset();
+    dds_.marker_reader.reset();
+    dds_.team_pose_reader.reset();
+    dds_.team_status_reader.reset();
   }
   return true;
 }
@@ -135,7 +139,7 @@ void Daemon::ResumeFromStateDir(const std::string& state_dir) {
 void Daemon::Stop() {
   if (!running_.exchange(false)) return;
   jobs_.Stop();
-  waiter_->Wake();
+  dds_.waiter->Wake();
   io_thread_.join();
   worker_thread_.join();
   if (plan_thread_.joinable()) plan_thread_.join();  // a plan being built is dropped
@@ -157,7 +161,7 @@ std::string Daemon::StatusLine() const {
 void Daemon::IoLoop() {
   std::vector<Input> batch;
   while (true) {
-    waiter_->Wait(std::chrono::milliseconds(100));
+    dds_.waiter->Wait(std::chrono::milliseconds(100));
     if (jobs_.stopped()) break;
     io_heartbeat_ns_ = platform::MonotonicNs();
     std::vector<std::function<void()>> posted;
@@ -170,7 +174,8 @@ void Daemon::IoLoop() {
     HandleBatch(batch);
     ApplyFinished(false);
     // The team: at a person's pace, a bounded take a turn is plenty.
-    for (auto* reader : {marker_reader_.get(), team_pose_reader_.get(), team_status_reader_.get()})
+    for (auto* reader :
+         {dds_.marker_reader.get(), dds_.team_pose_reader.get(), dds_.team_status_reader.get()})
       if (reader)
         for (const platform::Envelope& e : reader->Take(256)) engine_->OnTeam(reader->topic(), e);
     SaveMarkers();
@@ -195,7 +200,7 @@ void Daemon::TakeBatch(std::vector<Input>* batch) {
   batch->clear();
   for (int turn = 0; turn < kMaxTurns; ++turn) {
     const size_t before = batch->size();
-    for (auto* reader : {pose_reader_.get(), mesh_reader_.get(), command_reader_.get()})
+    for (auto* reader : {dds_.pose_reader.get(), dds_.mesh_reader.get(), dds_.command_reader.get()})
       for (auto& e : reader->Take(256)) batch->push_back({reader->topic(), std::move(e)});
     if (batch->size() == before) break;
   }
@@ -232,7 +237,7 @@ void Daemon::HandleBatch(const std::vector<Input>& batch) {
   for (const Input& in : batch) {
     if (in.topic != Topic::kMeshDelta) continue;
     if (!running_) break;  // SIGTERM does not wait for a flood of meshes
-    for (auto& e : pose_reader_->Take(256)) Handle({Topic::kHeadsetPose, std::move(e)});
+    for (auto& e : dds_.pose_reader->Take(256)) Handle({Topic::kHeadsetPose, std::move(e)});
     Handle(in);
   }
   AfterInput();
@@ -240,7 +245,7 @@ void Daemon::HandleBatch(const std::vector<Input>& batch) {
 
 void Daemon::PublishStatus(int64_t now_ns) {
   // What DDS lost or rejected since the last status, counted in this one.
-  for (auto* reader : {pose_reader_.get(), mesh_reader_.get(), command_reader_.get()}) {
+  for (auto* reader : {dds_.pose_reader.get(), dds_.mesh_reader.get(), dds_.command_reader.get()}) {
     const platform::Reader::Losses l = reader->TakeLosses();
     engine_->OnDdsLosses(reader->topic(), l.lost, l.rejected);
   }
@@ -273,19 +278,19 @@ void Daemon::WorkerLoop() {
     spdlog::debug("registration worker keeps its priority: {}", std::strerror(errno));
   while (std::optional<platform::Job> job = jobs_.Take()) {
     jobs_.Finish(platform::RunJob(std::move(*job), platform::MonotonicNs));
-    waiter_->Wake();
+    dds_.waiter->Wake();
   }
 }
 
 void Daemon::Publish(Topic topic, const google::protobuf::Message& msg) {
-  platform::Writer* writer = topic == Topic::kPlanPose       ? plan_pose_writer_.get()
-                             : topic == Topic::kAlignment    ? alignment_writer_.get()
-                             : topic == Topic::kStatus       ? status_writer_.get()
-                             : topic == Topic::kPlanTrack    ? track_writer_.get()
-                             : topic == Topic::kCommandReply ? reply_writer_.get()
-                             : topic == Topic::kExplored     ? explored_writer_.get()
-                             : topic == Topic::kAlert        ? alert_writer_.get()
-                             : topic == Topic::kMarker       ? marker_writer_.get()
+  platform::Writer* writer = topic == Topic::kPlanPose       ? dds_.plan_pose_writer.get()
+                             : topic == Topic::kAlignment    ? dds_.alignment_writer.get()
+                             : topic == Topic::kStatus       ? dds_.status_writer.get()
+                             : topic == Topic::kPlanTrack    ? dds_.track_writer.get()
+                             : topic == Topic::kCommandReply ? dds_.reply_writer.get()
+                             : topic == Topic::kExplored     ? dds_.explored_writer.get()
+                             : topic == Topic::kAlert        ? dds_.alert_writer.get()
+                             : topic == Topic::kMarker       ? dds_.marker_writer.get()
                                                              : nullptr;
   if (!writer) return;
   // A marker is its own instance, keyed by its id; everything else is the device's.

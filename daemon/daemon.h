@@ -70,13 +70,16 @@ class Daemon {
   v1::FloorposedConfig config_;
   bool deterministic_;
 
-  std::unique_ptr<platform::Participant> participant_;
-  std::unique_ptr<platform::Reader> mesh_reader_, pose_reader_, command_reader_;
-  // The team's markers, plan poses and statuses (every device's; Engine::OnTeam).
-  std::unique_ptr<platform::Reader> marker_reader_, team_pose_reader_, team_status_reader_;
-  std::unique_ptr<platform::Writer> plan_pose_writer_, alignment_writer_, status_writer_,
-      track_writer_, reply_writer_, explored_writer_, alert_writer_, marker_writer_;
-  std::unique_ptr<platform::Waiter> waiter_;
+  // The participant, the wearer's topics and, where granted, the team's (JoinDds).
+  struct Dds {
+    std::unique_ptr<platform::Participant> participant;
+    std::unique_ptr<platform::Reader> mesh_reader, pose_reader, command_reader;
+    // The team's markers, plan poses and statuses (every device's; Engine::OnTeam).
+    std::unique_ptr<platform::Reader> marker_reader, team_pose_reader, team_status_reader;
+    std::unique_ptr<platform::Writer> plan_pose_writer, alignment_writer, status_writer,
+        track_writer, reply_writer, explored_writer, alert_writer, marker_writer;
+    std::unique_ptr<platform::Waiter> waiter;
+  } dds_;
   std::unique_ptr<platform::Engine> engine_;  // io thread only
   int64_t next_status_ns_ = 0;
 
