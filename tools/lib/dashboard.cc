@@ -544,6 +544,21 @@ struct Dashboard::Impl {
   std::optional<v1::CommandReply> Ask(const std::string& device, v1::Command command,
                                       std::chrono::milliseconds timeout);
   void OnReply(const std::string& device, const v1::CommandReply& reply);
+
+  // The participant, the wearers' readers and, where granted, the lead's topics.
+  void JoinDds();
+  // The markers saved at options.markers_path, into the state and out on DDS.
+  void LoadMarkers(DashboardState& state);
+  // GET: the page's files, the plans, the explored and searched maps, the devices.
+  void ServeReads(DashboardState& state);
+  // GET /events: server-sent frames of the state.
+  void ServeEvents(DashboardState& state);
+  // POST: markers, alert acknowledgements and routes asked of a wearer's daemon.
+  void ServeLead(DashboardState& state);
+  void PostMarker(DashboardState& state, const httplib::Request& req, httplib::Response& res);
+  void PostRoute(const httplib::Request& req, httplib::Response& res);
+  // Binds options.host:port (any free port for 0); the port, or -1.
+  int Bind();
 };
 
 std::optional<v1::CommandReply> Dashboard::Impl::Ask(const std::string& device, v1::Command command,
@@ -669,6 +684,253 @@ void Dashboard::Impl::ReadDds(DashboardState& state) {
   }
 }
 
+namespace {
+
+// The plan's rooms that hold a SEARCHED marker, green, one pixel a cell of its room grid;
+// empty when none does.
+std::string SearchedRoomsPng(const RoomMap& map, const std::vector<Eigen::Vector2d>& markers) {
+  std::vector<int> searched;
+  for (const Eigen::Vector2d& p : markers)
+    if (const int room = map.RoomAt(p); room >= 0) searched.push_back(room);
+  if (searched.empty()) return {};
+  const GridGeometry& g = map.grid();
+  std::vector<unsigned char> rgba(g.size() * 4, 0);
+  for (int cell = 0; cell < static_cast<int>(g.size()); ++cell) {
+    const int room = map.RoomAt(g.CellCentre(cell));
+    if (room < 0 || std::find(searched.begin(), searched.end(), room) == searched.end()) continue;
+    unsigned char* px = &rgba[static_cast<size_t>(cell) * 4];
+    px[0] = 0, px[1] = 158, px[2] = 115, px[3] = 70;  // Okabe-Ito green
+  }
+  return EncodePngBottomUp(static_cast<uint32_t>(g.nx), static_cast<uint32_t>(g.ny), rgba);
+}
+
+void Refuse(httplib::Response& res, int status, const std::string& why) {
+  res.status = status;
+  res.set_content(json{{"error", why}}.dump(), "application/json");
+}
+
+}  // namespace
+
+void Dashboard::Impl::JoinDds() {
+  participant = std::make_unique<platform::Participant>(
+      options.domain_id, options.cyclone_config, options.security ? &*options.security : nullptr);
+  waiter = std::make_unique<platform::Waiter>(*participant);
+  for (Topic t :
+       {Topic::kStatus, Topic::kAlignment, Topic::kPlanTrack, Topic::kPlanPose, Topic::kExplored}) {
+    readers.push_back(std::make_unique<platform::Reader>(*participant, t));
+    waiter->Attach(*readers.back());
+  }
+  try {
+    // The lead's part. On a secured domain whose permissions predate these topics the
+    // dashboard still shows the wearers.
+    std::vector<std::unique_ptr<platform::Reader>> team;
+    for (Topic t : {Topic::kAlert, Topic::kMarker, Topic::kCommandReply})
+      team.push_back(std::make_unique<platform::Reader>(*participant, t));
+    marker_writer = std::make_unique<platform::Writer>(*participant, Topic::kMarker);
+    command_writer = std::make_unique<platform::Writer>(*participant, Topic::kCommand);
+    for (auto& reader : team) {
+      waiter->Attach(*reader);
+      readers.push_back(std::move(reader));
+    }
+  } catch (const std::exception& e) {
+    spdlog::warn("DDS: {}: no alerts, markers or routes on this domain (not granted)", e.what());
+    marker_writer.reset();
+    command_writer.reset();
+  }
+}
+
+void Dashboard::Impl::LoadMarkers(DashboardState& state) {
+  if (options.markers_path.empty()) return;
+  platform::MarkerBoard saved;
+  std::string error;
+  if (!saved.Load(options.markers_path, &error))
+    spdlog::warn("markers {} not read: {}", options.markers_path, error);
+  for (const auto& [id, marker] : saved.markers()) {
+    std::string why;
+    state.OnMarker(marker, &why);
+    PublishMarker(marker);
+  }
+  if (!saved.markers().empty())
+    spdlog::info("{} markers from {}", saved.markers().size(), options.markers_path);
+}
+
+void Dashboard::Impl::ServeReads(DashboardState& state) {
+  for (const DashboardAsset* a = kDashboardAssets; a->path; ++a) {
+    const DashboardAsset asset = *a;
+    http.Get(asset.path, [asset](const httplib::Request&, httplib::Response& res) {
+      res.set_content(asset.body, asset.content_type);
+    });
+  }
+  http.Get("/api/plans", [this](const httplib::Request&, httplib::Response& res) {
+    res.set_content(plans_json, "application/json");
+  });
+  http.Get(R"(/api/explored/([^/]+)\.png)",
+           [&state](const httplib::Request& req, httplib::Response& res) {
+             const std::string png = state.ExploredPng(req.matches[1]);
+             if (png.empty()) {
+               res.status = 404;
+               res.set_content("no explored map of that plan yet\n", "text/plain");
+               return;
+             }
+             res.set_header("Cache-Control", "no-cache");
+             res.set_content(png, "image/png");
+           });
+  http.Get(R"(/api/searched/([^/]+)\.png)", [this, &state](const httplib::Request& req,
+                                                           httplib::Response& res) {
+    auto map = rooms.find(req.matches[1]);
+    const std::string png = map == rooms.end()
+                                ? std::string()
+                                : SearchedRoomsPng(*map->second, state.SearchedOn(req.matches[1]));
+    if (png.empty()) {
+      res.status = 404;
+      res.set_content("no room of that plan searched yet\n", "text/plain");
+      return;
+    }
+    res.set_header("Cache-Control", "no-cache");
+    res.set_content(png, "image/png");
+  });
+  http.Get("/api/devices", [&state](const httplib::Request&, httplib::Response& res) {
+    DashboardState::Cursor fresh;
+    res.set_content(state.Frame(&fresh, Clock::now()), "application/json");
+  });
+}
+
+void Dashboard::Impl::ServeEvents(DashboardState& state) {
+  // The whole picture first, then what changed, at most every frame_period_s, and at
+  // least every second (ages and staleness move on their own).
+  http.Get("/events", [this, &state](const httplib::Request& req, httplib::Response& res) {
+    struct Stream {
+      DashboardState::Cursor cursor;
+      bool started = false;
+    };
+    auto stream = std::make_shared<Stream>();
+    const auto period = std::chrono::duration_cast<std::chrono::milliseconds>(
+        std::chrono::duration<double>(options.dashboard.frame_period_s));
+    spdlog::info("browser {} connected ({} open)", req.remote_addr, ++clients);
+    res.set_header("Cache-Control", "no-cache");
+    res.set_header("X-Accel-Buffering", "no");
+    res.set_chunked_content_provider(
+        "text/event-stream",
+        [&state, stream, period](size_t, httplib::DataSink& sink) {
+          if (stream->started) {
+            std::this_thread::sleep_for(period);
+            state.WaitForChange(stream->cursor.version, std::chrono::seconds(1));
+          }
+          stream->started = true;
+          if (state.stopped()) {
+            sink.done();
+            return true;
+          }
+          const std::string event = "data: " + state.Frame(&stream->cursor, Clock::now()) + "\n\n";
+          return sink.write(event.data(), event.size());
+        },
+        [this, remote = req.remote_addr](bool) {
+          spdlog::info("browser {} disconnected ({} open)", remote, --clients);
+        });
+  });
+}
+
+// A marker placed or removed by the lead: {"kind", "plan", "floor", "x", "y", "text",
+// "radius_m"}, or {"id", "removed": true}.
+void Dashboard::Impl::PostMarker(DashboardState& state, const httplib::Request& req,
+                                 httplib::Response& res) {
+  const json body = json::parse(req.body, nullptr, false);
+  if (!body.is_object()) return Refuse(res, 400, "not a JSON object");
+  v1::Marker marker;
+  const int64_t now = platform::WallClockNs();
+  if (body.value("removed", false)) {
+    const std::optional<v1::Marker> held = state.MarkerById(body.value("id", ""));
+    if (!held) return Refuse(res, 400, "no such marker");
+    marker = *held;
+    marker.set_removed(true);
+    marker.set_revision(held->revision() + 1);
+  } else {
+    v1::Marker::Kind kind{};
+    if (!platform::ParseMarkerKind(body.value("kind", ""), &kind))
+      return Refuse(res, 400, "kind must be hazard, victim, searched, blocked or note");
+    if (!body.contains("x") || !body.contains("y") || !body["x"].is_number() ||
+        !body["y"].is_number())
+      return Refuse(res, 400, "x and y (plan metres) are needed");
+    marker.set_id(options.name + "-" + std::to_string(now / 1'000'000) + "-" +
+                  std::to_string(++placed));
+    marker.set_kind(kind);
+    marker.set_plan_id(body.value("plan", ""));
+    marker.set_floor(body.value("floor", ""));
+    marker.set_x(body["x"].get<double>());
+    marker.set_y(body["y"].get<double>());
+    marker.set_radius_m(body.value("radius_m", 0.0));
+    marker.set_text(body.value("text", ""));
+    marker.set_author(options.name);
+    marker.set_revision(1);
+  }
+  marker.set_created_unix_ns(now);
+  std::string why;
+  if (!state.OnMarker(marker, &why)) return Refuse(res, 400, why.empty() ? "not newer" : why);
+  PublishMarker(marker);
+  state.SaveMarkers(options.markers_path);
+  res.set_content(json{{"id", marker.id()}}.dump(), "application/json");
+}
+
+// A wearer's way out or way back, asked of its daemon: {"device", "to": "exit" or
+// "backtrack"}; the reply's path, or why there is none.
+void Dashboard::Impl::PostRoute(const httplib::Request& req, httplib::Response& res) {
+  const json body = json::parse(req.body, nullptr, false);
+  const std::string device = body.is_object() ? body.value("device", "") : "";
+  const std::string to = body.is_object() ? body.value("to", "") : "";
+  if (device.empty() || device.size() > 128 || (to != "exit" && to != "backtrack"))
+    return Refuse(res, 400, "device and to (exit or backtrack) are needed");
+  v1::Command route;
+  route.mutable_route()->set_destination(to == "exit" ? v1::Command::Route::EXIT
+                                                      : v1::Command::Route::BACKTRACK);
+  const std::optional<v1::CommandReply> reply = Ask(device, route, std::chrono::seconds(5));
+  if (!reply) return Refuse(res, 504, "no answer from the wearer's daemon");
+  json path = json::array();
+  for (const v1::PlanPoint& p : reply->route().path()) path.push_back({Mm(p.x()), Mm(p.y())});
+  res.status = reply->ok() ? 200 : 409;
+  res.set_content(json{{"device", device},
+                       {"to", to},
+                       {"ok", reply->ok()},
+                       {"message", reply->message()},
+                       {"length_m", Mm(reply->route().length_m())},
+                       {"path", std::move(path)}}
+                      .dump(-1, ' ', false, json::error_handler_t::replace),
+                  "application/json");
+}
+
+void Dashboard::Impl::ServeLead(DashboardState& state) {
+  http.Post("/api/markers", [this, &state](const httplib::Request& req, httplib::Response& res) {
+    PostMarker(state, req, res);
+  });
+  // The lead acknowledges a wearer's alert: {"device"}; the wearer's daemon marks it
+  // acknowledged (Command.acknowledge_alert) and every dashboard sees it so.
+  http.Post("/api/alerts/ack", [this](const httplib::Request& req, httplib::Response& res) {
+    const json body = json::parse(req.body, nullptr, false);
+    const std::string device = body.is_object() ? body.value("device", "") : "";
+    if (device.empty() || device.size() > 128) return Refuse(res, 400, "device is needed");
+    v1::Command ack;
+    ack.mutable_acknowledge_alert()->set_by(options.name);
+    SendCommand(device, ack);
+    res.status = 202;
+    res.set_content(json{{"device", device}}.dump(), "application/json");
+  });
+  http.Post("/api/route",
+            [this](const httplib::Request& req, httplib::Response& res) { PostRoute(req, res); });
+}
+
+int Dashboard::Impl::Bind() {
+  http.set_logger([](const httplib::Request& req, const httplib::Response& res) {
+    if (res.status >= 400) spdlog::info("{} {} -> {}", req.method, req.path, res.status);
+  });
+  // Address reuse only (a restart binds at once), never port sharing: a second dashboard
+  // on a port in use is an error, not a silent half of the requests.
+  http.set_socket_options([](socket_t sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+  });
+  if (options.port == 0) return http.bind_to_any_port(options.host);
+  return http.bind_to_port(options.host, options.port) ? options.port : -1;
+}
+
 Dashboard::Dashboard(DashboardServerOptions options, std::vector<DashboardPlan> plans)
     : impl_(std::make_unique<Impl>()), state_(std::make_unique<DashboardState>(options.dashboard)) {
   Impl& m = *impl_;
@@ -684,240 +946,14 @@ Dashboard::Dashboard(DashboardServerOptions options, std::vector<DashboardPlan> 
     if (!m.cot->Open(&error)) throw std::runtime_error(error);
     spdlog::info("CoT to {} for {} georeferenced plans", m.options.cot->to, placed.size());
   }
-  m.participant =
-      std::make_unique<platform::Participant>(m.options.domain_id, m.options.cyclone_config,
-                                              m.options.security ? &*m.options.security : nullptr);
-  m.waiter = std::make_unique<platform::Waiter>(*m.participant);
-  for (Topic t :
-       {Topic::kStatus, Topic::kAlignment, Topic::kPlanTrack, Topic::kPlanPose, Topic::kExplored}) {
-    m.readers.push_back(std::make_unique<platform::Reader>(*m.participant, t));
-    m.waiter->Attach(*m.readers.back());
-  }
-  try {
-    // The lead's part. On a secured domain whose permissions predate these topics the
-    // dashboard still shows the wearers.
-    std::vector<std::unique_ptr<platform::Reader>> team;
-    for (Topic t : {Topic::kAlert, Topic::kMarker, Topic::kCommandReply})
-      team.push_back(std::make_unique<platform::Reader>(*m.participant, t));
-    m.marker_writer = std::make_unique<platform::Writer>(*m.participant, Topic::kMarker);
-    m.command_writer = std::make_unique<platform::Writer>(*m.participant, Topic::kCommand);
-    for (auto& reader : team) {
-      m.waiter->Attach(*reader);
-      m.readers.push_back(std::move(reader));
-    }
-  } catch (const std::exception& e) {
-    spdlog::warn("DDS: {}: no alerts, markers or routes on this domain (not granted)", e.what());
-    m.marker_writer.reset();
-    m.command_writer.reset();
-  }
-  if (!m.options.markers_path.empty()) {
-    platform::MarkerBoard saved;
-    std::string error;
-    if (!saved.Load(m.options.markers_path, &error))
-      spdlog::warn("markers {} not read: {}", m.options.markers_path, error);
-    for (const auto& [id, marker] : saved.markers()) {
-      std::string why;
-      state_->OnMarker(marker, &why);
-      m.PublishMarker(marker);
-    }
-    if (!saved.markers().empty())
-      spdlog::info("{} markers from {}", saved.markers().size(), m.options.markers_path);
-  }
-
+  m.JoinDds();
+  m.LoadMarkers(*state_);
   // One thread per open event stream: a team's few dashboards, not the public.
   m.http.new_task_queue = [] { return new httplib::ThreadPool(64); };
-  for (const DashboardAsset* a = kDashboardAssets; a->path; ++a) {
-    const DashboardAsset asset = *a;
-    m.http.Get(asset.path, [asset](const httplib::Request&, httplib::Response& res) {
-      res.set_content(asset.body, asset.content_type);
-    });
-  }
-  m.http.Get("/api/plans", [this](const httplib::Request&, httplib::Response& res) {
-    res.set_content(impl_->plans_json, "application/json");
-  });
-  m.http.Get(R"(/api/explored/([^/]+)\.png)",
-             [this](const httplib::Request& req, httplib::Response& res) {
-               const std::string png = state_->ExploredPng(req.matches[1]);
-               if (png.empty()) {
-                 res.status = 404;
-                 res.set_content("no explored map of that plan yet\n", "text/plain");
-                 return;
-               }
-               res.set_header("Cache-Control", "no-cache");
-               res.set_content(png, "image/png");
-             });
-  // The rooms that hold a SEARCHED marker, green, one pixel a cell of the plan's room grid.
-  m.http.Get(
-      R"(/api/searched/([^/]+)\.png)", [this](const httplib::Request& req, httplib::Response& res) {
-        auto rooms = impl_->rooms.find(req.matches[1]);
-        std::vector<int> searched;
-        if (rooms != impl_->rooms.end())
-          for (const Eigen::Vector2d& p : state_->SearchedOn(req.matches[1]))
-            if (const int room = rooms->second->RoomAt(p); room >= 0) searched.push_back(room);
-        if (searched.empty()) {
-          res.status = 404;
-          res.set_content("no room of that plan searched yet\n", "text/plain");
-          return;
-        }
-        const RoomMap& map = *rooms->second;
-        const GridGeometry& g = map.grid();
-        std::vector<unsigned char> rgba(g.size() * 4, 0);
-        for (int cell = 0; cell < static_cast<int>(g.size()); ++cell) {
-          const int room = map.RoomAt(g.CellCentre(cell));
-          if (room < 0 || std::find(searched.begin(), searched.end(), room) == searched.end())
-            continue;
-          unsigned char* px = &rgba[static_cast<size_t>(cell) * 4];
-          px[0] = 0, px[1] = 158, px[2] = 115, px[3] = 70;  // Okabe-Ito green
-        }
-        res.set_header("Cache-Control", "no-cache");
-        res.set_content(
-            EncodePngBottomUp(static_cast<uint32_t>(g.nx), static_cast<uint32_t>(g.ny), rgba),
-            "image/png");
-      });
-  m.http.Get("/api/devices", [this](const httplib::Request&, httplib::Response& res) {
-    DashboardState::Cursor fresh;
-    res.set_content(state_->Frame(&fresh, Clock::now()), "application/json");
-  });
-  // Server-sent events: the whole picture first, then what changed, at most every
-  // frame_period_s, and at least every second (ages and staleness move on their own).
-  m.http.Get("/events", [this](const httplib::Request& req, httplib::Response& res) {
-    struct Stream {
-      DashboardState::Cursor cursor;
-      bool started = false;
-    };
-    auto stream = std::make_shared<Stream>();
-    const auto period = std::chrono::duration_cast<std::chrono::milliseconds>(
-        std::chrono::duration<double>(impl_->options.dashboard.frame_period_s));
-    spdlog::info("browser {} connected ({} open)", req.remote_addr, ++impl_->clients);
-    res.set_header("Cache-Control", "no-cache");
-    res.set_header("X-Accel-Buffering", "no");
-    res.set_chunked_content_provider(
-        "text/event-stream",
-        [this, stream, period](size_t, httplib::DataSink& sink) {
-          if (stream->started) {
-            std::this_thread::sleep_for(period);
-            state_->WaitForChange(stream->cursor.version, std::chrono::seconds(1));
-          }
-          stream->started = true;
-          if (state_->stopped()) {
-            sink.done();
-            return true;
-          }
-          const std::string event =
-              "data: " + state_->Frame(&stream->cursor, Clock::now()) + "\n\n";
-          return sink.write(event.data(), event.size());
-        },
-        [this, remote = req.remote_addr](bool) {
-          spdlog::info("browser {} disconnected ({} open)", remote, --impl_->clients);
-        });
-  });
-  // A marker placed or removed by the lead: {"kind", "plan", "floor", "x", "y", "text",
-  // "radius_m"}, or {"id", "removed": true}.
-  m.http.Post("/api/markers", [this](const httplib::Request& req, httplib::Response& res) {
-    const json body = json::parse(req.body, nullptr, false);
-    auto refuse = [&](const std::string& why) {
-      res.status = 400;
-      res.set_content(json{{"error", why}}.dump(), "application/json");
-    };
-    if (!body.is_object()) return refuse("not a JSON object");
-    v1::Marker marker;
-    const int64_t now = platform::WallClockNs();
-    if (body.value("removed", false)) {
-      const std::optional<v1::Marker> held = state_->MarkerById(body.value("id", ""));
-      if (!held) return refuse("no such marker");
-      marker = *held;
-      marker.set_removed(true);
-      marker.set_revision(held->revision() + 1);
-    } else {
-      v1::Marker::Kind kind{};
-      if (!platform::ParseMarkerKind(body.value("kind", ""), &kind))
-        return refuse("kind must be hazard, victim, searched, blocked or note");
-      if (!body.contains("x") || !body.contains("y") || !body["x"].is_number() ||
-          !body["y"].is_number())
-        return refuse("x and y (plan metres) are needed");
-      marker.set_id(impl_->options.name + "-" + std::to_string(now / 1'000'000) + "-" +
-                    std::to_string(++impl_->placed));
-      marker.set_kind(kind);
-      marker.set_plan_id(body.value("plan", ""));
-      marker.set_floor(body.value("floor", ""));
-      marker.set_x(body["x"].get<double>());
-      marker.set_y(body["y"].get<double>());
-      marker.set_radius_m(body.value("radius_m", 0.0));
-      marker.set_text(body.value("text", ""));
-      marker.set_author(impl_->options.name);
-      marker.set_revision(1);
-    }
-    marker.set_created_unix_ns(now);
-    std::string why;
-    if (!state_->OnMarker(marker, &why)) return refuse(why.empty() ? "not newer" : why);
-    impl_->PublishMarker(marker);
-    state_->SaveMarkers(impl_->options.markers_path);
-    res.set_content(json{{"id", marker.id()}}.dump(), "application/json");
-  });
-  // The lead acknowledges a wearer's alert: {"device"}; the wearer's daemon marks it
-  // acknowledged (Command.acknowledge_alert) and every dashboard sees it so.
-  m.http.Post("/api/alerts/ack", [this](const httplib::Request& req, httplib::Response& res) {
-    const json body = json::parse(req.body, nullptr, false);
-    const std::string device = body.is_object() ? body.value("device", "") : "";
-    if (device.empty() || device.size() > 128) {
-      res.status = 400;
-      res.set_content(json{{"error", "device is needed"}}.dump(), "application/json");
-      return;
-    }
-    v1::Command ack;
-    ack.mutable_acknowledge_alert()->set_by(impl_->options.name);
-    impl_->SendCommand(device, ack);
-    res.status = 202;
-    res.set_content(json{{"device", device}}.dump(), "application/json");
-  });
-  // A wearer's way out or way back, asked of its daemon: {"device", "to": "exit" or
-  // "backtrack"}; the reply's path, or why there is none.
-  m.http.Post("/api/route", [this](const httplib::Request& req, httplib::Response& res) {
-    const json body = json::parse(req.body, nullptr, false);
-    const std::string device = body.is_object() ? body.value("device", "") : "";
-    const std::string to = body.is_object() ? body.value("to", "") : "";
-    if (device.empty() || device.size() > 128 || (to != "exit" && to != "backtrack")) {
-      res.status = 400;
-      res.set_content(json{{"error", "device and to (exit or backtrack) are needed"}}.dump(),
-                      "application/json");
-      return;
-    }
-    v1::Command route;
-    route.mutable_route()->set_destination(to == "exit" ? v1::Command::Route::EXIT
-                                                        : v1::Command::Route::BACKTRACK);
-    const std::optional<v1::CommandReply> reply =
-        impl_->Ask(device, route, std::chrono::seconds(5));
-    if (!reply) {
-      res.status = 504;
-      res.set_content(json{{"error", "no answer from the wearer's daemon"}}.dump(),
-                      "application/json");
-      return;
-    }
-    json path = json::array();
-    for (const v1::PlanPoint& p : reply->route().path()) path.push_back({Mm(p.x()), Mm(p.y())});
-    res.status = reply->ok() ? 200 : 409;
-    res.set_content(json{{"device", device},
-                         {"to", to},
-                         {"ok", reply->ok()},
-                         {"message", reply->message()},
-                         {"length_m", Mm(reply->route().length_m())},
-                         {"path", std::move(path)}}
-                        .dump(-1, ' ', false, json::error_handler_t::replace),
-                    "application/json");
-  });
-  m.http.set_logger([](const httplib::Request& req, const httplib::Response& res) {
-    if (res.status >= 400) spdlog::info("{} {} -> {}", req.method, req.path, res.status);
-  });
-
-  // Address reuse only (a restart binds at once), never port sharing: a second dashboard
-  // on a port in use is an error, not a silent half of the requests.
-  m.http.set_socket_options([](socket_t sock) {
-    int yes = 1;
-    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
-  });
-  port_ = m.options.port == 0
-              ? m.http.bind_to_any_port(m.options.host)
-              : (m.http.bind_to_port(m.options.host, m.options.port) ? m.options.port : -1);
+  m.ServeReads(*state_);
+  m.ServeEvents(*state_);
+  m.ServeLead(*state_);
+  port_ = m.Bind();
   if (port_ <= 0)
     throw std::runtime_error("cannot listen on " + m.options.host + ":" +
                              std::to_string(m.options.port));
