@@ -704,6 +704,17 @@ std::string SearchedRoomsPng(const RoomMap& map, const std::vector<Eigen::Vector
   return EncodePngBottomUp(static_cast<uint32_t>(g.nx), static_cast<uint32_t>(g.ny), rgba);
 }
 
+// A map drawn fresh each time, or 404 with why there is none.
+void SendPng(httplib::Response& res, const std::string& png, const char* missing) {
+  if (png.empty()) {
+    res.status = 404;
+    res.set_content(std::string(missing) + "\n", "text/plain");
+    return;
+  }
+  res.set_header("Cache-Control", "no-cache");
+  res.set_content(png, "image/png");
+}
+
 void Refuse(httplib::Response& res, int status, const std::string& why) {
   res.status = status;
   res.set_content(json{{"error", why}}.dump(), "application/json");
@@ -766,14 +777,7 @@ void Dashboard::Impl::ServeReads(DashboardState& state) {
   });
   http.Get(R"(/api/explored/([^/]+)\.png)",
            [&state](const httplib::Request& req, httplib::Response& res) {
-             const std::string png = state.ExploredPng(req.matches[1]);
-             if (png.empty()) {
-               res.status = 404;
-               res.set_content("no explored map of that plan yet\n", "text/plain");
-               return;
-             }
-             res.set_header("Cache-Control", "no-cache");
-             res.set_content(png, "image/png");
+             SendPng(res, state.ExploredPng(req.matches[1]), "no explored map of that plan yet");
            });
   http.Get(R"(/api/searched/([^/]+)\.png)", [this, &state](const httplib::Request& req,
                                                            httplib::Response& res) {
@@ -781,13 +785,7 @@ void Dashboard::Impl::ServeReads(DashboardState& state) {
     const std::string png = map == rooms.end()
                                 ? std::string()
                                 : SearchedRoomsPng(*map->second, state.SearchedOn(req.matches[1]));
-    if (png.empty()) {
-      res.status = 404;
-      res.set_content("no room of that plan searched yet\n", "text/plain");
-      return;
-    }
-    res.set_header("Cache-Control", "no-cache");
-    res.set_content(png, "image/png");
+    SendPng(res, png, "no room of that plan searched yet");
   });
   http.Get("/api/devices", [&state](const httplib::Request&, httplib::Response& res) {
     DashboardState::Cursor fresh;
