@@ -617,64 +617,105 @@ class HeadSwing {
   double phase1_, phase2_, phase3_;
 };
 
-std::vector<HeadSample> GenerateWalk(const FreeSpace& fs, Scenario scenario,
-                                     const SimulatorOptions& o, SplitMix64& rng) {
-  const std::vector<int>& cells = fs.cells();
-  auto random_point = [&](double min_clearance) {
-    Eigen::Vector2d p = fs.CellCentre(cells[rng.Next() % cells.size()]);
-    for (int i = 0; i < 20 && fs.Clearance(p) < min_clearance; ++i)
-      p = fs.CellCentre(cells[rng.Next() % cells.size()]);
+// Goals: random places, not too close. Of a few candidates, the corridor scenario takes
+// the farthest from here, so that the walk strings long hallways together; the others the
+// farthest from every goal so far, so that the walk explores the building (uniform goals
+// alone would keep returning to its largest room).
+class GoalChooser {
+ public:
+  GoalChooser(const FreeSpace& fs, Scenario scenario, double min_goal_distance_m, SplitMix64& rng)
+      : fs_(fs), scenario_(scenario), min_goal_distance_m_(min_goal_distance_m), rng_(rng) {}
+
+  // A random free cell's centre, tried a few times for min_clearance from the walls.
+  Eigen::Vector2d RandomPoint(double min_clearance) {
+    const std::vector<int>& cells = fs_.cells();
+    Eigen::Vector2d p = fs_.CellCentre(cells[rng_.Next() % cells.size()]);
+    for (int i = 0; i < 20 && fs_.Clearance(p) < min_clearance; ++i)
+      p = fs_.CellCentre(cells[rng_.Next() % cells.size()]);
     return p;
-  };
-  // Goals: random places, not too close. Of a few candidates, the corridor scenario takes
-  // the farthest from here, so that the walk strings long hallways together; the others
-  // the farthest from every goal so far, so that the walk explores the building (uniform
-  // goals alone would keep returning to its largest room).
-  std::vector<Eigen::Vector2d> visited;
-  auto choose_goal = [&](const Eigen::Vector2d& from) {
+  }
+  // Where the walk starts: a goal visited.
+  Eigen::Vector2d Start() {
+    const Eigen::Vector2d p = RandomPoint(0.5);
+    visited_.push_back(p);
+    return p;
+  }
+  Eigen::Vector2d Next(const Eigen::Vector2d& from) {
     auto score = [&](const Eigen::Vector2d& p) {
-      if (scenario == Scenario::kCorridor) return (p - from).norm();
+      if (scenario_ == Scenario::kCorridor) return (p - from).norm();
       double nearest = 1e300;
-      for (const Eigen::Vector2d& v : visited) nearest = std::min(nearest, (p - v).norm());
+      for (const Eigen::Vector2d& v : visited_) nearest = std::min(nearest, (p - v).norm());
       return nearest;
     };
-    Eigen::Vector2d best = random_point(0.5);
-    const int candidates = scenario == Scenario::kCorridor ? 8 : 4;
+    Eigen::Vector2d best = RandomPoint(0.5);
+    const int candidates = scenario_ == Scenario::kCorridor ? 8 : 4;
     for (int tries = 0, found = 0; tries < 40 && found < candidates; ++tries) {
-      const Eigen::Vector2d p = random_point(0.5);
-      if ((p - from).norm() < o.min_goal_distance_m) continue;
+      const Eigen::Vector2d p = RandomPoint(0.5);
+      if ((p - from).norm() < min_goal_distance_m_) continue;
       if (found == 0 || score(p) > score(best)) best = p;
       ++found;
     }
-    visited.push_back(best);
+    visited_.push_back(best);
     return best;
-  };
+  }
 
+ private:
+  const FreeSpace& fs_;
+  const Scenario scenario_;
+  const double min_goal_distance_m_;
+  SplitMix64& rng_;
+  std::vector<Eigen::Vector2d> visited_;
+};
+
+// Stopped: scanning the room, the head swinging `amplitude` to either side once.
+struct Stop {
+  double total = 0, elapsed = 0, amplitude = 0;
+  double Scan() const { return amplitude * std::sin(2 * M_PI * elapsed / total); }
+};
+
+// The stop at the end of a leg: a random length, and a scan no faster than about
+// 1.6 rad/s at its peak (faster is not looking any more).
+Stop NextStop(const SimulatorOptions& o, SplitMix64& rng) {
+  Stop stop;
+  stop.total = rng.Uniform(o.min_stop_s, o.max_stop_s);
+  stop.amplitude = std::min(o.max_scan_rad * rng.Uniform(0.5, 1.0), 0.25 * stop.total) *
+                   (rng.Next() % 2 ? 1 : -1);
+  return stop;
+}
+
+// The body turned (at a human rate, over dt) towards the point ahead of it.
+double TurnTowards(double body, const Eigen::Vector2d& ahead, const SimulatorOptions& o) {
+  if (ahead.norm() <= 1e-6) return body;
+  const double turn = WrapAngle(std::atan2(ahead.y(), ahead.x()) - body);
+  const double max_turn = o.max_turn_rate_rad_s * o.pose_period_s;
+  return WrapAngle(body + std::clamp(turn, -max_turn, max_turn));
+}
+
+std::vector<HeadSample> GenerateWalk(const FreeSpace& fs, Scenario scenario,
+                                     const SimulatorOptions& o, SplitMix64& rng) {
+  GoalChooser goals(fs, scenario, o.min_goal_distance_m, rng);
   const double dt = o.pose_period_s;
   const HeadSwing swing(rng);
-  Eigen::Vector2d position = random_point(0.5);
-  visited.push_back(position);
+  Eigen::Vector2d position = goals.Start();
   double body = rng.Uniform(-M_PI, M_PI);
-  // Stopped: scanning the room, the head swinging scan_amplitude to either side once.
   bool stopped = true;
-  double stop_total = o.first_stop_s, stop_elapsed = 0.0;
-  double scan_amplitude = std::min(o.max_scan_rad, 0.25 * stop_total) * (rng.Next() % 2 ? 1 : -1);
+  Stop stop;
+  stop.total = o.first_stop_s;
+  stop.amplitude = std::min(o.max_scan_rad, 0.25 * stop.total) * (rng.Next() % 2 ? 1 : -1);
   Leg leg;
   double along = 0.0, walked = 0.0;
   std::vector<HeadSample> out;
   for (double t = 0.0; t <= o.max_duration_s; t += dt) {
     // The head: looking around while walking, the scan when stopped, pitch swinging.
-    const double scan =
-        stopped ? scan_amplitude * std::sin(2 * M_PI * stop_elapsed / stop_total) : 0.0;
+    const double scan = stopped ? stop.Scan() : 0.0;
     out.push_back({position, WrapAngle(body + swing.Look(t, o) + scan), swing.Pitch(t, o)});
     if (walked >= o.target_length_m) break;
-
     if (stopped) {
-      stop_elapsed += dt;
-      if (stop_elapsed < stop_total) continue;
+      stop.elapsed += dt;
+      if (stop.elapsed < stop.total) continue;
       std::vector<Eigen::Vector2d> path;
       for (int tries = 0; tries < 20 && path.size() < 2; ++tries)
-        path = fs.Path(position, choose_goal(position));
+        path = fs.Path(position, goals.Next(position));
       if (path.size() < 2) break;  // nowhere to go: the walk ends here
       leg = MakeLeg(std::move(path), rng.Uniform(o.min_speed_mps, o.max_speed_mps));
       along = 0.0;
@@ -684,20 +725,11 @@ std::vector<HeadSample> GenerateWalk(const FreeSpace& fs, Scenario scenario,
     const Eigen::Vector2d next = leg.At(along);
     walked += (next - position).norm();
     position = next;
-    // The body turns (at a human rate) towards the path a metre ahead.
-    const Eigen::Vector2d ahead = leg.At(along + 1.0) - position;
-    if (ahead.norm() > 1e-6) {
-      const double turn = WrapAngle(std::atan2(ahead.y(), ahead.x()) - body);
-      const double max_turn = o.max_turn_rate_rad_s * dt;
-      body = WrapAngle(body + std::clamp(turn, -max_turn, max_turn));
-    }
+    // The body turns towards the path a metre ahead.
+    body = TurnTowards(body, leg.At(along + 1.0) - position, o);
     if (along >= leg.Length()) {
       stopped = true;
-      stop_elapsed = 0.0;
-      stop_total = rng.Uniform(o.min_stop_s, o.max_stop_s);
-      // Swinging faster than about 1.6 rad/s at the peak is not looking any more.
-      scan_amplitude = std::min(o.max_scan_rad * rng.Uniform(0.5, 1.0), 0.25 * stop_total) *
-                       (rng.Next() % 2 ? 1 : -1);
+      stop = NextStop(o, rng);
     }
   }
   return out;
