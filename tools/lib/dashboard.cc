@@ -286,6 +286,91 @@ std::vector<Eigen::Vector2d> DashboardState::SearchedOn(const std::string& plan_
   return out;
 }
 
+json DashboardState::DeviceJson(const std::string& id, const Device& d) const {
+  json dev = {{"id", id}};
+  const auto name = options_.names.find(id);
+  dev["name"] = name == options_.names.end() ? id : name->second;
+  dev["plan"] = d.status ? d.status->plan_id() : "";
+  dev["state"] = d.status ? v1::DaemonStatus::State_Name(d.status->state()) : "";
+  if (d.status && !d.status->message().empty()) dev["message"] = d.status->message();
+  if (d.pose) {
+    const v1::PlanPose& p = *d.pose;
+    dev["pose"] = {{"x", Mm(p.x())},
+                   {"y", Mm(p.y())},
+                   {"heading", std::round(p.heading() * 1e4) / 1e4},
+                   {"floor", p.floor()},
+                   {"flag", FlagClass(p.reliability().flag())},
+                   {"probability", std::round(p.reliability().probability() * 1e3) / 1e3},
+                   {"reason", p.reliability().reason()},
+                   {"alignment_version", p.alignment_version()},
+                   {"stamp_ns", p.source_stamp_ns()}};
+  }
+  if (d.alert && d.alert->kind() != v1::Alert::NONE)
+    dev["alert"] = {{"kind", d.alert->kind() == v1::Alert::NO_MOTION ? "no_motion" : "pre_alert"},
+                    {"still_s", std::round(d.alert->still_s() * 10.0) / 10.0},
+                    {"acknowledged", d.alert->acknowledged()},
+                    {"by", d.alert->acknowledged_by()}};
+  if (d.alignment)
+    dev["alignment"] = {{"version", d.alignment->version()},
+                        {"source", v1::Alignment::Source_Name(d.alignment->source())},
+                        {"rmse_m", Mm(d.alignment->stats().inlier_rmse_m())}};
+  return dev;
+}
+
+json DashboardState::TrailJson(const std::string& id, const Device& d, Cursor* cursor) const {
+  // The trail points this browser lacks; all of them after a re-projection.
+  auto [epoch, next] = cursor->trails[id];
+  const bool reset = epoch != d.trail_epoch || next < d.trail_first_seq;
+  const uint64_t from = reset ? d.trail_first_seq : next;
+  json points = json::array();
+  for (uint64_t s = from; s < d.trail_first_seq + d.trail.size(); ++s) {
+    const TrailPoint& t = d.trail[s - d.trail_first_seq];
+    points.push_back({Mm(t.x), Mm(t.y), FlagClass(t.flag)});
+  }
+  cursor->trails[id] = {d.trail_epoch, d.trail_first_seq + d.trail.size()};
+  if (!reset && points.empty()) return nullptr;
+  return {{"reset", reset}, {"points", std::move(points)}};
+}
+
+json DashboardState::ExploredJson() const {
+  std::set<std::string> plans;
+  for (const auto& [id, d] : devices_)
+    if (d.explored) plans.insert(d.explored->plan_id());
+  json explored = json::object();
+  for (const std::string& plan : plans) {
+    const std::vector<const Device*> maps = ExploredOf(plan);
+    const v1::ExploredMap& g = *maps.front()->explored;
+    std::map<uint32_t, const v1::ExploredMap::Room*> visited;  // the union, by room id
+    for (const Device* d : maps)
+      for (const auto& r : d->explored->visited()) visited.emplace(r.id(), &r);
+    json rooms = json::array();
+    for (const auto& [id, r] : visited) rooms.push_back({Mm(r->x()), Mm(r->y())});
+    explored[plan] = {
+        {"version", explored_version_}, {"origin", {Mm(g.origin_x()), Mm(g.origin_y())}},
+        {"cell_m", g.cell_m()},         {"width", g.width()},
+        {"height", g.height()},         {"devices", maps.size()},
+        {"rooms", g.rooms()},           {"visited", std::move(rooms)}};
+  }
+  return explored;
+}
+
+json DashboardState::MarkersJson() const {
+  // Every marker, removed ones as such: few, and the page replaces its set.
+  json list = json::array();
+  for (const auto& [id, m] : markers_.markers())
+    list.push_back({{"id", id},
+                    {"kind", platform::MarkerKindName(m.kind())},
+                    {"plan", m.plan_id()},
+                    {"floor", m.floor()},
+                    {"x", Mm(m.x())},
+                    {"y", Mm(m.y())},
+                    {"radius_m", Mm(m.radius_m())},
+                    {"text", m.text()},
+                    {"author", m.author()},
+                    {"removed", m.removed()}});
+  return list;
+}
+
 std::string DashboardState::Frame(Cursor* cursor, Clock::time_point now) const {
   std::lock_guard lock(mu_);
   json frame = {{"stale_after_s", options_.stale_after_s}};
@@ -298,81 +383,16 @@ std::string DashboardState::Frame(Cursor* cursor, Clock::time_point now) const {
     ages[id] = std::round(age * 10.0) / 10.0;
     if (age > options_.stale_after_s) stale.push_back(id);
     if (d.version <= cursor->version) continue;
-    json dev = {{"id", id}};
-    const auto name = options_.names.find(id);
-    dev["name"] = name == options_.names.end() ? id : name->second;
-    dev["plan"] = d.status ? d.status->plan_id() : "";
-    dev["state"] = d.status ? v1::DaemonStatus::State_Name(d.status->state()) : "";
-    if (d.status && !d.status->message().empty()) dev["message"] = d.status->message();
-    if (d.pose) {
-      const v1::PlanPose& p = *d.pose;
-      dev["pose"] = {{"x", Mm(p.x())},
-                     {"y", Mm(p.y())},
-                     {"heading", std::round(p.heading() * 1e4) / 1e4},
-                     {"floor", p.floor()},
-                     {"flag", FlagClass(p.reliability().flag())},
-                     {"probability", std::round(p.reliability().probability() * 1e3) / 1e3},
-                     {"reason", p.reliability().reason()},
-                     {"alignment_version", p.alignment_version()},
-                     {"stamp_ns", p.source_stamp_ns()}};
-    }
-    if (d.alert && d.alert->kind() != v1::Alert::NONE)
-      dev["alert"] = {{"kind", d.alert->kind() == v1::Alert::NO_MOTION ? "no_motion" : "pre_alert"},
-                      {"still_s", std::round(d.alert->still_s() * 10.0) / 10.0},
-                      {"acknowledged", d.alert->acknowledged()},
-                      {"by", d.alert->acknowledged_by()}};
-    if (d.alignment)
-      dev["alignment"] = {{"version", d.alignment->version()},
-                          {"source", v1::Alignment::Source_Name(d.alignment->source())},
-                          {"rmse_m", Mm(d.alignment->stats().inlier_rmse_m())}};
-    // The trail points this browser lacks; all of them after a re-projection.
-    auto [epoch, next] = cursor->trails[id];
-    const bool reset = epoch != d.trail_epoch || next < d.trail_first_seq;
-    const uint64_t from = reset ? d.trail_first_seq : next;
-    json points = json::array();
-    for (uint64_t s = from; s < d.trail_first_seq + d.trail.size(); ++s) {
-      const TrailPoint& t = d.trail[s - d.trail_first_seq];
-      points.push_back({Mm(t.x), Mm(t.y), FlagClass(t.flag)});
-    }
-    if (reset || !points.empty()) dev["trail"] = {{"reset", reset}, {"points", std::move(points)}};
-    cursor->trails[id] = {d.trail_epoch, d.trail_first_seq + d.trail.size()};
+    json dev = DeviceJson(id, d);
+    if (json trail = TrailJson(id, d, cursor); !trail.is_null()) dev["trail"] = std::move(trail);
     out.push_back(std::move(dev));
   }
   if (cursor->explored_version < explored_version_) {
-    std::set<std::string> plans;
-    for (const auto& [id, d] : devices_)
-      if (d.explored) plans.insert(d.explored->plan_id());
-    json& explored = frame["explored"] = json::object();
-    for (const std::string& plan : plans) {
-      const std::vector<const Device*> maps = ExploredOf(plan);
-      const v1::ExploredMap& g = *maps.front()->explored;
-      std::map<uint32_t, const v1::ExploredMap::Room*> visited;  // the union, by room id
-      for (const Device* d : maps)
-        for (const auto& r : d->explored->visited()) visited.emplace(r.id(), &r);
-      json rooms = json::array();
-      for (const auto& [id, r] : visited) rooms.push_back({Mm(r->x()), Mm(r->y())});
-      explored[plan] = {
-          {"version", explored_version_}, {"origin", {Mm(g.origin_x()), Mm(g.origin_y())}},
-          {"cell_m", g.cell_m()},         {"width", g.width()},
-          {"height", g.height()},         {"devices", maps.size()},
-          {"rooms", g.rooms()},           {"visited", std::move(rooms)}};
-    }
+    frame["explored"] = ExploredJson();
     cursor->explored_version = explored_version_;
   }
   if (cursor->markers_revision != markers_.revision()) {
-    // Every marker, removed ones as such: few, and the page replaces its set.
-    json& list = frame["markers"] = json::array();
-    for (const auto& [id, m] : markers_.markers())
-      list.push_back({{"id", id},
-                      {"kind", platform::MarkerKindName(m.kind())},
-                      {"plan", m.plan_id()},
-                      {"floor", m.floor()},
-                      {"x", Mm(m.x())},
-                      {"y", Mm(m.y())},
-                      {"radius_m", Mm(m.radius_m())},
-                      {"text", m.text()},
-                      {"author", m.author()},
-                      {"removed", m.removed()}});
+    frame["markers"] = MarkersJson();
     cursor->markers_revision = markers_.revision();
   }
   cursor->version = version_;

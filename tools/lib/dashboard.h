@@ -17,6 +17,8 @@
 #include <thread>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "core/floor_plan.h"
 #include "core/rooms.h"
 #include "floorpose/v1/floorpose.pb.h"
@@ -109,6 +111,12 @@ class DashboardState {
   void Append(Device& d, const v1::PlanPose& p);
   // The devices' grids of a plan that share the first one's geometry (by device id).
   std::vector<const Device*> ExploredOf(const std::string& plan_id) const;  // under mu_
+  // Parts of a Frame, under mu_: a device's name, state, pose, alert and alignment; the
+  // trail points *cursor lacks (advancing it); every plan's explored grid; every marker.
+  nlohmann::json DeviceJson(const std::string& id, const Device& d) const;
+  nlohmann::json TrailJson(const std::string& id, const Device& d, Cursor* cursor) const;
+  nlohmann::json ExploredJson() const;
+  nlohmann::json MarkersJson() const;
 
   DashboardOptions options_;
   mutable std::mutex mu_;
