@@ -615,20 +615,117 @@ std::string BarLabel(double metres) {
 
 }  // namespace
 
-std::string ToSvg(const FloorPlan& plan, const EvalReport& r) {
-  // Plan metres to pixels, y up on the plan, down in SVG; the error plot to the right.
-  const double margin = 2.0, scale = 20.0, plot_w = 420, gap = 30;
-  Eigen::Vector2d lo = plan.min, hi = plan.max;
+namespace {
+
+// Plan metres to SVG pixels: y up on the plan, down in SVG, `margin` metres about the plan
+// and both tracks.
+struct SvgMap {
+  static constexpr double kScale = 20.0;  // pixels a metre
+  Eigen::Vector2d lo, hi;
+  double X(double x) const { return (x - lo.x()) * kScale; }
+  double Y(double y) const { return (hi.y() - y) * kScale; }
+  double width() const { return (hi.x() - lo.x()) * kScale; }
+  double height() const { return (hi.y() - lo.y()) * kScale; }
+};
+
+SvgMap MapOf(const FloorPlan& plan, const EvalReport& r, double margin) {
+  SvgMap m{plan.min, plan.max};
   for (const EvalPose& p : r.track) {
-    lo = lo.cwiseMin(Eigen::Vector2d(p.x, p.y)).cwiseMin(Eigen::Vector2d(p.true_x, p.true_y));
-    hi = hi.cwiseMax(Eigen::Vector2d(p.x, p.y)).cwiseMax(Eigen::Vector2d(p.true_x, p.true_y));
+    m.lo = m.lo.cwiseMin(Eigen::Vector2d(p.x, p.y)).cwiseMin(Eigen::Vector2d(p.true_x, p.true_y));
+    m.hi = m.hi.cwiseMax(Eigen::Vector2d(p.x, p.y)).cwiseMax(Eigen::Vector2d(p.true_x, p.true_y));
   }
-  lo -= Eigen::Vector2d::Constant(margin);
-  hi += Eigen::Vector2d::Constant(margin);
-  auto X = [&](double x) { return (x - lo.x()) * scale; };
-  auto Y = [&](double y) { return (hi.y() - y) * scale; };
-  const double map_w = (hi.x() - lo.x()) * scale, map_h = (hi.y() - lo.y()) * scale;
-  const double height = std::max(map_h, 260.0), width = map_w + gap + plot_w;
+  m.lo -= Eigen::Vector2d::Constant(margin);
+  m.hi += Eigen::Vector2d::Constant(margin);
+  return m;
+}
+
+// The plan's walls as one path, to a tenth of a pixel (5 mm): a raster plan has tens of
+// thousands of segments. The truth thin and dashed; the estimate in runs of one colour,
+// blue while RELIABLE, orange while not.
+void SvgWallsAndTracks(std::ostringstream& s, const FloorPlan& plan, const EvalReport& r,
+                       const SvgMap& m) {
+  s << "<path fill=\"none\" stroke=\"#555\" stroke-width=\"2\" d=\"";
+  s.precision(1);
+  for (const Segment& seg : plan.segments)
+    s << "M" << m.X(seg.a.x()) << " " << m.Y(seg.a.y()) << "L" << m.X(seg.b.x()) << " "
+      << m.Y(seg.b.y());
+  s << "\"/>\n";
+  s << "<polyline fill=\"none\" stroke=\"" << kTruthColour
+    << "\" stroke-width=\"1.5\" stroke-dasharray=\"6 4\" points=\"";
+  for (const EvalPose& p : r.track) s << m.X(p.true_x) << "," << m.Y(p.true_y) << " ";
+  s << "\"/>\n";
+  for (size_t i = 1; i < r.track.size();) {
+    const bool reliable = r.track[i].reliable;
+    s << "<polyline fill=\"none\" stroke-width=\"2.5\" stroke=\""
+      << (reliable ? kReliableColour : kOtherColour) << "\" points=\"" << m.X(r.track[i - 1].x)
+      << "," << m.Y(r.track[i - 1].y);
+    for (; i < r.track.size() && r.track[i].reliable == reliable; ++i)
+      s << " " << m.X(r.track[i].x) << "," << m.Y(r.track[i].y);
+    s << "\"/>\n";
+  }
+  s.precision(2);
+}
+
+// The markers, the truth's and the estimate's; a scale bar in metres, bottom left; the
+// legend.
+void SvgMarkersAndLegend(std::ostringstream& s, const EvalReport& r, const SvgMap& m) {
+  for (const EvalPose& p : r.track) {
+    if (!p.marker) continue;
+    s << "<circle cx=\"" << m.X(p.true_x) << "\" cy=\"" << m.Y(p.true_y)
+      << "\" r=\"4\" fill=\"none\" stroke=\"" << kTruthColour << "\" stroke-width=\"1.5\"/>"
+      << "<circle cx=\"" << m.X(p.x) << "\" cy=\"" << m.Y(p.y) << "\" r=\"4\" fill=\""
+      << (p.reliable ? kReliableColour : kOtherColour) << "\"/><text x=\"" << m.X(p.true_x) + 6
+      << "\" y=\"" << m.Y(p.true_y) - 6 << "\" font-size=\"13\">" << p.marker << "</text>\n";
+  }
+  const double bar = ScaleBarLength(m.hi.x() - m.lo.x());
+  const double map_h = m.height(), bar_px = bar * SvgMap::kScale;
+  s << "<path d=\"M10 " << map_h - 12 << "h" << bar_px << "M10 " << map_h - 17 << "v10M"
+    << 10 + bar_px << " " << map_h - 17 << "v10\" stroke=\"black\" stroke-width=\"2\"/>"
+    << "<text x=\"" << 14 + bar_px << "\" y=\"" << map_h - 8 << "\" font-size=\"13\">"
+    << BarLabel(bar) << "</text>\n";
+  s << "<text x=\"10\" y=\"20\" font-size=\"15\">" << XmlText(r.method) << " (mean "
+    << r.mean_error_m << " m): <tspan fill=\"" << kReliableColour << "\">RELIABLE</tspan>, "
+    << "<tspan fill=\"" << kOtherColour << "\">not RELIABLE</tspan>; truth dashed</text>\n";
+}
+
+// Error over time, from x0, plot_w wide: the same colours, a line at 1 m.
+void SvgErrorPlot(std::ostringstream& s, const EvalReport& r, double x0, double plot_w,
+                  double height) {
+  if (r.track.empty()) return;
+  const double top = 30, bottom = height - 30, left = x0 + 40;
+  const double t0 = static_cast<double>(r.track.front().stamp_ns) * 1e-9;
+  const double t1 = std::max(t0 + 1, static_cast<double>(r.track.back().stamp_ns) * 1e-9);
+  double emax = 2.0;
+  for (const EvalPose& p : r.track) emax = std::max(emax, std::min(p.error_m, 20.0));
+  auto PX = [&](int64_t ns) {
+    return left + (static_cast<double>(ns) * 1e-9 - t0) / (t1 - t0) * (plot_w - 50);
+  };
+  auto PY = [&](double e) { return bottom - std::min(e, emax) / emax * (bottom - top); };
+  s << "<text x=\"" << left << "\" y=\"20\" font-size=\"15\">error (m) over " << t1 - t0
+    << " s</text>\n"
+    << "<path d=\"M" << left << " " << top << "V" << bottom << "H" << left + plot_w - 50
+    << "\" fill=\"none\" stroke=\"black\"/>\n"
+    << "<path d=\"M" << left << " " << PY(1.0) << "H" << left + plot_w - 50
+    << "\" stroke=\"#999\" stroke-dasharray=\"4 3\"/><text x=\"" << left - 30 << "\" y=\""
+    << PY(1.0) + 4 << "\" font-size=\"12\">1 m</text><text x=\"" << left - 36 << "\" y=\""
+    << top + 4 << "\" font-size=\"12\">" << emax << "</text>\n";
+  s.precision(1);
+  for (const bool reliable : {false, true}) {
+    s << "<path fill=\"" << (reliable ? kReliableColour : kOtherColour) << "\" d=\"";
+    for (const EvalPose& p : r.track)
+      if (p.reliable == reliable)
+        s << "M" << PX(p.stamp_ns) << " " << PY(p.error_m) << "h1.5v1.5h-1.5z";
+    s << "\"/>\n";
+  }
+}
+
+}  // namespace
+
+std::string ToSvg(const FloorPlan& plan, const EvalReport& r) {
+  // The plan and the tracks; the error plot to the right.
+  const double plot_w = 420, gap = 30;
+  const SvgMap map = MapOf(plan, r, 2.0);
+  const double height = std::max(map.height(), 260.0), width = map.width() + gap + plot_w;
   std::ostringstream s;
   s.setf(std::ios::fixed);
   s.precision(2);
@@ -637,75 +734,10 @@ std::string ToSvg(const FloorPlan& plan, const EvalReport& r) {
     << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
     << "<title>" << XmlText(r.plan_id) << " " << XmlText(r.scenario) << " seed " << r.seed << " "
     << XmlText(r.method) << ": mean " << r.mean_error_m << " m, max " << r.max_error_m
-    << " m</title>\n"
-    << "<path fill=\"none\" stroke=\"#555\" stroke-width=\"2\" d=\"";
-  // One path, to a tenth of a pixel (5 mm): a raster plan has tens of thousands of segments.
-  s.precision(1);
-  for (const Segment& seg : plan.segments)
-    s << "M" << X(seg.a.x()) << " " << Y(seg.a.y()) << "L" << X(seg.b.x()) << " " << Y(seg.b.y());
-  s << "\"/>\n";
-  // The truth thin and dashed; the estimate in runs of one colour, blue while RELIABLE,
-  // orange while not.
-  s << "<polyline fill=\"none\" stroke=\"" << kTruthColour
-    << "\" stroke-width=\"1.5\" stroke-dasharray=\"6 4\" points=\"";
-  for (const EvalPose& p : r.track) s << X(p.true_x) << "," << Y(p.true_y) << " ";
-  s << "\"/>\n";
-  for (size_t i = 1; i < r.track.size();) {
-    const bool reliable = r.track[i].reliable;
-    s << "<polyline fill=\"none\" stroke-width=\"2.5\" stroke=\""
-      << (reliable ? kReliableColour : kOtherColour) << "\" points=\"" << X(r.track[i - 1].x) << ","
-      << Y(r.track[i - 1].y);
-    for (; i < r.track.size() && r.track[i].reliable == reliable; ++i)
-      s << " " << X(r.track[i].x) << "," << Y(r.track[i].y);
-    s << "\"/>\n";
-  }
-  s.precision(2);
-  for (const EvalPose& p : r.track) {
-    if (!p.marker) continue;
-    s << "<circle cx=\"" << X(p.true_x) << "\" cy=\"" << Y(p.true_y)
-      << "\" r=\"4\" fill=\"none\" stroke=\"" << kTruthColour << "\" stroke-width=\"1.5\"/>"
-      << "<circle cx=\"" << X(p.x) << "\" cy=\"" << Y(p.y) << "\" r=\"4\" fill=\""
-      << (p.reliable ? kReliableColour : kOtherColour) << "\"/><text x=\"" << X(p.true_x) + 6
-      << "\" y=\"" << Y(p.true_y) - 6 << "\" font-size=\"13\">" << p.marker << "</text>\n";
-  }
-  // A scale bar in metres, bottom left.
-  const double bar = ScaleBarLength(hi.x() - lo.x());
-  s << "<path d=\"M10 " << map_h - 12 << "h" << bar * scale << "M10 " << map_h - 17 << "v10M"
-    << 10 + bar * scale << " " << map_h - 17 << "v10\" stroke=\"black\" stroke-width=\"2\"/>"
-    << "<text x=\"" << 14 + bar * scale << "\" y=\"" << map_h - 8 << "\" font-size=\"13\">"
-    << BarLabel(bar) << "</text>\n";
-  s << "<text x=\"10\" y=\"20\" font-size=\"15\">" << XmlText(r.method) << " (mean "
-    << r.mean_error_m << " m): <tspan fill=\"" << kReliableColour << "\">RELIABLE</tspan>, "
-    << "<tspan fill=\"" << kOtherColour << "\">not RELIABLE</tspan>; truth dashed</text>\n";
-
-  // Error over time: the same colours, a line at 1 m.
-  if (!r.track.empty()) {
-    const double x0 = map_w + gap, top = 30, bottom = height - 30, left = x0 + 40;
-    const double t0 = static_cast<double>(r.track.front().stamp_ns) * 1e-9;
-    const double t1 = std::max(t0 + 1, static_cast<double>(r.track.back().stamp_ns) * 1e-9);
-    double emax = 2.0;
-    for (const EvalPose& p : r.track) emax = std::max(emax, std::min(p.error_m, 20.0));
-    auto PX = [&](int64_t ns) {
-      return left + (static_cast<double>(ns) * 1e-9 - t0) / (t1 - t0) * (plot_w - 50);
-    };
-    auto PY = [&](double e) { return bottom - std::min(e, emax) / emax * (bottom - top); };
-    s << "<text x=\"" << left << "\" y=\"20\" font-size=\"15\">error (m) over " << t1 - t0
-      << " s</text>\n"
-      << "<path d=\"M" << left << " " << top << "V" << bottom << "H" << left + plot_w - 50
-      << "\" fill=\"none\" stroke=\"black\"/>\n"
-      << "<path d=\"M" << left << " " << PY(1.0) << "H" << left + plot_w - 50
-      << "\" stroke=\"#999\" stroke-dasharray=\"4 3\"/><text x=\"" << left - 30 << "\" y=\""
-      << PY(1.0) + 4 << "\" font-size=\"12\">1 m</text><text x=\"" << left - 36 << "\" y=\""
-      << top + 4 << "\" font-size=\"12\">" << emax << "</text>\n";
-    s.precision(1);
-    for (const bool reliable : {false, true}) {
-      s << "<path fill=\"" << (reliable ? kReliableColour : kOtherColour) << "\" d=\"";
-      for (const EvalPose& p : r.track)
-        if (p.reliable == reliable)
-          s << "M" << PX(p.stamp_ns) << " " << PY(p.error_m) << "h1.5v1.5h-1.5z";
-      s << "\"/>\n";
-    }
-  }
+    << " m</title>\n";
+  SvgWallsAndTracks(s, plan, r, map);
+  SvgMarkersAndLegend(s, r, map);
+  SvgErrorPlot(s, r, map.width() + gap, plot_w, height);
   s << "</svg>\n";
   return s.str();
 }
