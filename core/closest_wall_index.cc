@@ -19,6 +19,11 @@ ClosestWall MakeHit(const FloorPlan& plan, uint32_t i, const Eigen::Vector2d& p)
 
 }  // namespace
 
+namespace {
+// At most this many cells (and the distance grid's): see SizeCells.
+constexpr double kMaxCells = 1 << 24;
+}  // namespace
+
 ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
     : plan_(plan), options_(options) {
   data_.reserve(plan_.segments.size());
@@ -26,11 +31,19 @@ ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
     const Eigen::Vector2d d = s.b - s.a;
     data_.push_back({s.a, d, s.Normal(), d.squaredNorm() > 0 ? 1.0 / d.squaredNorm() : 0.0});
   }
+  SizeCells();
+  FillCandidates();
+  SortCandidates();
+  if (options_.grid_cell_m > 0)
+    grid_ = DistanceGrid(plan_.segments, plan_.min, plan_.max, options_.grid_cell_m,
+                         std::min(kGridNearM, options_.max_distance_m), kMaxCells);
+}
+
+void ClosestWallIndex::SizeCells() {
   // Memory is bounded by design: a plan too large for the requested cells (drawn in
   // millimetres, or with a stray far-away segment) gets coarser cells instead of
   // gigabytes or an overflowing cell count. Any cell size gives exact answers (see the
   // header); only the candidate lists grow.
-  constexpr double kMaxCells = 1 << 24;
   const Eigen::Vector2d size = plan_.max - plan_.min;
   auto cell_count = [&](double c) {
     const double margin2 = 2 * (options_.max_distance_m + c);
@@ -45,13 +58,18 @@ ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
   // std::max(1.0, NaN) is 1.0: no undefined conversion even for absurd bounds.
   nx_ = static_cast<int>(std::min(kMaxCells, std::max(1.0, std::ceil(extent.x() / cell))));
   ny_ = static_cast<int>(std::min(kMaxCells, std::max(1.0, std::ceil(extent.y() / cell))));
+}
+
+void ClosestWallIndex::FillCandidates() {
+  const double cell = options_.cell_m;
   const size_t n = static_cast<size_t>(nx_) * static_cast<size_t>(ny_);
   const double r = 0.5 * cell * std::sqrt(2.0);
   // Only segments within this distance of a centre can matter (see the header).
   const double reach = options_.max_distance_m + 2 * r;
-
-  // Visits the cells whose centres may lie within `reach` of segment s.
-  auto for_cells_near = [&](const Segment& s, auto&& fn) {
+  // Visits the cells whose centres may lie within `reach` of segment k, with the
+  // segment's distance from each centre.
+  auto for_cells_near = [&](uint32_t k, auto&& fn) {
+    const Segment& s = plan_.segments[k];
     const Eigen::Vector2d lo = s.a.cwiseMin(s.b) - Eigen::Vector2d::Constant(reach);
     const Eigen::Vector2d hi = s.a.cwiseMax(s.b) + Eigen::Vector2d::Constant(reach);
     const int x0 = std::max(0, static_cast<int>(std::floor((lo.x() - origin_.x()) / cell)));
@@ -59,40 +77,36 @@ ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
     const int x1 = std::min(nx_ - 1, static_cast<int>(std::floor((hi.x() - origin_.x()) / cell)));
     const int y1 = std::min(ny_ - 1, static_cast<int>(std::floor((hi.y() - origin_.y()) / cell)));
     for (int iy = y0; iy <= y1; ++iy)
-      for (int ix = x0; ix <= x1; ++ix) fn(static_cast<size_t>(iy) * nx_ + ix, CellCentre(ix, iy));
+      for (int ix = x0; ix <= x1; ++ix)
+        fn(static_cast<size_t>(iy) * nx_ + ix, std::sqrt(data_[k].Distance2(CellCentre(ix, iy))));
   };
-
   // Pass 1: d* per cell, clipped at reach.
-  auto distance = [&](uint32_t k, const Eigen::Vector2d& c) {
-    return std::sqrt(data_[k].Distance2(c));
-  };
   const auto segments = static_cast<uint32_t>(plan_.segments.size());
   std::vector<float> best(n, std::numeric_limits<float>::infinity());
-  for (uint32_t k = 0; k < segments; ++k) {
-    for_cells_near(plan_.segments[k], [&](size_t i, const Eigen::Vector2d& c) {
-      best[i] = std::min(best[i], static_cast<float>(distance(k, c)));
-    });
-  }
+  for (uint32_t k = 0; k < segments; ++k)
+    for_cells_near(k,
+                   [&](size_t i, double d) { best[i] = std::min(best[i], static_cast<float>(d)); });
   // Pass 2: count, then fill the candidate lists (CSR).
   std::vector<uint32_t> count(n + 1, 0);
   auto is_candidate = [&](size_t i, double d) {
     return best[i] - r <= options_.max_distance_m && d <= best[i] + 2 * r + 1e-9;
   };
-  for (uint32_t k = 0; k < segments; ++k) {
-    for_cells_near(plan_.segments[k], [&](size_t i, const Eigen::Vector2d& c) {
-      if (is_candidate(i, distance(k, c))) ++count[i + 1];
+  for (uint32_t k = 0; k < segments; ++k)
+    for_cells_near(k, [&](size_t i, double d) {
+      if (is_candidate(i, d)) ++count[i + 1];
     });
-  }
   cell_begin_.assign(n + 1, 0);
   for (size_t i = 0; i < n; ++i) cell_begin_[i + 1] = cell_begin_[i] + count[i + 1];
   candidates_.resize(cell_begin_[n]);
   std::vector<uint32_t> fill(cell_begin_.begin(), cell_begin_.end() - 1);
-  for (uint32_t k = 0; k < segments; ++k) {
-    for_cells_near(plan_.segments[k], [&](size_t i, const Eigen::Vector2d& c) {
-      if (is_candidate(i, distance(k, c))) candidates_[fill[i]++] = k;
+  for (uint32_t k = 0; k < segments; ++k)
+    for_cells_near(k, [&](size_t i, double d) {
+      if (is_candidate(i, d)) candidates_[fill[i]++] = k;
     });
-  }
-  // Pass 3: each list nearest its cell's centre first (see Query), ties in segment order.
+}
+
+void ClosestWallIndex::SortCandidates() {
+  // Each list nearest its cell's centre first (see Query), ties in segment order.
   std::vector<std::pair<double, uint32_t>> sorted;
   for (int iy = 0; iy < ny_; ++iy) {
     for (int ix = 0; ix < nx_; ++ix) {
@@ -105,9 +119,6 @@ ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
       for (size_t j = 0; j < sorted.size(); ++j) candidates_[cell_begin_[i] + j] = sorted[j].second;
     }
   }
-  if (options_.grid_cell_m > 0)
-    grid_ = DistanceGrid(plan_.segments, plan_.min, plan_.max, options_.grid_cell_m,
-                         std::min(kGridNearM, options_.max_distance_m), kMaxCells);
 }
 
 std::optional<ClosestWall> ClosestWallIndex::Query(const Eigen::Vector2d& p) const {

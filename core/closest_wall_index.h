@@ -83,6 +83,13 @@ class ClosestWallIndex {
     }
   };
 
+  // Building the index: the cells (coarser where the plan is too large for options' size,
+  // within kMaxCells); each cell's candidate segments (CSR); each list sorted nearest
+  // first.
+  void SizeCells();
+  void FillCandidates();
+  void SortCandidates();
+
   // The centre of cell (ix, iy): what the lists are sorted by and Query bounds from, so
   // one formula for both.
   Eigen::Vector2d CellCentre(int ix, int iy) const {
