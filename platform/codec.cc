@@ -23,6 +23,50 @@ bool StampInRange(int64_t stamp_ns) {
 
 }  // namespace
 
+namespace {
+
+// A mesh's arrays whole triangles and vertices, within the limits; an error or empty.
+std::string CheckMeshSizes(const v1::MeshDelta& msg, const v1::LimitsConfig& limits,
+                           const std::string& what, Refusal& k) {
+  if (msg.vertices_size() % 3 != 0)
+    return Refuse(k, Refusal::kInconsistent, what + ": vertex array not a multiple of 3");
+  if (msg.triangles_size() % 3 != 0)
+    return Refuse(k, Refusal::kInconsistent, what + ": index array not a multiple of 3");
+  const size_t nv = static_cast<size_t>(msg.vertices_size()) / 3;
+  const size_t nt = static_cast<size_t>(msg.triangles_size()) / 3;
+  if (nv > limits.max_vertices_per_mesh())
+    return Refuse(k, Refusal::kOverLimits,
+                  what + ": " + std::to_string(nv) + " vertices over the limit of " +
+                      std::to_string(limits.max_vertices_per_mesh()));
+  if (nt > limits.max_triangles_per_mesh())
+    return Refuse(k, Refusal::kOverLimits,
+                  what + ": " + std::to_string(nt) + " triangles over the limit of " +
+                      std::to_string(limits.max_triangles_per_mesh()));
+  return {};
+}
+
+// The mesh-to-world transform: identity when absent, else 16 finite values of an affine
+// matrix (row-major); an error or empty.
+std::string MeshToWorld(const v1::MeshDelta& msg, const std::string& what, Refusal& k,
+                        Eigen::Matrix4d* T_world_mesh) {
+  T_world_mesh->setIdentity();
+  if (msg.mesh_to_world_size() == 0) return {};
+  if (msg.mesh_to_world_size() != 16)
+    return Refuse(
+        k, Refusal::kInconsistent,
+        what + ": mesh-to-world needs 16 values, got " + std::to_string(msg.mesh_to_world_size()));
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) (*T_world_mesh)(r, c) = msg.mesh_to_world(r * 4 + c);
+  if (!T_world_mesh->allFinite())
+    return Refuse(k, Refusal::kNonFinite, what + ": non-finite mesh-to-world transform");
+  if ((T_world_mesh->row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-6)
+    return Refuse(k, Refusal::kInconsistent,
+                  what + ": mesh-to-world is not affine (last row must be 0 0 0 1)");
+  return {};
+}
+
+}  // namespace
+
 std::string DecodeMeshDelta(const std::string& payload, HeadsetFrame frame,
                             const v1::LimitsConfig& limits, DecodedMesh* out, Refusal* kind) {
   Refusal ignored;
@@ -47,37 +91,14 @@ std::string DecodeMeshDelta(const std::string& payload, HeadsetFrame frame,
   if (msg.change() == v1::MeshDelta::REMOVED) return {};
 
   const std::string what = "MeshDelta " + std::to_string(msg.mesh_id());
-  if (msg.vertices_size() % 3 != 0)
-    return Refuse(k, Refusal::kInconsistent, what + ": vertex array not a multiple of 3");
-  if (msg.triangles_size() % 3 != 0)
-    return Refuse(k, Refusal::kInconsistent, what + ": index array not a multiple of 3");
-  const size_t nv = static_cast<size_t>(msg.vertices_size()) / 3;
-  const size_t nt = static_cast<size_t>(msg.triangles_size()) / 3;
-  if (nv > limits.max_vertices_per_mesh())
-    return Refuse(k, Refusal::kOverLimits,
-                  what + ": " + std::to_string(nv) + " vertices over the limit of " +
-                      std::to_string(limits.max_vertices_per_mesh()));
-  if (nt > limits.max_triangles_per_mesh())
-    return Refuse(k, Refusal::kOverLimits,
-                  what + ": " + std::to_string(nt) + " triangles over the limit of " +
-                      std::to_string(limits.max_triangles_per_mesh()));
-
-  Eigen::Matrix4d T_world_mesh = Eigen::Matrix4d::Identity();
-  if (msg.mesh_to_world_size() == 16) {
-    for (int r = 0; r < 4; ++r)
-      for (int c = 0; c < 4; ++c) T_world_mesh(r, c) = msg.mesh_to_world(r * 4 + c);
-    if (!T_world_mesh.allFinite())
-      return Refuse(k, Refusal::kNonFinite, what + ": non-finite mesh-to-world transform");
-    if ((T_world_mesh.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-6)
-      return Refuse(k, Refusal::kInconsistent,
-                    what + ": mesh-to-world is not affine (last row must be 0 0 0 1)");
-  } else if (msg.mesh_to_world_size() != 0) {
-    return Refuse(
-        k, Refusal::kInconsistent,
-        what + ": mesh-to-world needs 16 values, got " + std::to_string(msg.mesh_to_world_size()));
-  }
+  if (std::string e = CheckMeshSizes(msg, limits, what, k); !e.empty()) return e;
+  Eigen::Matrix4d T_world_mesh;
+  if (std::string e = MeshToWorld(msg, what, k, &T_world_mesh); !e.empty()) return e;
+  // Vertices in the SLAM frame; one that is not finite or beyond the coordinate limit is
+  // kept as NaN (its triangles are dropped later) and counted.
   const Eigen::Matrix4d T = MeshToWorldToSlam(frame, T_world_mesh);
   const double max_abs = limits.max_abs_coordinate_m();
+  const size_t nv = static_cast<size_t>(msg.vertices_size()) / 3;
   out->vertices.resize(nv);
   for (size_t i = 0; i < nv; ++i) {
     const Eigen::Vector3d v(msg.vertices(static_cast<int>(3 * i)),
