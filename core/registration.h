@@ -100,9 +100,10 @@ struct RegistrationOptions {
   // wall pick's point, whose error a heading error swings into metres at the wearer).
   // Without it, about the cloud's centroid.
   std::optional<Eigen::Vector2d> search_pivot;
-  // With a covariance of the guess about search_pivot (unknowns phi, ux, uy as in
-  // core/alignment_filter.h), only corrections within search_max_sigmas of it are
-  // searched: the box shrinks to the ellipse (a hall's open axis, not across its walls).
+  // With a covariance of the guess about search_pivot (unknowns: the rotation phi about
+  // the pivot, then the shift ux, uy), only corrections within search_max_sigmas of it
+  // are searched: the box shrinks to the ellipse (a hall's open axis, not across its
+  // walls).
   std::optional<Eigen::Matrix3d> search_covariance;
   double search_max_sigmas = 3.0;
   uint32_t search_candidates = 4;
