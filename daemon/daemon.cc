@@ -48,15 +48,7 @@ bool Daemon::Start(std::string* error) {
       platform::MonotonicNs);
   if (!deterministic_) {
     engine_->SetOffload([this](std::function<void()> work, std::function<void()> done) {
-      if (plan_thread_.joinable()) plan_thread_.join();  // the last one, done already
-      plan_thread_ = std::thread([this, work = std::move(work), done = std::move(done)] {
-        work();
-        {
-          std::lock_guard lock(posted_mu_);
-          posted_.push_back(done);
-        }
-        dds_.waiter->Wake();
-      });
+      offload_.Run(std::move(work), std::move(done), [this] { dds_.waiter->Wake(); });
     });
   }
   const std::string plan_error = engine_->Start();
@@ -142,7 +134,7 @@ void Daemon::Stop() {
   dds_.waiter->Wake();
   io_thread_.join();
   worker_thread_.join();
-  if (plan_thread_.joinable()) plan_thread_.join();  // a plan being built is dropped
+  offload_.Join();  // a plan being built is dropped
   if (snapshots_) {
     MaybeSnapshot(platform::MonotonicNs(), /*force=*/true);
     snapshots_->Finish();
@@ -164,12 +156,7 @@ void Daemon::IoLoop() {
     dds_.waiter->Wait(std::chrono::milliseconds(100));
     if (jobs_.stopped()) break;
     io_heartbeat_ns_ = platform::MonotonicNs();
-    std::vector<std::function<void()>> posted;
-    {
-      std::lock_guard lock(posted_mu_);
-      posted.swap(posted_);
-    }
-    for (auto& f : posted) f();
+    offload_.RunPosted();
     TakeBatch(&batch);
     HandleBatch(batch);
     ApplyFinished(false);

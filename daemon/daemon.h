@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "daemon/job_slot.h"
+#include "daemon/offload.h"
 #include "daemon/snapshot_keeper.h"
 #include "floorpose/v1/config.pb.h"
 #include "platform/dds.h"
@@ -86,13 +87,9 @@ class Daemon {
   JobSlot jobs_;  // io thread <-> worker
 
   std::unique_ptr<platform::StateDirLock> state_lock_;  // held while the daemon runs
-  // Plans loaded by command are built on plan_thread_; what then goes on on the io thread
-  // waits in posted_ (Engine::SetOffload).
-  std::thread plan_thread_;
-  std::mutex posted_mu_;
-  std::vector<std::function<void()>> posted_;
-  std::string markers_path_;    // state_dir/markers.pb; empty: not kept
-  uint64_t saved_markers_ = 0;  // MarkerBoard::revision() last saved
+  Offload offload_;                                     // plans loaded by command are built there
+  std::string markers_path_;                            // state_dir/markers.pb; empty: not kept
+  uint64_t saved_markers_ = 0;                          // MarkerBoard::revision() last saved
   void SaveMarkers();
   std::unique_ptr<SnapshotKeeper> snapshots_;  // null: no state directory
 
