@@ -72,7 +72,7 @@ double RandomLogLikelihood(const MeasurementModel& model, const ClosestWallIndex
   return MeanLogLikelihood(model, index, DrawRandomPoints(index));
 }
 
-double DistinctPlaces(const ClosestWallIndex& index, double place_m, double place_rad) {
+double PlanPlaces(const ClosestWallIndex& index, double place_m, double place_rad) {
   return Places(index, DrawRandomPoints(index), place_m, place_rad);
 }
 

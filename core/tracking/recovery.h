@@ -1,7 +1,7 @@
 // Whether the wearer is at any of the belief's places at all: a filter over three
 // hypotheses. "Here": the wearer is at one of the belief's places, and the walls fit as the
 // belief says. "Elsewhere" (the belief lost the wearer: a wrong start, a SLAM jump): the
-// wearer is at one fixed place the belief does not hold, one of the plan's DistinctPlaces.
+// wearer is at one fixed place the belief does not hold, one of the plan's places (PlanPlaces).
 // With the chance of one in that many it is the place the walls fit as a right place does:
 // as the model expects (ExpectedLogLikelihood), or as they have fitted since the start
 // where that is lower (a building less like its plan fits its right place less well).
@@ -113,6 +113,6 @@ double ExpectedLogLikelihood(const MeasurementModel& model, double reach_m);
 double RandomLogLikelihood(const MeasurementModel& model, const ClosestWallIndex& index);
 // How many distinct places the plan holds: its area within the index's reach of a wall, in
 // discs of place_m, times the headings in steps of 2 place_rad (at least 1).
-double DistinctPlaces(const ClosestWallIndex& index, double place_m, double place_rad);
+double PlanPlaces(const ClosestWallIndex& index, double place_m, double place_rad);
 
 }  // namespace floorpose::tracking

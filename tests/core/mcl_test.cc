@@ -170,12 +170,12 @@ TEST(RecoveryTest, AFitLikeARandomPlaceKeepsTheDoubtAndARightOneClearsIt) {
   EXPECT_LT(stale.Elsewhere(), 0.01);
 }
 
-TEST(RecoveryTest, TheDistinctPlacesAreTheAreaInDiscsTimesTheHeadings) {
+TEST(RecoveryTest, PlanPlacesAreTheAreaInDiscsTimesTheHeadings) {
   // 10 m x 7 m, every point within the index's reach (3 m) of a wall.
   const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
-  EXPECT_NEAR(DistinctPlaces(index, 1.0, kPlaceRad), 70 / M_PI * M_PI / kPlaceRad, 1e-6);
-  EXPECT_NEAR(DistinctPlaces(index, 2.0, kPlaceRad), 70 / (4 * M_PI) * M_PI / kPlaceRad, 1e-6);
-  EXPECT_EQ(DistinctPlaces(index, 100.0, M_PI), 1.0) << "never fewer than one";
+  EXPECT_NEAR(PlanPlaces(index, 1.0, kPlaceRad), 70 / M_PI * M_PI / kPlaceRad, 1e-6);
+  EXPECT_NEAR(PlanPlaces(index, 2.0, kPlaceRad), 70 / (4 * M_PI) * M_PI / kPlaceRad, 1e-6);
+  EXPECT_EQ(PlanPlaces(index, 100.0, M_PI), 1.0) << "never fewer than one";
 }
 
 TEST(RecoveryTest, ANearMissIsDoubtedUntilASearchHandsItsPlaceToTheBelief) {
