@@ -119,13 +119,8 @@ void Daemon::ResumeFromStateDir(const std::string& state_dir) {
   snapshots_ = std::make_unique<SnapshotKeeper>(
       platform::SnapshotPath(state_dir, config_.dds().device_id()), config_.snapshot_period_s());
   ResumeFromSnapshot();
-  markers_path_ = (std::filesystem::path(state_dir) / "markers.pb").string();
-  std::string markers_error;
-  if (!engine_->crew().markers().Load(markers_path_, &markers_error))
-    spdlog::warn("markers {} not read: {}", markers_path_, markers_error);
-  saved_markers_ = engine_->crew().markers().revision();
-  if (!engine_->crew().markers().markers().empty())
-    spdlog::info("{} markers from {}", engine_->crew().markers().markers().size(), markers_path_);
+  markers_.Open((std::filesystem::path(state_dir) / "markers.pb").string(),
+                engine_->crew().markers());
 }
 
 void Daemon::Stop() {
@@ -145,10 +140,7 @@ void Daemon::Stop() {
                c.plan_poses_out(), c.mesh_deltas_in(), c.rejected_messages());
 }
 
-std::string Daemon::StatusLine() const {
-  std::lock_guard lock(status_mu_);
-  return status_line_;
-}
+std::string Daemon::StatusLine() const { return status_.Line(); }
 
 void Daemon::IoLoop() {
   std::vector<Input> batch;
@@ -165,10 +157,10 @@ void Daemon::IoLoop() {
          {dds_.marker_reader.get(), dds_.team_pose_reader.get(), dds_.team_status_reader.get()})
       if (reader)
         for (const platform::Envelope& e : reader->Take(256)) engine_->OnTeam(reader->topic(), e);
-    SaveMarkers();
+    markers_.Save(engine_->crew().markers());
     const int64_t now = platform::MonotonicNs();
     MaybeSnapshot(now, false);
-    if (now >= next_status_ns_) PublishStatus(now);
+    if (status_.Due(now)) PublishStatus(now);
   }
 }
 
@@ -237,9 +229,8 @@ void Daemon::PublishStatus(int64_t now_ns) {
     engine_->OnDdsLosses(reader->topic(), l.lost, l.rejected);
   }
   engine_->PublishStatus({});
-  next_status_ns_ = now_ns + static_cast<int64_t>(config_.status_period_s() * 1e9);
-  std::lock_guard lock(status_mu_);
-  status_line_ = engine_->StatusLine();
+  status_.Posted(engine_->StatusLine(),
+                 now_ns + static_cast<int64_t>(config_.status_period_s() * 1e9));
 }
 
 void Daemon::AfterInput() {
@@ -286,15 +277,6 @@ void Daemon::Publish(Topic topic, const google::protobuf::Message& msg) {
   std::string error;
   if (!writer->WriteMessage(key, msg, platform::WallClockNs(), &error))
     spdlog::warn("publishing on {} failed: {}", platform::TopicName(topic), error);
-}
-
-void Daemon::SaveMarkers() {
-  const uint64_t revision = engine_->crew().markers().revision();
-  if (markers_path_.empty() || revision == saved_markers_) return;
-  std::string error;
-  if (!engine_->crew().markers().Save(markers_path_, &error))
-    spdlog::warn("markers not saved to {}: {}", markers_path_, error);
-  saved_markers_ = revision;
 }
 
 void Daemon::ResumeFromSnapshot() {

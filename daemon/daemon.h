@@ -14,8 +14,10 @@
 #include <vector>
 
 #include "daemon/job_slot.h"
+#include "daemon/markers_file.h"
 #include "daemon/offload.h"
 #include "daemon/snapshot_keeper.h"
+#include "daemon/status_board.h"
 #include "floorpose/v1/config.pb.h"
 #include "platform/dds.h"
 #include "platform/engine.h"
@@ -82,21 +84,17 @@ class Daemon {
     std::unique_ptr<platform::Waiter> waiter;
   } dds_;
   std::unique_ptr<platform::Engine> engine_;  // io thread only
-  int64_t next_status_ns_ = 0;
+  StatusBoard status_;
 
   JobSlot jobs_;  // io thread <-> worker
 
   std::unique_ptr<platform::StateDirLock> state_lock_;  // held while the daemon runs
   Offload offload_;                                     // plans loaded by command are built there
-  std::string markers_path_;                            // state_dir/markers.pb; empty: not kept
-  uint64_t saved_markers_ = 0;                          // MarkerBoard::revision() last saved
-  void SaveMarkers();
-  std::unique_ptr<SnapshotKeeper> snapshots_;  // null: no state directory
+  MarkersFile markers_;                                 // state_dir/markers.pb
+  std::unique_ptr<SnapshotKeeper> snapshots_;           // null: no state directory
 
   std::atomic<bool> running_{false};
   std::atomic<int64_t> io_heartbeat_ns_{0};
-  mutable std::mutex status_mu_;
-  std::string status_line_;
   std::thread io_thread_, worker_thread_;
 };
 
