@@ -272,9 +272,11 @@ MclUpdate MclTracker::PrepareUpdate(int64_t now_ns) {
       last_update_ns_ ? static_cast<double>(now_ns - *last_update_ns_) * 1e-9 : options_.window_s;
   u.evidence = std::clamp(u.dt_s / options_.window_s, 0.0, 1.0);
   u.mid_fit = recovery_.MidFit();
+  u.elsewhere = recovery_.Elsewhere();
   u.seed = rng_.Next();
   u.belief_version = belief_version_;
-  // The place in use stays until another holds twice its mass; a search's seed is its
+  // The place in use stays until another holds twice its mass and the belief would trust
+  // it, or the place in use has lost its samples (PublishedMode); a search's seed is its
   // best place, published or not yet.
   if (!belief_.empty()) u.published = alignment_.T_plan_slam;
   // From here: the walk since prepared, from where the wearer is.

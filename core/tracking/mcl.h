@@ -83,6 +83,7 @@ struct MclUpdate {
   // A fit per point above this is nearer a right place's than a random one's
   // (Recovery::MidFit).
   double mid_fit = 0;
+  double elsewhere = 0;  // Recovery::Elsewhere when prepared
   double dt_s = 0;
   uint64_t seed = 0;
   uint64_t belief_version = 0;

@@ -82,14 +82,19 @@ BeliefFit WeighSamples(Belief& belief, const MclUpdate& u,
   return fit;
 }
 
-// The place with the least expected error at the wearer, or the one published now while
-// no other holds kSwitchRatio times its mass: a belief split about evenly must not make
-// the published pose jump between its places.
-Mode PublishedMode(const Belief& belief, const MclUpdate& u, double radius_m) {
-  const Mode best = belief.Estimate(u.wearer_slam, radius_m, kPlaceRad);
+// The place with the least expected error at the wearer, or the one published now unless
+// another holds kSwitchRatio times its mass and either the belief would trust it (its
+// mass, less the doubt, at publish.reliable) or the one in use has lost its samples (less
+// than kOfferShare). A belief split between places far apart must not move the published
+// pose to one it does not trust: the pose a reader acts on jumps only to a place it may
+// act on, or away from one the belief has left.
+Mode PublishedMode(const Belief& belief, const MclUpdate& u, const PublishOptions& publish) {
+  const Mode best = belief.Estimate(u.wearer_slam, publish.within_m, kPlaceRad);
   if (!u.published) return best;
-  const Mode kept = belief.ModeAt(*u.published, u.wearer_slam, radius_m, kPlaceRad);
-  return kept.mass * kSwitchRatio >= best.mass ? kept : best;
+  const Mode kept = belief.ModeAt(*u.published, u.wearer_slam, publish.within_m, kPlaceRad);
+  if (kept.mass * kSwitchRatio >= best.mass) return kept;
+  const bool trusted = best.mass * (1 - u.elsewhere) >= publish.reliable;
+  return trusted || kept.mass < kOfferShare ? best : kept;
 }
 
 // ICP on the whole window from the published place: its polish is published when it stays
@@ -151,7 +156,7 @@ MclUpdateResult RunMclUpdate(MclUpdate u, const std::vector<Eigen::Vector2d>& cl
       belief.size() > options.samples.max_samples)
     belief.Resample(options.samples, u.wearer_slam, rng);
   const double radius_m = options.publish.within_m;
-  const Mode mode = PublishedMode(belief, u, radius_m);
+  const Mode mode = PublishedMode(belief, u, options.publish);
   out.mode_mass = mode.mass;
   out.published = mode.T_plan_slam;
   PolishOrOffer(out, belief, u, cloud, points, index, options, rng);

@@ -653,5 +653,35 @@ TEST(MclUpdateTest, ThePlaceIcpReachesOutsideTheBeliefIsOfferedToIt) {
   EXPECT_GT(near.belief.MassWithin(wearer, room.truth * wearer, 1.0), 0.99);
 }
 
+// One update that weighs nothing (no new walls) on a belief split between the published
+// place, the truth, with `kept` of the mass, and a place 5 m off with the rest, at this
+// doubt: which place is published.
+Se2 PublishedAfterSplit(const RoomWalk& room, double kept, double elsewhere) {
+  const MclOptions options;
+  const Eigen::Vector2d at{2, 5};
+  MclUpdate u;
+  u.wearer_slam = room.truth.Inverse() * at;
+  u.elsewhere = elsewhere;
+  u.published = room.truth;
+  const Se2 other = Se2{0, {0, 5}} * room.truth;
+  const Eigen::Matrix3d tight = PlaceCovariance(0.02, Deg(0.2));
+  SplitMix64 rng(7);
+  u.belief.AddGaussian(room.truth, tight, at, 200, std::log(kept / 200), rng);
+  u.belief.AddGaussian(other, tight, other * u.wearer_slam, 200, std::log((1 - kept) / 200), rng);
+  return RunMclUpdate(std::move(u), room.SeenFrom(at), *room.index, options).published;
+}
+
+TEST(MclUpdateTest, ThePublishedPlaceMovesOnlyToAPlaceTheBeliefTrustsOrFromOneItLeft) {
+  RoomWalk room;
+  const Eigen::Vector2d wearer = room.truth.Inverse() * Eigen::Vector2d(2, 5);
+  const auto off_m = [&](const Se2& T) { return (T * wearer - room.truth * wearer).norm(); };
+  EXPECT_LT(off_m(PublishedAfterSplit(room, 0.4, 0.0)), 0.1) << "60% is not twice 40%";
+  EXPECT_LT(off_m(PublishedAfterSplit(room, 0.06, 0.5)), 0.1)
+      << "94% of the samples, but half the belief is elsewhere: 47% is not to be trusted";
+  EXPECT_NEAR(off_m(PublishedAfterSplit(room, 0.06, 0.0)), 5.0, 0.1) << "94%: trusted";
+  EXPECT_NEAR(off_m(PublishedAfterSplit(room, 0.02, 0.5)), 5.0, 0.1)
+      << "the place in use has lost its samples";
+}
+
 }  // namespace
 }  // namespace floorpose::tracking
