@@ -83,26 +83,31 @@ double GlobalSearch::HeadingStep(double reach_m) const {
   return std::clamp(step, 0.1 * M_PI / 180, 5.0 * M_PI / 180);
 }
 
-std::vector<double> GlobalSearch::WallHeadings(
-    const std::vector<Eigen::Vector2d>& points_slam) const {
-  // The cloud's wall directions: a line fit through each point's neighbours within 0.3 m
-  // (points binned in 0.3 m cells), counted when the neighbours lie along a line.
-  constexpr double kRadius = 0.3;
-  std::map<std::pair<int64_t, int64_t>, std::vector<Eigen::Vector2d>> bins;
+namespace {
+
+// Points binned in cells of kDirectionRadiusM: each cell's neighbourhood is a local line fit.
+constexpr double kDirectionRadiusM = 0.3;
+using DirectionBins = std::map<std::pair<int64_t, int64_t>, std::vector<Eigen::Vector2d>>;
+
+// The cloud's wall directions, a histogram by degree modulo 180: a line fit through each
+// point's neighbours within 0.3 m (its cell and the eight around), counted when the
+// neighbours lie along a line. `bins` holds the finite points by cell.
+std::vector<double> CloudDirections(const std::vector<Eigen::Vector2d>& points_slam,
+                                    DirectionBins* bins) {
   for (const Eigen::Vector2d& p : points_slam)
     if (p.allFinite() && p.cwiseAbs().maxCoeff() < 1e6)
-      bins[{static_cast<int64_t>(std::floor(p.x() / kRadius)),
-            static_cast<int64_t>(std::floor(p.y() / kRadius))}]
+      (*bins)[{static_cast<int64_t>(std::floor(p.x() / kDirectionRadiusM)),
+               static_cast<int64_t>(std::floor(p.y() / kDirectionRadiusM))}]
           .push_back(p);
   std::vector<double> cloud(180, 0.0);
-  for (const auto& [key, members] : bins) {
+  for (const auto& [key, members] : *bins) {
     Eigen::Vector2d mean = Eigen::Vector2d::Zero();
     Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
     int n = 0;
     for (int64_t dy = -1; dy <= 1; ++dy)
       for (int64_t dx = -1; dx <= 1; ++dx) {
-        const auto it = bins.find({key.first + dx, key.second + dy});
-        if (it == bins.end()) continue;
+        const auto it = bins->find({key.first + dx, key.second + dy});
+        if (it == bins->end()) continue;
         for (const Eigen::Vector2d& q : it->second) {
           mean += q;
           scatter += q * q.transpose();
@@ -122,19 +127,25 @@ std::vector<double> GlobalSearch::WallHeadings(
     cloud[static_cast<size_t>(deg) % 180] +=
         static_cast<double>(members.size()) * std::max(0.0, 1.0 - small / large * 10);
   }
-  // Circular correlation, degree by degree, of the two histograms (each lightly smoothed).
+  return cloud;
+}
+
+// The shifts, in degrees, at which the two direction histograms line up best: the circular
+// correlation of the two (each lightly smoothed), its best `max_peaks` local maxima at
+// least 5 degrees apart. None when nothing correlates.
+std::vector<int> DirectionPeaks(const std::vector<double>& cloud, const std::vector<double>& plan,
+                                int max_peaks) {
   auto smooth = [](const std::vector<double>& h) {
     std::vector<double> out(180, 0.0);
     for (int i = 0; i < 180; ++i)
       out[i] = 0.25 * h[(i + 179) % 180] + 0.5 * h[i] + 0.25 * h[(i + 1) % 180];
     return out;
   };
-  const std::vector<double> a = smooth(cloud), b = smooth(plan_directions_);
+  const std::vector<double> a = smooth(cloud), b = smooth(plan);
   std::vector<double> correlation(180, 0.0);
   for (int shift = 0; shift < 180; ++shift)
     for (int i = 0; i < 180; ++i) correlation[shift] += a[i] * b[(i + shift) % 180];
   if (*std::max_element(correlation.begin(), correlation.end()) <= 0) return {};
-  // The best few local maxima, at least 5 degrees apart.
   std::vector<int> peaks;
   for (int i = 0; i < 180; ++i)
     if (correlation[i] > 0 && correlation[i] >= correlation[(i + 179) % 180] &&
@@ -144,11 +155,22 @@ std::vector<double> GlobalSearch::WallHeadings(
             [&](int x, int y) { return correlation[x] > correlation[y]; });
   std::vector<int> chosen;
   for (int p : peaks) {
-    if (static_cast<int>(chosen.size()) >= options_.heading_peaks) break;
+    if (static_cast<int>(chosen.size()) >= max_peaks) break;
     bool near = false;
     for (int c : chosen) near = near || std::min(std::abs(p - c), 180 - std::abs(p - c)) < 5;
     if (!near) chosen.push_back(p);
   }
+  return chosen;
+}
+
+}  // namespace
+
+std::vector<double> GlobalSearch::WallHeadings(
+    const std::vector<Eigen::Vector2d>& points_slam) const {
+  DirectionBins bins;
+  const std::vector<double> cloud = CloudDirections(points_slam, &bins);
+  const std::vector<int> chosen = DirectionPeaks(cloud, plan_directions_, options_.heading_peaks);
+  if (chosen.empty()) return {};
   // Each alignment and its half turn, widened by the spread in Search's heading steps.
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
   size_t count = 0;
