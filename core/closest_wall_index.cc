@@ -17,11 +17,9 @@ ClosestWall MakeHit(const FloorPlan& plan, uint32_t i, const Eigen::Vector2d& p)
   return hit;
 }
 
-}  // namespace
-
-namespace {
 // At most this many cells (and the distance grid's): see SizeCells.
 constexpr double kMaxCells = 1 << 24;
+
 }  // namespace
 
 ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)

@@ -21,10 +21,6 @@ bool StampInRange(int64_t stamp_ns) {
   return stamp_ns > -kMaxAbsStampNs && stamp_ns < kMaxAbsStampNs;
 }
 
-}  // namespace
-
-namespace {
-
 // A mesh's arrays whole triangles and vertices, within the limits; an error or empty.
 std::string CheckMeshSizes(const v1::MeshDelta& msg, const v1::LimitsConfig& limits,
                            const std::string& what, Refusal& k) {

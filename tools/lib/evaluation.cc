@@ -613,10 +613,6 @@ std::string BarLabel(double metres) {
   return text;
 }
 
-}  // namespace
-
-namespace {
-
 // Plan metres to SVG pixels: y up on the plan, down in SVG, `margin` metres about the plan
 // and both tracks.
 struct SvgMap {
