@@ -217,7 +217,9 @@ TEST(RecoveryTest, SearchesComeAsOftenAsTheWearerMayBeElsewhere) {
   // percent: a search is due after 0.2 * 3 / Elsewhere() seconds.
   const double mid =
       0.5 * (ExpectedLogLikelihood(m, index.max_distance_m()) + RandomLogLikelihood(m, index));
-  while (r.Elsewhere() > 0.02) r.Observe(mid, mid, 0.5, 1.0);
+  int updates = 0;
+  while (r.Elsewhere() > 0.02 && updates < 1000) r.Observe(mid, mid, 0.5, 1.0), ++updates;
+  ASSERT_LE(r.Elsewhere(), 0.02) << "still doubted after " << updates << " updates";
   const double due_s = o.search_share * o.search_interval_s / r.Elsewhere();
   EXPECT_GT(due_s, 30.0);
   EXPECT_FALSE(r.SearchDue(0.99 * due_s));
