@@ -202,6 +202,16 @@ double GlobalSearch::Score(const std::vector<Eigen::Vector2d>& points_slam,
   return n ? sum / static_cast<double>(n) : 0.0;
 }
 
+// A cloud turned to one heading: each point's cell offset from the cell of the cloud's
+// centre, the same as an offset into the pyramid's arrays (rows of `stride_`), and their
+// bounds. A node whose points all land on the arrays is summed without a bound check per
+// point (on a laser log few do: its cloud reaches past the plan's edge from most cells).
+struct GlobalSearch::Offsets {
+  std::vector<Eigen::Vector2i> cell;
+  std::vector<ptrdiff_t> linear;
+  Eigen::Vector2i min{0, 0}, max{0, 0};
+};
+
 namespace {
 
 // One point a cell (the first, in cell order), then a stride down to max_points; points
@@ -223,36 +233,6 @@ std::vector<Eigen::Vector2d> ThinToCells(const std::vector<Eigen::Vector2d>& poi
   for (const auto& [key, p] : voxels)
     if (k++ % step == 0) cloud.push_back(p);
   return cloud;
-}
-
-// A cloud turned to one heading: each point's cell offset from the cell of the cloud's
-// centre, the same as an offset into the pyramid's arrays (rows of `stride`), and their
-// bounds. A node whose points all land on the arrays (most of them) is summed without a
-// bound check per point.
-struct Offsets {
-  std::vector<Eigen::Vector2i> cell;
-  std::vector<ptrdiff_t> linear;
-  Eigen::Vector2i min{0, 0}, max{0, 0};
-};
-
-std::vector<Offsets> HeadingOffsets(const std::vector<Eigen::Vector2d>& cloud,
-                                    const Eigen::Vector2d& centre,
-                                    const std::vector<double>& angles, double cell, int stride) {
-  std::vector<Offsets> offsets(angles.size());
-  for (size_t r = 0; r < angles.size(); ++r) {
-    const Se2 rotate{angles[r], Eigen::Vector2d::Zero()};
-    Offsets& o = offsets[r];
-    for (const Eigen::Vector2d& p : cloud) {
-      const Eigen::Vector2d q = rotate * (p - centre) / cell;
-      const Eigen::Vector2i c(static_cast<int>(std::floor(q.x() + 0.5)),
-                              static_cast<int>(std::floor(q.y() + 0.5)));
-      o.min = o.cell.empty() ? c : o.min.cwiseMin(c);
-      o.max = o.cell.empty() ? c : o.max.cwiseMax(c);
-      o.cell.push_back(c);
-      o.linear.push_back(static_cast<ptrdiff_t>(c.y()) * stride + c.x());
-    }
-  }
-  return offsets;
 }
 
 // Whether every translation of a node (heading `angle`, level h, at cell x, y) lies within
@@ -296,11 +276,31 @@ std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>
     for (int i = 0; i < n; ++i) angles.push_back(WrapAngle(i * 2 * M_PI / n));
   }
   st.rotations = angles.size();
+  return BestFirst(HeadingOffsets(cloud, centre, angles), angles, centre, st);
+}
 
-  const int n_points = static_cast<int>(cloud.size());
-  const std::vector<Offsets> offsets = HeadingOffsets(cloud, centre, angles, cell, stride_);
-  // A leaf's score, or a node's bound on the scores of the leaves under it.
-  const auto sum = [&](const Offsets& o, int x, int y, const auto* level, auto total) {
+std::vector<GlobalSearch::Offsets> GlobalSearch::HeadingOffsets(
+    const std::vector<Eigen::Vector2d>& cloud, const Eigen::Vector2d& centre,
+    const std::vector<double>& angles) const {
+  std::vector<Offsets> offsets(angles.size());
+  for (size_t r = 0; r < angles.size(); ++r) {
+    const Se2 rotate{angles[r], Eigen::Vector2d::Zero()};
+    Offsets& o = offsets[r];
+    for (const Eigen::Vector2d& p : cloud) {
+      const Eigen::Vector2d q = rotate * (p - centre) / grid_.cell_m;
+      const Eigen::Vector2i c(static_cast<int>(std::floor(q.x() + 0.5)),
+                              static_cast<int>(std::floor(q.y() + 0.5)));
+      o.min = o.cell.empty() ? c : o.min.cwiseMin(c);
+      o.max = o.cell.empty() ? c : o.max.cwiseMax(c);
+      o.cell.push_back(c);
+      o.linear.push_back(static_cast<ptrdiff_t>(c.y()) * stride_ + c.x());
+    }
+  }
+  return offsets;
+}
+
+float GlobalSearch::Bound(const Offsets& o, int h, int x, int y) const {
+  const auto sum = [&](const auto* level, auto total) {
     const auto* at = level + static_cast<ptrdiff_t>(y + pad_) * stride_ + (x + pad_);
     // The offsets that land on the arrays: [-pad_, nx) x [-pad_, ny) about the node.
     const Eigen::Vector2i lo(-pad_ - x, -pad_ - y), hi(grid_.nx - x, grid_.ny - y);
@@ -315,40 +315,43 @@ std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>
     }
     return total;
   };
-  auto bound = [&](int r, int h, int x, int y) {
-    ++st.nodes;
-    const Offsets& o = offsets[static_cast<size_t>(r)];
-    if (h == 0) return sum(o, x, y, likelihood_.data(), 0.0f) / static_cast<float>(n_points);
-    const uint32_t steps = sum(o, x, y, bounds_[static_cast<size_t>(h - 1)].data(), uint32_t{0});
-    return static_cast<float>(steps) / (static_cast<float>(kSteps) * static_cast<float>(n_points));
-  };
+  const auto n_points = static_cast<float>(o.cell.size());
+  if (h == 0) return sum(likelihood_.data(), 0.0f) / n_points;
+  const uint32_t steps = sum(bounds_[static_cast<size_t>(h - 1)].data(), uint32_t{0});
+  return static_cast<float>(steps) / (static_cast<float>(kSteps) * n_points);
+}
 
+std::vector<GlobalPlace> GlobalSearch::BestFirst(const std::vector<Offsets>& offsets,
+                                                 const std::vector<double>& angles,
+                                                 const Eigen::Vector2d& centre,
+                                                 GlobalSearchStats& st) const {
   // Best first: a leaf off the top of the heap scores at least as well as every
   // translation not yet looked at, so places come out in the order of their scores.
   const float threshold = static_cast<float>(options_.min_score);
   std::priority_queue<Node> open;
+  const auto visit = [&](int r, int h, int x, int y) {
+    ++st.nodes;
+    if (const float b = Bound(offsets[static_cast<size_t>(r)], h, x, y); b >= threshold)
+      open.push({b, r, h, x, y});
+  };
   const int top = options_.depth - 1;
   for (int r = 0; r < static_cast<int>(angles.size()); ++r)
     for (int y = 0; y < grid_.ny; y += 1 << top)
-      for (int x = 0; x < grid_.nx; x += 1 << top)
-        if (const float b = bound(r, top, x, y); b >= threshold) open.push({b, r, top, x, y});
+      for (int x = 0; x < grid_.nx; x += 1 << top) visit(r, top, x, y);
 
+  const double cell = grid_.cell_m;
   std::vector<GlobalPlace> places;
   std::vector<std::pair<double, Eigen::Vector2d>> found;  // heading, centre cell (x, y)
   const double distinct_cells = options_.distinct_m / cell;
-  const auto covered = [&](const Node& n) {
-    return Covered(found, angles[static_cast<size_t>(n.rotation)], n.h, n.x, n.y, distinct_cells,
-                   options_.distinct_rad);
-  };
   while (!open.empty() && places.size() < max_places()) {
     const Node n = open.top();
     open.pop();
     if (!places.empty() && n.bound < options_.min_ratio * places.front().score) break;
     if (places.size() >= options_.places && n.bound < options_.crowd_ratio * places.front().score)
       break;
-    if (covered(n)) continue;
+    const double angle = angles[static_cast<size_t>(n.rotation)];
+    if (Covered(found, angle, n.h, n.x, n.y, distinct_cells, options_.distinct_rad)) continue;
     if (n.h == 0) {
-      const double angle = angles[static_cast<size_t>(n.rotation)];
       const Se2 rotate{angle, Eigen::Vector2d::Zero()};
       const Eigen::Vector2d at = grid_.origin + cell * Eigen::Vector2d(n.x + 0.5, n.y + 0.5);
       places.push_back({Se2{angle, at - rotate * centre}, n.bound});
@@ -357,12 +360,9 @@ std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>
     }
     const int half = 1 << (n.h - 1);
     for (int dy = 0; dy <= half; dy += half)
-      for (int dx = 0; dx <= half; dx += half) {
-        const int x = n.x + dx, y = n.y + dy;
-        if (x >= grid_.nx || y >= grid_.ny) continue;
-        if (const float b = bound(n.rotation, n.h - 1, x, y); b >= threshold)
-          open.push({b, n.rotation, n.h - 1, x, y});
-      }
+      for (int dx = 0; dx <= half; dx += half)
+        if (n.x + dx < grid_.nx && n.y + dy < grid_.ny)
+          visit(n.rotation, n.h - 1, n.x + dx, n.y + dy);
   }
   return places;
 }

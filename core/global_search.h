@@ -109,6 +109,19 @@ class GlobalSearch {
 
  private:
   struct Node;
+  struct Offsets;  // the cloud turned to one heading, as offsets into the pyramid
+  // The cloud turned to each of `angles` about its centre.
+  std::vector<Offsets> HeadingOffsets(const std::vector<Eigen::Vector2d>& cloud,
+                                      const Eigen::Vector2d& centre,
+                                      const std::vector<double>& angles) const;
+  // The score of the cloud turned as `o` at cell (x, y) of level 0, or for h >= 1 a bound
+  // on the scores at every cell of the square [x, x + 2^h) x [y, y + 2^h).
+  float Bound(const Offsets& o, int h, int x, int y) const;
+  // Search's branch and bound over every heading of `offsets` (the angles in `angles`,
+  // about the cloud's `centre`): the places in the order of their scores.
+  std::vector<GlobalPlace> BestFirst(const std::vector<Offsets>& offsets,
+                                     const std::vector<double>& angles,
+                                     const Eigen::Vector2d& centre, GlobalSearchStats& st) const;
   // One cell of arc at reach_m (Hess et al. eq. 7), or rotation_step_rad when set.
   double HeadingStep(double reach_m) const;
   // The pyramid at cell (x, y), for x, y from -pad_ on (0 outside the plan's grid):
