@@ -6,7 +6,7 @@ namespace floorpose::tracking {
 
 Reliability Assess(const BeliefSummary& s, const PublishOptions& options) {
   Reliability r;
-  r.probability = s.mass_within * (1.0 - s.elsewhere);
+  r.probability = WithinProbability(s.mass_within, s.elsewhere);
   r.flag = r.probability >= options.reliable   ? ReliabilityFlag::kReliable
            : r.probability >= options.degraded ? ReliabilityFlag::kDegraded
                                                : ReliabilityFlag::kUnreliable;

@@ -27,6 +27,12 @@ struct BeliefSummary {
   bool checked = false;    // an update weighted the belief since it was set
 };
 
+// The published probability: mass_within times the probability the wearer is at one of
+// the belief's places (1 - elsewhere).
+inline double WithinProbability(double mass_within, double elsewhere) {
+  return mass_within * (1.0 - elsewhere);
+}
+
 Reliability Assess(const BeliefSummary& s, const PublishOptions& options);
 
 }  // namespace floorpose::tracking

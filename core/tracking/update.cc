@@ -93,7 +93,7 @@ Mode PublishedMode(const Belief& belief, const MclUpdate& u, const PublishOption
   if (!u.published) return best;
   const Mode kept = belief.ModeAt(*u.published, u.wearer_slam, publish.within_m, kPlaceRad);
   if (kept.mass * kSwitchRatio >= best.mass) return kept;
-  const bool trusted = best.mass * (1 - u.elsewhere) >= publish.reliable;
+  const bool trusted = WithinProbability(best.mass, u.elsewhere) >= publish.reliable;
   return trusted || kept.mass < kOfferShare ? best : kept;
 }
 
