@@ -85,6 +85,20 @@ double GlobalSearch::HeadingStep(double reach_m) const {
 
 namespace {
 
+// The mean of a cloud's points, and how far the farthest of them lies from it.
+struct Extent {
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  double reach = 0;
+};
+
+Extent ExtentOf(const std::vector<Eigen::Vector2d>& points) {
+  Extent e;
+  for (const Eigen::Vector2d& p : points) e.centre += p;
+  e.centre /= static_cast<double>(points.size());
+  for (const Eigen::Vector2d& p : points) e.reach = std::max(e.reach, (p - e.centre).norm());
+  return e;
+}
+
 // Points binned in cells of kDirectionRadiusM: each cell's neighbourhood is a local line fit.
 constexpr double kDirectionRadiusM = 0.3;
 using DirectionBins = std::map<std::pair<int64_t, int64_t>, std::vector<Eigen::Vector2d>>;
@@ -172,16 +186,11 @@ std::vector<double> GlobalSearch::WallHeadings(
   const std::vector<int> chosen = DirectionPeaks(cloud, plan_directions_, options_.heading_peaks);
   if (chosen.empty()) return {};
   // Each alignment and its half turn, widened by the spread in Search's heading steps.
-  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-  size_t count = 0;
+  std::vector<Eigen::Vector2d> finite;
   for (const auto& [key, members] : bins)
-    for (const Eigen::Vector2d& q : members) centre += q, ++count;
-  centre /= static_cast<double>(count);
-  double reach = 0;
-  for (const auto& [key, members] : bins)
-    for (const Eigen::Vector2d& q : members) reach = std::max(reach, (q - centre).norm());
+    finite.insert(finite.end(), members.begin(), members.end());
   std::vector<double> headings;
-  const double step = HeadingStep(reach);
+  const double step = HeadingStep(ExtentOf(finite).reach);
   const int n = static_cast<int>(std::ceil(options_.heading_spread_rad / step));
   for (int c : chosen)
     for (double half : {0.0, M_PI})
@@ -261,22 +270,18 @@ std::vector<GlobalPlace> GlobalSearch::Search(const std::vector<Eigen::Vector2d>
 
   const std::vector<Eigen::Vector2d> cloud = ThinToCells(points_slam, cell, options_.max_points);
   if (cloud.empty()) return {};
-  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-  for (const Eigen::Vector2d& p : cloud) centre += p;
-  centre /= static_cast<double>(cloud.size());
-  double reach = 0;
-  for (const Eigen::Vector2d& p : cloud) reach = std::max(reach, (p - centre).norm());
+  const Extent extent = ExtentOf(cloud);
   st.points = cloud.size();
 
   // Headings: every rotation_step (by default one cell of arc at the farthest point).
   std::vector<double> angles = rotations;
   if (angles.empty()) {
-    const double step_rad = HeadingStep(reach);
+    const double step_rad = HeadingStep(extent.reach);
     const int n = static_cast<int>(std::ceil(2 * M_PI / step_rad));
     for (int i = 0; i < n; ++i) angles.push_back(WrapAngle(i * 2 * M_PI / n));
   }
   st.rotations = angles.size();
-  return BestFirst(HeadingOffsets(cloud, centre, angles), angles, centre, st);
+  return BestFirst(HeadingOffsets(cloud, extent.centre, angles), angles, extent.centre, st);
 }
 
 std::vector<GlobalSearch::Offsets> GlobalSearch::HeadingOffsets(
