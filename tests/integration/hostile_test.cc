@@ -109,7 +109,10 @@ TEST_F(HostileTest, StampsFromTheFarFutureAreRefusedAndTheWalkGoesOn) {
   });
   std::printf("RELIABLE after step %zu: %.1f%% clean, %.1f%% with the poisoned stamps\n", third,
               clean, attacked);
-  EXPECT_NEAR(attacked, clean, 2.0);
+  // Within one pose: the daemon is deterministic given its inputs' order, but a mesh
+  // delta's fragment resent under load can reach it after the pose sent just after it,
+  // and an update then weighs one scan less.
+  EXPECT_NEAR(attacked, clean, 100.0 / static_cast<double>(walk.steps.size() - third) + 0.1);
   EXPECT_GT(Registrations(), registrations_at_attack) << "no registration after the attack";
   ASSERT_TRUE(link_->status);
   EXPECT_EQ(link_->status->counters().future_stamps(), 2u);

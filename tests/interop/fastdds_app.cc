@@ -128,18 +128,35 @@ class App {
         timeout);
   }
 
-  // Sends a command with the next request id; waits for the reply with that id.
-  CommandReply Request(Command command, std::chrono::seconds timeout) {
-    const uint64_t id = Send(std::move(command));
-    if (!WaitUntil([&] { return replies_.count(id) > 0; }, timeout))
-      Fail("no reply to request " + std::to_string(id));
-    return replies_.at(id);
+  // Sends a command with the next request id and waits for its reply; without one within
+  // two seconds, sends it again with a new id (section 7's resend rule: the daemon's
+  // reader may not have matched our writer yet, though ours matched it). The request
+  // answered is the one reported.
+  CommandReply Request(const Command& command, std::chrono::seconds timeout) {
+    const auto end = Clock::now() + timeout;
+    std::vector<uint64_t> ids;
+    const auto answered = [&]() -> std::optional<uint64_t> {
+      for (const uint64_t id : ids)
+        if (replies_.count(id)) return id;
+      return std::nullopt;
+    };
+    do {
+      ids.push_back(Post(command));
+      if (WaitUntil([&] { return answered().has_value(); }, std::chrono::seconds(2))) {
+        requests_.push_back(*answered());
+        return replies_.at(requests_.back());
+      }
+    } while (Clock::now() < end);
+    Fail("no reply to request " + std::to_string(ids.front()) + " nor to its " +
+         std::to_string(ids.size() - 1) + " resends");
   }
 
-  uint64_t Send(Command command) {
+  // Sends a command whose reply is waited for at the end of the walk.
+  void Send(const Command& command) { requests_.push_back(Post(command)); }
+
+  uint64_t Post(Command command) {
     command.set_request_id(++request_id_);
     Publish(command_, command.SerializeAsString(), 0);
-    requests_.push_back(command.request_id());
     return command.request_id();
   }
 
