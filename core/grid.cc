@@ -92,24 +92,10 @@ std::vector<int> GridAStar(const GridGeometry& grid, const std::vector<uint8_t>&
   };
   GridSearchScratch local;
   GridSearchScratch& s = scratch ? *scratch : local;
-  if (s.stamp.size() != grid.size() || ++s.search == 0) {
-    s.stamp.assign(grid.size(), 0);
-    s.g.resize(grid.size());
-    s.parent.resize(grid.size());
-    s.closed.resize(grid.size());
-    s.search = 1;
-  }
-  auto touch = [&s](int cell) {
-    if (s.stamp[cell] != s.search) {
-      s.stamp[cell] = s.search;
-      s.g[cell] = std::numeric_limits<double>::infinity();
-      s.parent[cell] = -1;
-      s.closed[cell] = 0;
-    }
-  };
+  s.Begin(grid.size());
   using Entry = std::pair<double, int>;  // (f, cell): ties break on the cell, deterministic
   std::priority_queue<Entry, std::vector<Entry>, std::greater<>> open;
-  touch(start);
+  s.Touch(start);
   s.g[start] = 0;
   open.push({h(start), start});
   bool reached = false;
@@ -128,7 +114,7 @@ std::vector<int> GridAStar(const GridGeometry& grid, const std::vector<uint8_t>&
         if ((dx == 0 && dy == 0) || !grid.InGrid(x + dx, y + dy)) continue;
         const int q = (y + dy) * nx + x + dx;
         if (!passable[q]) continue;
-        touch(q);
+        s.Touch(q);
         if (s.closed[q]) continue;
         if (dx != 0 && dy != 0 && (!passable[y * nx + x + dx] || !passable[(y + dy) * nx + x]))
           continue;

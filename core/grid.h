@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <vector>
 
 #include "core/floor_plan.h"
@@ -55,6 +56,26 @@ struct GridSearchScratch {
   std::vector<int> parent;
   std::vector<uint8_t> closed;
   uint32_t search = 0;
+
+  // A new search over `cells` cells: every cell untouched, in O(1) but every 2^32nd.
+  void Begin(size_t cells) {
+    if (stamp.size() != cells || ++search == 0) {
+      stamp.assign(cells, 0);
+      g.resize(cells);
+      parent.resize(cells);
+      closed.resize(cells);
+      search = 1;
+    }
+  }
+  // A cell's first touch in this search: unreached, no parent, open.
+  void Touch(int cell) {
+    if (stamp[cell] != search) {
+      stamp[cell] = search;
+      g[cell] = std::numeric_limits<double>::infinity();
+      parent[cell] = -1;
+      closed[cell] = 0;
+    }
+  }
 };
 
 // The cheapest 8-connected path from start to goal through passable cells, never cutting

@@ -5,26 +5,32 @@
 
 namespace floorpose {
 
+namespace {
+
+// Why the raster cannot be read; empty when it can.
+std::string RasterError(const OccupancyRaster& raster, const RasterPlanOptions& options) {
+  if (raster.width <= 0 || raster.height <= 0 ||
+      static_cast<size_t>(raster.width) * static_cast<size_t>(raster.height) > options.max_cells)
+    return "raster plan: bad size " + std::to_string(raster.width) + " x " +
+           std::to_string(raster.height) + " (at most " + std::to_string(options.max_cells) +
+           " cells)";
+  if (raster.occupied.size() != static_cast<size_t>(raster.width) * raster.height)
+    return "raster plan: " + std::to_string(raster.occupied.size()) + " cells for " +
+           std::to_string(raster.width) + " x " + std::to_string(raster.height);
+  if (!(raster.resolution_m > 0) || !std::isfinite(raster.resolution_m) ||
+      !raster.origin.allFinite())
+    return "raster plan: resolution must be positive and the origin finite";
+  return {};
+}
+
+}  // namespace
+
 FloorPlanParse FloorPlanFromRaster(const OccupancyRaster& raster, std::string id,
                                    const RasterPlanOptions& options, RasterPlanReport* report) {
   FloorPlanParse out;
+  out.error = RasterError(raster, options);
+  if (!out.error.empty()) return out;
   const double res = raster.resolution_m;
-  if (raster.width <= 0 || raster.height <= 0 ||
-      static_cast<size_t>(raster.width) * static_cast<size_t>(raster.height) > options.max_cells) {
-    out.error = "raster plan: bad size " + std::to_string(raster.width) + " x " +
-                std::to_string(raster.height) + " (at most " + std::to_string(options.max_cells) +
-                " cells)";
-    return out;
-  }
-  if (raster.occupied.size() != static_cast<size_t>(raster.width) * raster.height) {
-    out.error = "raster plan: " + std::to_string(raster.occupied.size()) + " cells for " +
-                std::to_string(raster.width) + " x " + std::to_string(raster.height);
-    return out;
-  }
-  if (!(res > 0) || !std::isfinite(res) || !raster.origin.allFinite()) {
-    out.error = "raster plan: resolution must be positive and the origin finite";
-    return out;
-  }
   const int w = raster.width, h = raster.height;
   auto occupied = [&](int col, int row) {
     return col >= 0 && row >= 0 && col < w && row < h &&

@@ -118,6 +118,42 @@ struct Step {
   std::vector<Eigen::Vector3d> degenerate;
 };
 
+// The pairs a step weighs: picky ICP (Zinsser et al. 2003) keeps those within
+// reject_sigma deviations, about their centroid, with the Cauchy scale and RMS radius
+// they give. Fewer than 3 kept: count says so, and the scales are not set.
+struct KeptPairs {
+  double reject = 0;  // a pair at most this far apart is kept, metres
+  double cauchy = 0;  // the Cauchy scale: the median absolute residual times the factor
+  double radius = 0;  // RMS distance of the kept points from their centroid (at least 0.1 m)
+  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+  size_t count = 0;
+};
+
+KeptPairs KeepPairs(const std::vector<Row>& rows, const IcpOptions& o) {
+  KeptPairs k;
+  double sum2 = 0;
+  for (const Row& q : rows) sum2 += q.d * q.d;
+  k.reject = std::max(o.reject_sigma * std::sqrt(sum2 / rows.size()), 0.01);
+  std::vector<double> abs_r;
+  abs_r.reserve(rows.size());
+  for (const Row& q : rows) {
+    if (q.d > k.reject) continue;
+    abs_r.push_back(std::abs(q.r));
+    k.centroid += q.p;
+  }
+  k.count = abs_r.size();
+  if (k.count < 3) return k;
+  k.centroid /= static_cast<double>(k.count);
+  // Cauchy scale tied to the data: the median absolute residual of the kept pairs.
+  std::nth_element(abs_r.begin(), abs_r.begin() + abs_r.size() / 2, abs_r.end());
+  k.cauchy = std::max(o.cauchy_scale_factor * abs_r[abs_r.size() / 2], 0.01);
+  double radius2 = 0;
+  for (const Row& q : rows)
+    if (q.d <= k.reject) radius2 += (q.p - k.centroid).squaredNorm();
+  k.radius = std::max(std::sqrt(radius2 / abs_r.size()), 0.1);
+  return k;
+}
+
 // Picky rejection, Cauchy weights, and the weighted least-squares step with solution
 // remapping. Unknowns are (theta, x, y) about the centroid of the rows; theta is scaled
 // by the RMS radius so that its eigenvalue compares with the translations'.
@@ -127,30 +163,13 @@ Step SolveStep(const std::vector<Row>& rows, const IcpOptions& o, bool translati
     st.reason = "fewer than 3 correspondences";
     return st;
   }
-  // Picky ICP (Zinsser et al. 2003): reject pairs beyond reject_sigma deviations.
-  double sum2 = 0;
-  for (const Row& q : rows) sum2 += q.d * q.d;
-  const double reject = std::max(o.reject_sigma * std::sqrt(sum2 / rows.size()), 0.01);
-  std::vector<double> abs_r;
-  abs_r.reserve(rows.size());
-  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
-  for (const Row& q : rows) {
-    if (q.d > reject) continue;
-    abs_r.push_back(std::abs(q.r));
-    centroid += q.p;
-  }
-  if (abs_r.size() < 3) {
+  const KeptPairs kept = KeepPairs(rows, o);
+  if (kept.count < 3) {
     st.reason = "fewer than 3 pairs after rejection";
     return st;
   }
-  centroid /= static_cast<double>(abs_r.size());
-  // Cauchy scale tied to the data: the median absolute residual of the kept pairs.
-  std::nth_element(abs_r.begin(), abs_r.begin() + abs_r.size() / 2, abs_r.end());
-  const double c = std::max(o.cauchy_scale_factor * abs_r[abs_r.size() / 2], 0.01);
-  double radius2 = 0;
-  for (const Row& q : rows)
-    if (q.d <= reject) radius2 += (q.p - centroid).squaredNorm();
-  const double radius = std::max(std::sqrt(radius2 / abs_r.size()), 0.1);
+  const double reject = kept.reject, c = kept.cauchy, radius = kept.radius;
+  const Eigen::Vector2d& centroid = kept.centroid;
 
   // Equation 4.4 in 2D: A_i = [p x n / radius, n], b_i = n . (p - y).
   Eigen::Matrix3d H = Eigen::Matrix3d::Zero();

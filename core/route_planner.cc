@@ -198,6 +198,14 @@ Route RoutePlanner::Search(const std::vector<uint8_t>& passable, const Eigen::Ve
     route.error = text;
     return route;
   }
+  ShapePath(cells, passable, from, to, goal, &route);
+  return route;
+}
+
+void RoutePlanner::ShapePath(const std::vector<int>& cells, const std::vector<uint8_t>& passable,
+                             const Eigen::Vector2d& from, const Eigen::Vector2d& to, int goal,
+                             Route* route) const {
+  auto open = [&](int cell) { return cell >= 0 && passable[cell]; };
   std::vector<Eigen::Vector2d> points;
   points.reserve(cells.size() + 2);
   const bool start_snapped = !open(grid_.CellOf(from));
@@ -211,15 +219,14 @@ Route RoutePlanner::Search(const std::vector<uint8_t>& passable, const Eigen::Ve
   auto sight = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
     return WalkSegmentCells(grid_, a, b, open);
   };
-  route.path = PullString(tail, sight);
-  DropCorners(&route.path, sight);
+  route->path = PullString(tail, sight);
+  DropCorners(&route->path, sight);
   if (start_snapped) {
-    route.start_moved_m = (route.path.front() - from).norm();
-    route.path.insert(route.path.begin(), from);
+    route->start_moved_m = (route->path.front() - from).norm();
+    route->path.insert(route->path.begin(), from);
   }
-  if (goal_snapped) route.goal_moved_m = (route.path.back() - to).norm();
-  route.length_m = PolylineLength(route.path);
-  return route;
+  if (goal_snapped) route->goal_moved_m = (route->path.back() - to).norm();
+  route->length_m = PolylineLength(route->path);
 }
 
 Route RoutePlanner::WayOut(const Eigen::Vector2d& from,

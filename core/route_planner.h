@@ -83,6 +83,11 @@ class RoutePlanner {
   // The route on `passable` (passable_, or it with keep-outs), once Refusal found nothing.
   Route Search(const std::vector<uint8_t>& passable, const Eigen::Vector2d& from,
                const Eigen::Vector2d& to) const;
+  // Search's path through the A* cells, from `from` to `to`, pulled tight where the
+  // straight legs are clear; a start or goal snapped off a wall keeps its leg to it.
+  void ShapePath(const std::vector<int>& cells, const std::vector<uint8_t>& passable,
+                 const Eigen::Vector2d& from, const Eigen::Vector2d& to, int goal,
+                 Route* route) const;
   // passable_ less the cells a body centred in them would reach into a keep-out.
   std::vector<uint8_t> WithKeepOuts(const Eigen::Vector2d& from,
                                     const std::vector<KeepOut>& keep_out) const;

@@ -8,27 +8,22 @@
 
 namespace floorpose {
 
-std::vector<WallPoint> ExtractWallPoints(const SlamMesh& mesh, uint64_t mesh_id,
-                                         const WallExtractionOptions& options,
-                                         WallExtractionReport* report) {
-  WallExtractionReport local;
-  WallExtractionReport& r = report ? *report : local;
-  r = {};
-  std::vector<WallPoint> out;
-  if (!mesh.vertices || !mesh.triangles) return out;
+namespace {
+
+// A vertical triangle: its corners, its horizontal normal and its area.
+struct Face {
+  Eigen::Vector3d v0, v1, v2;
+  Eigen::Vector2f n2;
+  double area;
+};
+
+// Algorithm 4.1 lines 6-8: the mesh's vertical triangles, counted in the report.
+std::vector<Face> VerticalFaces(const SlamMesh& mesh, const WallExtractionOptions& options,
+                                WallExtractionReport& r) {
   const auto& V = *mesh.vertices;
   const auto& F = *mesh.triangles;
-  SplitMix64 rng(options.seed * 0x9e3779b97f4a7c15ULL ^ mesh_id);
   const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
   const double max_edge2 = options.max_edge_m * options.max_edge_m;
-
-  // Pass 1 finds the vertical triangles and their areas; pass 2 samples them, once the
-  // total is known to fit.
-  struct Face {
-    Eigen::Vector3d v0, v1, v2;
-    Eigen::Vector2f n2;
-    double area;
-  };
   std::vector<Face> faces;
   for (size_t t = 0; t + 2 < F.size(); t += 3) {
     ++r.triangles;
@@ -54,14 +49,16 @@ std::vector<WallPoint> ExtractWallPoints(const SlamMesh& mesh, uint64_t mesh_id,
     r.wall_area_m2 += area;
     faces.push_back({v0, v1, v2, normal.head<2>().normalized().cast<float>(), area});
   }
-  if (options.max_points > 0 &&
-      r.wall_area_m2 * options.density_per_m2 > static_cast<double>(options.max_points)) {
-    r.over_limit = true;
-    return out;
-  }
+  return faces;
+}
+
+// Algorithm 4.1 line 9: points on the faces at density_per_m2, those within the height
+// band kept, without their height (section 4.1.1).
+void SampleFaces(const std::vector<Face>& faces, const WallExtractionOptions& options,
+                 SplitMix64& rng, WallExtractionReport& r, std::vector<WallPoint>& out) {
   out.reserve(static_cast<size_t>(r.wall_area_m2 * options.density_per_m2) + faces.size());
   for (const Face& f : faces) {
-    const double expected = f.area * options.density_per_m2;  // line 9
+    const double expected = f.area * options.density_per_m2;
     size_t count = static_cast<size_t>(expected);
     if (rng.Uniform() < expected - static_cast<double>(count)) ++count;
     for (size_t j = 0; j < count; ++j) {
@@ -73,9 +70,31 @@ std::vector<WallPoint> ExtractWallPoints(const SlamMesh& mesh, uint64_t mesh_id,
         ++r.outside_band;
         continue;
       }
-      out.push_back({p.head<2>().cast<float>(), f.n2});  // drop z (section 4.1.1)
+      out.push_back({p.head<2>().cast<float>(), f.n2});
     }
   }
+}
+
+}  // namespace
+
+std::vector<WallPoint> ExtractWallPoints(const SlamMesh& mesh, uint64_t mesh_id,
+                                         const WallExtractionOptions& options,
+                                         WallExtractionReport* report) {
+  WallExtractionReport local;
+  WallExtractionReport& r = report ? *report : local;
+  r = {};
+  std::vector<WallPoint> out;
+  if (!mesh.vertices || !mesh.triangles) return out;
+  // Pass 1 finds the vertical triangles and their areas; pass 2 samples them, once the
+  // total is known to fit.
+  const std::vector<Face> faces = VerticalFaces(mesh, options, r);
+  if (options.max_points > 0 &&
+      r.wall_area_m2 * options.density_per_m2 > static_cast<double>(options.max_points)) {
+    r.over_limit = true;
+    return out;
+  }
+  SplitMix64 rng(options.seed * 0x9e3779b97f4a7c15ULL ^ mesh_id);
+  SampleFaces(faces, options, rng, r, out);
   return out;
 }
 

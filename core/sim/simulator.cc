@@ -1290,18 +1290,44 @@ std::string Describe(const Simulation& sim, const SimulatorOptions& o, const Set
 
 }  // namespace
 
+namespace {
+
+// Why a plan or options cannot be simulated; empty when they can.
+std::string InvalidInput(const FloorPlan& input, const SimulatorOptions& o) {
+  if (input.segments.empty()) return "the plan has no walls";
+  if (!(o.pose_period_s > 0) || o.rays_h < 1 || o.rays_v < 1 || o.poses_per_mesh_tick < 1 ||
+      !(o.chunk_m > 0) || !(o.patch_m > 0) || !(o.floor_cell_m > 0) || o.max_subdivisions < 1)
+    return "invalid simulator options";
+  return {};
+}
+
+// The headset maps what it sees along the walk (nothing while tracking is lost) and the
+// wearer picks a wall on the mesh; places the pick and says whether it was on the mesh.
+bool MeshAndPick(const SimulatorOptions& o, const std::vector<Surface>& surfaces,
+                 const std::vector<HeadSample>& head, const std::vector<uint8_t>& lost,
+                 SplitMix64& sensor_rng, SplitMix64& mesh_rng, SplitMix64& pick_rng,
+                 Simulation* sim) {
+  const size_t n = head.size();
+  const size_t earliest_pick =
+      std::min(n - 1, static_cast<size_t>(std::llround(o.pick_time_s / o.pose_period_s)));
+  Mesher mesher(o, surfaces, head, sim->reality.ceiling_m, sensor_rng, mesh_rng);
+  for (size_t i = 0; i < n && o.mesh; ++i) {
+    if (lost[i]) continue;
+    mesher.See(i);
+    if (i % o.poses_per_mesh_tick == 0) mesher.Emit(i, sim->steps[i], sim->counts);
+    mesher.TryPick(i, earliest_pick);
+  }
+  PlacePick(mesher.picked(), earliest_pick, o, pick_rng, sim);
+  return mesher.picked().has_value();
+}
+
+}  // namespace
+
 Simulation Simulate(const FloorPlan& input, const SimulatorOptions& o,
                     const std::vector<TimedPose>* trajectory) {
   Simulation sim;
-  if (input.segments.empty()) {
-    sim.error = "the plan has no walls";
-    return sim;
-  }
-  if (!(o.pose_period_s > 0) || o.rays_h < 1 || o.rays_v < 1 || o.poses_per_mesh_tick < 1 ||
-      !(o.chunk_m > 0) || !(o.patch_m > 0) || !(o.floor_cell_m > 0) || o.max_subdivisions < 1) {
-    sim.error = "invalid simulator options";
-    return sim;
-  }
+  sim.error = InvalidInput(input, o);
+  if (!sim.error.empty()) return sim;
   // Every plan and scenario gets its own draws for a seed: the SLAM drift and the wall
   // pick's error would otherwise repeat across a suite's plans (three seeds, three
   // pick errors).
@@ -1357,18 +1383,8 @@ Simulation Simulate(const FloorPlan& input, const SimulatorOptions& o,
   for (const Loss& loss : losses)
     for (size_t i = loss.from; i < loss.to; ++i) lost[i] = 1;
   settings.drift = TrackSlam(head, losses, o, drift_rng, &sim);
-
-  const size_t earliest_pick =
-      std::min(n - 1, static_cast<size_t>(std::llround(o.pick_time_s / dt)));
-  Mesher mesher(o, surfaces, head, sim.reality.ceiling_m, sensor_rng, mesh_rng);
-  for (size_t i = 0; i < n && o.mesh; ++i) {
-    if (lost[i]) continue;  // tracking lost: the headset maps nothing
-    mesher.See(i);
-    if (i % o.poses_per_mesh_tick == 0) mesher.Emit(i, sim.steps[i], sim.counts);
-    mesher.TryPick(i, earliest_pick);
-  }
-  settings.picked_on_mesh = mesher.picked().has_value();
-  PlacePick(mesher.picked(), earliest_pick, o, pick_rng, &sim);
+  settings.picked_on_mesh =
+      MeshAndPick(o, surfaces, head, lost, sensor_rng, mesh_rng, pick_rng, &sim);
   if (!losses.empty()) DropLostSteps(lost, &sim);  // while lost, the headset sends nothing
   if (o.scenario == Scenario::kScaled) settings.scaled = ScaleAndSkew(input, o, reality_rng, &sim);
   PlaceMarkers(&sim);
