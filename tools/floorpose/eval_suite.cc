@@ -494,6 +494,41 @@ void WriteBestAndWorst(const std::vector<EvalReport>& reports, const std::vector
   }
 }
 
+// Every plan, by its path; false, with the error logged, when one does not load.
+bool LoadPlans(const std::vector<std::string>& plans, std::map<std::string, FloorPlan>* loaded) {
+  for (const std::string& p : plans) {
+    FloorPlanParse parse = platform::LoadFloorPlan(p);
+    if (!parse.ok()) {
+      spdlog::error("{}", parse.error);
+      return false;
+    }
+    (*loaded)[p] = parse.plan;
+  }
+  return true;
+}
+
+// results.json (a line per run, in the order of plan, scenario, seed and method),
+// results.md with the calibration curve's SVG, the best and worst runs' SVGs; the tables
+// on stdout.
+void WriteResults(std::vector<EvalReport> reports, const std::vector<SuiteRun>& runs,
+                  const std::map<std::string, FloorPlan>& loaded, const SuiteOptions& o) {
+  std::sort(reports.begin(), reports.end(), [](const EvalReport& a, const EvalReport& b) {
+    return std::tie(a.plan_id, a.scenario, a.seed, a.method) <
+           std::tie(b.plan_id, b.scenario, b.seed, b.method);
+  });
+  {
+    std::ofstream json(fs::path(o.out) / "results.json");
+    for (const EvalReport& r : reports) json << ToJson(r) << "\n";
+  }
+  std::vector<CalibrationBin> curve;
+  const std::string md = ResultsMarkdown(reports, o, &curve);
+  std::ofstream(fs::path(o.out) / "svg" / "calibration.svg") << CalibrationSvg(
+      {{o.methods.front() + ": published probability, every pose of the suite", curve}});
+  std::ofstream(fs::path(o.out) / "results.md") << md;
+  WriteBestAndWorst(reports, runs, loaded, o);
+  std::fputs(md.c_str(), stdout);
+}
+
 int RunSuite(const SuiteOptions& o) {
   spdlog::set_level(spdlog::level::warn);  // thousands of registrations: only problems
   v1::FloorposedConfig base_config;
@@ -511,14 +546,7 @@ int RunSuite(const SuiteOptions& o) {
     fs::create_directories(fs::path(o.out) / dir);
   std::vector<SuiteRun> runs = PlanRuns(o, plans);
   std::map<std::string, FloorPlan> loaded;
-  for (const std::string& p : plans) {
-    FloorPlanParse parse = platform::LoadFloorPlan(p);
-    if (!parse.ok()) {
-      spdlog::error("{}", parse.error);
-      return 1;
-    }
-    loaded[p] = parse.plan;
-  }
+  if (!LoadPlans(plans, &loaded)) return 1;
 
   // Work items: one simulation, then its evaluations; spread over the cores.
   std::vector<EvalReport> reports;
@@ -552,21 +580,7 @@ int RunSuite(const SuiteOptions& o) {
     }
   });
 
-  std::sort(reports.begin(), reports.end(), [](const EvalReport& a, const EvalReport& b) {
-    return std::tie(a.plan_id, a.scenario, a.seed, a.method) <
-           std::tie(b.plan_id, b.scenario, b.seed, b.method);
-  });
-  {
-    std::ofstream json(fs::path(o.out) / "results.json");
-    for (const EvalReport& r : reports) json << ToJson(r) << "\n";
-  }
-  std::vector<CalibrationBin> curve;
-  const std::string md = ResultsMarkdown(reports, o, &curve);
-  std::ofstream(fs::path(o.out) / "svg" / "calibration.svg") << CalibrationSvg(
-      {{o.methods.front() + ": published probability, every pose of the suite", curve}});
-  std::ofstream(fs::path(o.out) / "results.md") << md;
-  WriteBestAndWorst(reports, runs, loaded, o);
-  std::fputs(md.c_str(), stdout);
+  WriteResults(std::move(reports), runs, loaded, o);
   return failures ? 1 : 0;
 }
 
