@@ -185,8 +185,7 @@ TEST_F(CommandViewTest, AlertsMarkersZoomAndFloorsAsALeadUsesThem) {
   const json fit = lead->Run(kCentre, json::array({"#zoom-fit"}));
   lead->Click(fit[0], fit[1]);
   // Back at zoom 1 before the clicks below, which aim at the fitted map (Screen). Each
-  // aim reads the map where it is then: a banner that comes (a wearer's data stops)
-  // moves the map down.
+  // aim reads the map's box at that moment, not an earlier look's.
   auto fitted = [&](const json& p) {
     const Eigen::Vector2d a = Screen(p, alice.x(), alice.y());
     return std::abs(p["devices"]["hl-test"].value("x", 0.0) - a.x()) < 2.0 &&
