@@ -1288,10 +1288,6 @@ std::string Describe(const Simulation& sim, const SimulatorOptions& o, const Set
   return text;
 }
 
-}  // namespace
-
-namespace {
-
 // Why a plan or options cannot be simulated; empty when they can.
 std::string InvalidInput(const FloorPlan& input, const SimulatorOptions& o) {
   if (input.segments.empty()) return "the plan has no walls";
