@@ -8,6 +8,14 @@
 #include <utility>
 
 namespace floorpose {
+namespace {
+
+// Whether a cell (-1: none) is passable in `passable`.
+auto PassableIn(const std::vector<uint8_t>& passable) {
+  return [&passable](int cell) { return cell >= 0 && passable[cell]; };
+}
+
+}  // namespace
 
 RoutePlanner::RoutePlanner(const FloorPlan& plan, const RouteOptions& options) : options_(options) {
   for (const PlanLine& o : plan.openings)
@@ -158,7 +166,7 @@ Route RoutePlanner::Search(const std::vector<uint8_t>& passable, const Eigen::Ve
     route.error = text;
     return route;
   };
-  auto open = [&](int cell) { return cell >= 0 && passable[cell]; };
+  const auto open = PassableIn(passable);
   const int start = open(grid_.CellOf(from)) ? grid_.CellOf(from) : Snap(passable, from, -1);
   if (start < 0)
     return fail("start (%.2f, %.2f) has no free space around it (a wall, or the outside)", from.x(),
@@ -205,7 +213,7 @@ Route RoutePlanner::Search(const std::vector<uint8_t>& passable, const Eigen::Ve
 void RoutePlanner::ShapePath(const std::vector<int>& cells, const std::vector<uint8_t>& passable,
                              const Eigen::Vector2d& from, const Eigen::Vector2d& to, int goal,
                              Route* route) const {
-  auto open = [&](int cell) { return cell >= 0 && passable[cell]; };
+  const auto open = PassableIn(passable);
   std::vector<Eigen::Vector2d> points;
   points.reserve(cells.size() + 2);
   const bool start_snapped = !open(grid_.CellOf(from));
@@ -295,7 +303,7 @@ Route RoutePlanner::Through(const Eigen::Vector2d& from, const std::vector<Eigen
     at = route.path.back();
   }
   const std::vector<uint8_t>& passable = grid_for(from);
-  auto open = [&](int cell) { return cell >= 0 && passable[cell]; };
+  const auto open = PassableIn(passable);
   DropCorners(&route.path, [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
     return WalkSegmentCells(grid_, a, b, open);
   });
