@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <queue>
 #include <utility>
@@ -244,6 +245,12 @@ std::vector<Eigen::Vector2d> ThinToCells(const std::vector<Eigen::Vector2d>& poi
   return cloud;
 }
 
+// The least float at or above v: a float compares with it as with v.
+float FloatAtLeast(double v) {
+  const auto f = static_cast<float>(v);
+  return static_cast<double>(f) < v ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+}
+
 // Whether every translation of a node (heading `angle`, level h, at cell x, y) lies within
 // distinct_cells of a place found at a heading within distinct_rad.
 bool Covered(const std::vector<std::pair<double, Eigen::Vector2d>>& found, double angle, int h,
@@ -304,25 +311,38 @@ std::vector<GlobalSearch::Offsets> GlobalSearch::HeadingOffsets(
   return offsets;
 }
 
-float GlobalSearch::Bound(const Offsets& o, int h, int x, int y) const {
-  const auto sum = [&](const auto* level, auto total) {
+float GlobalSearch::Bound(const Offsets& o, int h, int x, int y, float need) const {
+  // Summed a block of points at a time: once the points left, each worth at most `top`,
+  // cannot lift the sum to `floor` (need, less a float rounding's worth), the node is
+  // pruned whatever they add, and the sum so far is returned below need.
+  constexpr size_t kBlock = 32;
+  const size_t n = o.cell.size();
+  const auto sum = [&](const auto* level, auto total, double top, double floor) {
     const auto* at = level + static_cast<ptrdiff_t>(y + pad_) * stride_ + (x + pad_);
     // The offsets that land on the arrays: [-pad_, nx) x [-pad_, ny) about the node.
     const Eigen::Vector2i lo(-pad_ - x, -pad_ - y), hi(grid_.nx - x, grid_.ny - y);
-    if (o.min.x() >= lo.x() && o.max.x() < hi.x() && o.min.y() >= lo.y() && o.max.y() < hi.y()) {
-      for (const ptrdiff_t i : o.linear) total += at[i];
-      return total;
-    }
-    for (size_t i = 0; i < o.cell.size(); ++i) {
-      const Eigen::Vector2i& c = o.cell[i];
-      if (c.x() >= lo.x() && c.x() < hi.x() && c.y() >= lo.y() && c.y() < hi.y())
-        total += at[o.linear[i]];
+    const bool inside =
+        o.min.x() >= lo.x() && o.max.x() < hi.x() && o.min.y() >= lo.y() && o.max.y() < hi.y();
+    for (size_t begin = 0; begin < n; begin += kBlock) {
+      const size_t end = std::min(n, begin + kBlock);
+      if (inside) {
+        for (size_t i = begin; i < end; ++i) total += at[o.linear[i]];
+      } else {
+        for (size_t i = begin; i < end; ++i) {
+          const Eigen::Vector2i& c = o.cell[i];
+          if (c.x() >= lo.x() && c.x() < hi.x() && c.y() >= lo.y() && c.y() < hi.y())
+            total += at[o.linear[i]];
+        }
+      }
+      if (static_cast<double>(total) + top * static_cast<double>(n - end) < floor) return total;
     }
     return total;
   };
-  const auto n_points = static_cast<float>(o.cell.size());
-  if (h == 0) return sum(likelihood_.data(), 0.0f) / n_points;
-  const uint32_t steps = sum(bounds_[static_cast<size_t>(h - 1)].data(), uint32_t{0});
+  const auto n_points = static_cast<float>(n);
+  const double need_sum = static_cast<double>(need) * static_cast<double>(n);
+  if (h == 0) return sum(likelihood_.data(), 0.0f, 1.0, need_sum - 0.02) / n_points;
+  const uint32_t steps =
+      sum(bounds_[static_cast<size_t>(h - 1)].data(), uint32_t{0}, kSteps, need_sum * kSteps - 1);
   return static_cast<float>(steps) / (static_cast<float>(kSteps) * n_points);
 }
 
@@ -332,11 +352,13 @@ std::vector<GlobalPlace> GlobalSearch::BestFirst(const std::vector<Offsets>& off
                                                  GlobalSearchStats& st) const {
   // Best first: a leaf off the top of the heap scores at least as well as every
   // translation not yet looked at, so places come out in the order of their scores.
-  const float threshold = static_cast<float>(options_.min_score);
+  // A node below `need` is never pushed: min_score, and once places are found the share of
+  // the best below which the loop below ends anyway.
+  float need = static_cast<float>(options_.min_score);
   std::priority_queue<Node> open;
   const auto visit = [&](int r, int h, int x, int y) {
     ++st.nodes;
-    if (const float b = Bound(offsets[static_cast<size_t>(r)], h, x, y); b >= threshold)
+    if (const float b = Bound(offsets[static_cast<size_t>(r)], h, x, y, need); b >= need)
       open.push({b, r, h, x, y});
   };
   const int top = options_.depth - 1;
@@ -361,6 +383,10 @@ std::vector<GlobalPlace> GlobalSearch::BestFirst(const std::vector<Offsets>& off
       const Eigen::Vector2d at = grid_.origin + cell * Eigen::Vector2d(n.x + 0.5, n.y + 0.5);
       places.push_back({Se2{angle, at - rotate * centre}, n.bound});
       found.emplace_back(angle, Eigen::Vector2d(n.x, n.y));
+      const double ratio = places.size() >= options_.places
+                               ? std::max(options_.min_ratio, options_.crowd_ratio)
+                               : options_.min_ratio;
+      need = std::max(need, FloatAtLeast(ratio * places.front().score));
       continue;
     }
     const int half = 1 << (n.h - 1);

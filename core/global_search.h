@@ -115,8 +115,9 @@ class GlobalSearch {
                                       const Eigen::Vector2d& centre,
                                       const std::vector<double>& angles) const;
   // The score of the cloud turned as `o` at cell (x, y) of level 0, or for h >= 1 a bound
-  // on the scores at every cell of the square [x, x + 2^h) x [y, y + 2^h).
-  float Bound(const Offsets& o, int h, int x, int y) const;
+  // on the scores at every cell of the square [x, x + 2^h) x [y, y + 2^h). A node that
+  // cannot reach `need` may stop early with any value below it.
+  float Bound(const Offsets& o, int h, int x, int y, float need) const;
   // Search's branch and bound over every heading of `offsets` (the angles in `angles`,
   // about the cloud's `centre`): the places in the order of their scores.
   std::vector<GlobalPlace> BestFirst(const std::vector<Offsets>& offsets,
