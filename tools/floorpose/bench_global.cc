@@ -48,6 +48,63 @@ std::optional<double> CastRay(const FloorPlan& plan, const Eigen::Vector2d& p,
   return best;
 }
 
+// A laser's view from `at` (plan frame): 720 rays out to range_m, each hit with 3 cm of
+// noise, cast until one meets a wall within 0.5 m (too close, or inside one); empty when
+// fewer than 600 rays hit a wall (outside the building, or cut short by a wall too close).
+std::vector<Eigen::Vector2d> LaserView(const FloorPlan& plan, const Eigen::Vector2d& at,
+                                       double range_m, SplitMix64& rng) {
+  std::vector<Eigen::Vector2d> hits;
+  for (int k = 0; k < 720; ++k) {
+    const double a = k * M_PI / 360;
+    const Eigen::Vector2d dir(std::cos(a), std::sin(a));
+    if (const auto t = CastRay(plan, at, dir, range_m)) {
+      if (*t < 0.5) break;
+      hits.push_back(at + *t * dir + 0.03 * Eigen::Vector2d(rng.Gaussian(), rng.Gaussian()));
+    }
+  }
+  if (hits.size() < 600) return {};
+  return hits;
+}
+
+// What the trials measured.
+struct BenchGlobalResult {
+  double build_ms = 0;
+  std::vector<double> times, rotations;  // per search: milliseconds, headings tried
+  int found = 0, unique = 0;             // the best place right; clearly ahead of the next
+};
+
+void PrintBenchGlobal(bool json, const std::string& path, const FloorPlan& plan,
+                      const GlobalSearch& search, const BenchGlobalResult& r) {
+  const int n = static_cast<int>(r.times.size());
+  if (json) {
+    std::printf("%s\n", nlohmann::json{{"plan", path},
+                                       {"segments", plan.segments.size()},
+                                       {"cells", search.grid().size()},
+                                       {"cell_m", search.grid().cell_m},
+                                       {"build_ms", r.build_ms},
+                                       {"memory_mb", search.MemoryBytes() / 1048576.0},
+                                       {"trials", n},
+                                       {"found", r.found},
+                                       {"unique", r.unique},
+                                       {"search_ms_p50", Percentile(r.times, 0.5)},
+                                       {"search_ms_p99", Percentile(r.times, 0.99)},
+                                       {"search_ms_max", Percentile(r.times, 1.0)},
+                                       {"headings_p50", Percentile(r.rotations, 0.5)}}
+                            .dump()
+                            .c_str());
+  } else {
+    std::printf("%s: %zu walls, %zu cells of %.2f m, grids built in %.1f ms (%.1f MB)\n",
+                path.c_str(), plan.segments.size(), search.grid().size(), search.grid().cell_m,
+                r.build_ms, search.MemoryBytes() / 1048576.0);
+    std::printf(
+        "  %d searches over the whole plan and every heading: %.1f / %.1f / %.1f ms "
+        "(p50 / p99 / max)\n",
+        n, Percentile(r.times, 0.5), Percentile(r.times, 0.99), Percentile(r.times, 1.0));
+    std::printf("  best place within %.1f m and 2 deg: %d of %d; clearly ahead of the next: %d\n",
+                std::max(0.3, 2 * search.grid().cell_m), r.found, n, r.unique);
+  }
+}
+
 int RunBenchGlobal(const BenchGlobalOptions& o) {
   const std::string path = o.plan.empty() ? DefaultDemoPlan() : o.plan;
   const FloorPlanParse parse = platform::LoadFloorPlan(path);
@@ -59,26 +116,16 @@ int RunBenchGlobal(const BenchGlobalOptions& o) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   const GlobalSearch search(plan, o.search);
-  const double build_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  BenchGlobalResult r;
+  r.build_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 
   SplitMix64 rng(o.seed);
-  std::vector<double> times, rotations;
-  int found = 0, unique = 0, tries = 0;
-  while (static_cast<int>(times.size()) < o.trials && tries++ < 100 * o.trials) {
+  int tries = 0;
+  while (static_cast<int>(r.times.size()) < o.trials && tries++ < 100 * o.trials) {
     const Eigen::Vector2d at(rng.Uniform(plan.min.x(), plan.max.x()),
                              rng.Uniform(plan.min.y(), plan.max.y()));
-    std::vector<Eigen::Vector2d> hits;
-    int all_round = 0;
-    for (int k = 0; k < 720; ++k) {
-      const double a = k * M_PI / 360;
-      const Eigen::Vector2d dir(std::cos(a), std::sin(a));
-      if (const auto t = CastRay(plan, at, dir, o.range_m)) {
-        if (*t < 0.5) break;  // too close to a wall (or inside one)
-        hits.push_back(at + *t * dir + 0.03 * Eigen::Vector2d(rng.Gaussian(), rng.Gaussian()));
-        ++all_round;
-      }
-    }
-    if (all_round < 600) continue;  // outside the building, or a wall too close
+    std::vector<Eigen::Vector2d> hits = LaserView(plan, at, o.range_m, rng);
+    if (hits.empty()) continue;
     const Se2 T_slam_plan{rng.Uniform(-M_PI, M_PI),
                           {rng.Uniform(-100, 100), rng.Uniform(-100, 100)}};
     for (Eigen::Vector2d& h : hits) h = T_slam_plan * h;
@@ -86,44 +133,17 @@ int RunBenchGlobal(const BenchGlobalOptions& o) {
     const auto start = Clock::now();
     const std::vector<GlobalPlace> places = search.Search(
         hits, o.wall_headings ? search.WallHeadings(hits) : std::vector<double>{}, &stats);
-    times.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
-    rotations.push_back(static_cast<double>(stats.rotations));
+    r.times.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
+    r.rotations.push_back(static_cast<double>(stats.rotations));
     if (places.empty()) continue;
     const Se2 e = places[0].T_plan_slam * T_slam_plan;  // identity when right
     const double tolerance_m = std::max(0.3, 2 * search.grid().cell_m);
     if ((e * at - at).norm() < tolerance_m && std::abs(WrapAngle(e.theta)) < 2 * M_PI / 180)
-      ++found;
-    if (places.size() < 2 || places[1].score < 0.9 * places[0].score) ++unique;
+      ++r.found;
+    if (places.size() < 2 || places[1].score < 0.9 * places[0].score) ++r.unique;
   }
-  const int n = static_cast<int>(times.size());
-  if (o.json) {
-    std::printf("%s\n", nlohmann::json{{"plan", path},
-                                       {"segments", plan.segments.size()},
-                                       {"cells", search.grid().size()},
-                                       {"cell_m", search.grid().cell_m},
-                                       {"build_ms", build_ms},
-                                       {"memory_mb", search.MemoryBytes() / 1048576.0},
-                                       {"trials", n},
-                                       {"found", found},
-                                       {"unique", unique},
-                                       {"search_ms_p50", Percentile(times, 0.5)},
-                                       {"search_ms_p99", Percentile(times, 0.99)},
-                                       {"search_ms_max", Percentile(times, 1.0)},
-                                       {"headings_p50", Percentile(rotations, 0.5)}}
-                            .dump()
-                            .c_str());
-  } else {
-    std::printf("%s: %zu walls, %zu cells of %.2f m, grids built in %.1f ms (%.1f MB)\n",
-                path.c_str(), plan.segments.size(), search.grid().size(), search.grid().cell_m,
-                build_ms, search.MemoryBytes() / 1048576.0);
-    std::printf(
-        "  %d searches over the whole plan and every heading: %.1f / %.1f / %.1f ms "
-        "(p50 / p99 / max)\n",
-        n, Percentile(times, 0.5), Percentile(times, 0.99), Percentile(times, 1.0));
-    std::printf("  best place within %.1f m and 2 deg: %d of %d; clearly ahead of the next: %d\n",
-                std::max(0.3, 2 * search.grid().cell_m), found, n, unique);
-  }
-  return n > 0 ? 0 : 1;
+  PrintBenchGlobal(o.json, path, plan, search, r);
+  return r.times.empty() ? 1 : 0;
 }
 
 }  // namespace
