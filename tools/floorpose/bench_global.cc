@@ -66,6 +66,12 @@ std::vector<Eigen::Vector2d> LaserView(const FloorPlan& plan, const Eigen::Vecto
   return hits;
 }
 
+// How near the truth the best place must be to count as found: two search cells, at least
+// 0.3 m (and within 2 degrees).
+double FoundToleranceM(const GlobalSearch& search) {
+  return std::max(0.3, 2 * search.grid().cell_m);
+}
+
 // What the trials measured.
 struct BenchGlobalResult {
   double build_ms = 0;
@@ -101,7 +107,7 @@ void PrintBenchGlobal(bool json, const std::string& path, const FloorPlan& plan,
         "(p50 / p99 / max)\n",
         n, Percentile(r.times, 0.5), Percentile(r.times, 0.99), Percentile(r.times, 1.0));
     std::printf("  best place within %.1f m and 2 deg: %d of %d; clearly ahead of the next: %d\n",
-                std::max(0.3, 2 * search.grid().cell_m), r.found, n, r.unique);
+                FoundToleranceM(search), r.found, n, r.unique);
   }
 }
 
@@ -137,8 +143,8 @@ int RunBenchGlobal(const BenchGlobalOptions& o) {
     r.rotations.push_back(static_cast<double>(stats.rotations));
     if (places.empty()) continue;
     const Se2 e = places[0].T_plan_slam * T_slam_plan;  // identity when right
-    const double tolerance_m = std::max(0.3, 2 * search.grid().cell_m);
-    if ((e * at - at).norm() < tolerance_m && std::abs(WrapAngle(e.theta)) < 2 * M_PI / 180)
+    if ((e * at - at).norm() < FoundToleranceM(search) &&
+        std::abs(WrapAngle(e.theta)) < 2 * M_PI / 180)
       ++r.found;
     if (places.size() < 2 || places[1].score < 0.9 * places[0].score) ++r.unique;
   }
