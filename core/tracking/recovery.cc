@@ -127,12 +127,13 @@ void Recovery::Observe(double mean_log_likelihood, double predictive, double exp
   Doubt(1 - std::exp(-std::max(0.0, dt_s) / options_.lost_s));
   log_odds_ = std::clamp(log_odds_ + exponent * (random_ - mean_log_likelihood), kNone, -kNone);
   // A right place fits as the model expects, or as the walls have fitted since the start
-  // where the building is less like its plan.
+  // where the building is less like its plan; a wrong one as a random place.
   fit_sum_ += exponent * predictive;
   exponent_sum_ += exponent;
   const double right =
       exponent_sum_ > 0 ? std::min(expected_, fit_sum_ / exponent_sum_) : expected_;
-  right_log_odds_ = std::clamp(right_log_odds_ + exponent * (right - predictive), kNone, -kNone);
+  const double mid = 0.5 * (right + random_);
+  right_log_odds_ = std::clamp(right_log_odds_ + exponent * (mid - predictive), kNone, -kNone);
 }
 
 double Recovery::RightOdds() const {

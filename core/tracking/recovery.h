@@ -6,12 +6,16 @@
 // as the model expects (ExpectedLogLikelihood), or as they have fitted since the start
 // where that is lower (a building less like its plan fits its right place less well).
 // Otherwise it is a place that fits them as a random place of the building does
-// (RandomLogLikelihood). Walls that fit worse than a right place thus say "elsewhere" once
-// the shortfall outweighs the odds of one place in many, even where they fit better than a
-// random place: a near miss (a heading wrong after a jump, a look-alike room). Each update
-// weighs the three by the same tempered likelihood the belief uses, after the chance of a
-// loss since the last (one per lost_s). A start (pick, place, restore) begins at
-// start_doubt.
+// (RandomLogLikelihood). Were the wearer elsewhere at a place that fits, the belief's
+// places would be wrong ones, which fit the walls as a random place does; here, they fit
+// as a right place does. So each update's walls weigh for "elsewhere at a place that
+// fits" by how far the belief's fit falls below midway between the two (the log ratio of
+// two normals of one spread about them, scaled by the tempering): a near miss that fits
+// nearer a random place (a heading wrong after a jump, a look-alike room) is doubted once
+// the shortfall outweighs the odds of one place in many, and a right place through
+// clutter, which fits nearer a right place's fit, earns the belief. Each update weighs the
+// three by the same tempered likelihood the belief uses, after the chance of a loss since
+// the last (one per lost_s). A start (pick, place, restore) begins at start_doubt.
 //
 // The probability of "elsewhere" is published as mass the belief's samples do not hold,
 // and while it is high a search of the whole plan reseeds the belief (augmented MCL,
