@@ -523,7 +523,8 @@ std::vector<GlobalPlace> HalfTurnTwins(const GlobalSearch& search, const FloorPl
                                        const Se2& place,
                                        const std::vector<Eigen::Vector2d>& path_slam,
                                        const std::vector<double>& headings,
-                                       const WallSampleOptions& in_sight) {
+                                       const WallSampleOptions& in_sight,
+                                       GlobalSearchStats* stats) {
   std::vector<Eigen::Vector2d> walls =
       WallSamplesInSight(PathOnPlan(place, path_slam), plan, in_sight);
   if (walls.empty()) return {};
@@ -535,7 +536,7 @@ std::vector<GlobalPlace> HalfTurnTwins(const GlobalSearch& search, const FloorPl
     if (std::abs(WrapAngle(h - turned)) <= search.options().distinct_rad)
       twin_headings.push_back(h);
   if (twin_headings.empty()) twin_headings.push_back(WrapAngle(turned));
-  return search.Search(walls, twin_headings);
+  return search.Search(walls, twin_headings, stats);
 }
 
 PlanAlikeness PlanAlike(const std::vector<Eigen::Vector2d>& path_slam, const Se2& a, const Se2& b,

@@ -74,6 +74,8 @@ struct GlobalSearchStats {
   size_t rotations = 0;  // tried
   size_t nodes = 0;      // bounds evaluated
   double time_ms = 0;    // filled by callers that time it (core has no clock)
+  // What the branch and bound cost, in points looked up: at most every point per bound.
+  double point_bounds() const { return static_cast<double>(nodes) * static_cast<double>(points); }
 };
 
 class GlobalSearch {
@@ -205,12 +207,14 @@ std::vector<GlobalPlace> RefinePlaces(const std::vector<GlobalPlace>& places,
 // half a turn from it (those of `headings` within distinct_rad of it, or that heading
 // alone), best first. Grid places, to be refined on the wearer's walls. A hall that looks
 // the same both ways round has one, which the grid's few best places on the wearer's
-// drifting walls often leave out; the plan's walls have no drift and no clutter.
+// drifting walls often leave out; the plan's walls have no drift and no clutter. `stats`:
+// the search's, as Search gives them.
 std::vector<GlobalPlace> HalfTurnTwins(const GlobalSearch& search, const FloorPlan& plan,
                                        const Se2& place,
                                        const std::vector<Eigen::Vector2d>& path_slam,
                                        const std::vector<double>& headings,
-                                       const WallSampleOptions& in_sight);
+                                       const WallSampleOptions& in_sight,
+                                       GlobalSearchStats* stats = nullptr);
 
 // How alike the plan looks from the wearer's walk under two places: the plan's walls in
 // sight of the path (slam frame) under `a` (WallSamplesInSight within reach_m, every

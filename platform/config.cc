@@ -182,6 +182,8 @@ std::string ValidateConfig(const v1::FloorposedConfig& c) {
     return "floors.change_margin_m must be in (0, 10] and floors.change_hold_s in [0, 600]";
   if (!(c.status_period_s() > 0)) return "status_period_s must be positive";
   if (!(c.snapshot_period_s() > 0)) return "snapshot_period_s must be positive";
+  if (!(c.limits().search_cpu() >= 0 && c.limits().search_cpu() <= 1))
+    return "limits.search_cpu must be in [0, 1] (a share of one core; 0: no plan searches)";
   const std::string& l = c.log_level();
   if (l != "trace" && l != "debug" && l != "info" && l != "warn" && l != "error")
     return "log_level must be trace, debug, info, warn or error";

@@ -30,7 +30,8 @@ Engine::Engine(v1::FloorposedConfig configured, Publish publish, std::function<i
       crew_(config().dds().device_id(),
             {config().alerts().motion_m(), config().alerts().pre_alert_s(),
              config().alerts().no_motion_s()},
-            publish_) {}
+            publish_),
+      jobs_(config().limits().search_cpu()) {}
 
 std::string Engine::Start() {
   if (config().plan_path().empty()) return {};

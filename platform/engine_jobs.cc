@@ -12,7 +12,7 @@ std::optional<Job> Engine::TakeDueJob() {
 }
 
 void Engine::OnRegistrationDone(Done done) {
-  jobs_.Finished();
+  jobs_.Finished(done);
   if (done.job.global) {
     const std::string what = tracker_.OfferPlaces(done.places, done.job.cloud, done.job.stamp_ns);
     spdlog::info("global search: {} points, {} place(s), {:.1f} ms: {}", done.job.cloud.size(),

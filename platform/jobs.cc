@@ -20,7 +20,9 @@ Done RunJob(Job job, const std::function<int64_t()>& now_ns) {
   if (job.global) {
     const GlobalSearch& search = job.global->Get();
     const std::vector<double> headings = search.WallHeadings(job.cloud);
-    done.places = search.Search(job.cloud, headings);
+    GlobalSearchStats stats;
+    done.places = search.Search(job.cloud, headings, &stats);
+    double point_bounds = stats.point_bounds();
     if (job.version > 0) done.places.push_back({job.initial});  // the place in use, refined too
     if (job.index) done.places = RefineAsSearch(job, done.places);
     if (job.refine.alike_reach_m > 0 && !done.places.empty() && done.places.front().rank == 0) {
@@ -29,11 +31,14 @@ Done RunJob(Job job, const std::function<int64_t()>& now_ns) {
       WallSampleOptions in_sight;
       in_sight.reach_m = job.refine.alike_reach_m;
       in_sight.end_margin_m = job.refine.path_margin_m;
-      const std::vector<GlobalPlace> twins = HalfTurnTwins(
-          search, job.index->plan(), done.places.front().T_plan_slam, job.path, headings, in_sight);
+      const std::vector<GlobalPlace> twins =
+          HalfTurnTwins(search, job.index->plan(), done.places.front().T_plan_slam, job.path,
+                        headings, in_sight, &stats);
+      point_bounds += stats.point_bounds();
       if (!twins.empty()) done.places = RefineAsSearch(job, twins, done.places);
     }
     done.result.points = static_cast<uint32_t>(job.cloud.size());
+    done.search_cpu_s = SearchBudget::CpuS(point_bounds);
   } else if (job.mcl && job.index) {
     done.mcl = tracking::RunMclUpdate(std::move(*job.mcl), job.cloud, *job.index, job.mcl_options);
     job.mcl.reset();
@@ -46,6 +51,15 @@ Done RunJob(Job job, const std::function<int64_t()>& now_ns) {
   return done;
 }
 
+void SearchBudget::Refill(int64_t now_ns) {
+  // A stamp before the last (the headset's clock started again) earns nothing, and the
+  // budget goes on from it.
+  if (last_ns_ && now_ns > *last_ns_)
+    credit_s_ = std::min(share_ * kHorizonS,
+                         credit_s_ + share_ * static_cast<double>(now_ns - *last_ns_) * 1e-9);
+  last_ns_ = now_ns;
+}
+
 std::optional<Job> JobScheduler::TakeDue(tracking::MclTracker& tracker, WallStore& store,
                                          const std::shared_ptr<GlobalSearchCache>& global,
                                          size_t window_max_points, int64_t now) {
@@ -56,7 +70,7 @@ std::optional<Job> JobScheduler::TakeDue(tracking::MclTracker& tracker, WallStor
     return std::max(tracker.frame_since_ns(),
                     window_s > 0 ? now - static_cast<int64_t>(window_s * 1e9) : INT64_MIN);
   };
-  if (global && tracker.SearchDue(now, store.points())) {
+  if (global && budget_.Allows(now) && tracker.SearchDue(now, store.points())) {
     // Where on the whole plan do the walls fit: to seed the belief, or to reseed it. A
     // look that finds fewer than search_min_points in the window counts as a search: the
     // next comes a search interval later and runs on that interval's walls too. (Looking

@@ -41,8 +41,9 @@ struct Job {
 
 struct Done {
   Job job;
-  RegistrationResult result;                     // the update's polish (time_ms: the whole job's)
-  std::vector<GlobalPlace> places;               // of a search, best first
+  RegistrationResult result;        // the update's polish (time_ms: the whole job's)
+  std::vector<GlobalPlace> places;  // of a search, best first...
+  double search_cpu_s = 0;          // ...and its CPU at the nominal cost (SearchBudget)
   std::optional<tracking::MclUpdateResult> mcl;  // of an update
 };
 
@@ -54,9 +55,40 @@ Done RunJob(Job job, const std::function<int64_t()>& now_ns);
 std::vector<GlobalPlace> RefineAsSearch(const Job& job, const std::vector<GlobalPlace>& places,
                                         const std::vector<GlobalPlace>& ranked = {});
 
+// The plan's searches' share of a core (limits.search_cpu), averaged over kHorizonS: a
+// token bucket that holds what the share earns in that time, full at the start, and lets a
+// search start while it is not in debt. A search is priced by its branch and bound's point
+// lookups at a nominal cost per lookup, not by a clock, so that a replay searches where it
+// did before on any machine and under any load (the refinement of its places is in the
+// nominal cost: docs/performance.md).
+class SearchBudget {
+ public:
+  static constexpr double kHorizonS = 600.0;
+  static constexpr double kNsPerPointBound = 2.5;
+  static double CpuS(double point_bounds) { return point_bounds * kNsPerPointBound * 1e-9; }
+
+  explicit SearchBudget(double share) : share_(share), credit_s_(share * kHorizonS) {}
+  bool Allows(int64_t now_ns) {
+    Refill(now_ns);
+    return share_ > 0 && credit_s_ >= 0;
+  }
+  void Spend(double cpu_s, int64_t now_ns) {
+    Refill(now_ns);
+    credit_s_ -= cpu_s;
+  }
+
+ private:
+  void Refill(int64_t now_ns);
+
+  double share_;
+  double credit_s_;  // CPU seconds the searches may still take; below 0 a debt
+  std::optional<int64_t> last_ns_;
+};
+
 // One job at a time: which is due, from the tracker and the wall store as they are now.
 class JobScheduler {
  public:
+  explicit JobScheduler(double search_cpu) : budget_(search_cpu) {}
   // A pose's slam position, for the path the searches weigh.
   void AddPosition(int64_t stamp_ns, const Eigen::Vector2d& position, double window_s) {
     searches_.AddPosition(stamp_ns, position, window_s);
@@ -67,8 +99,11 @@ class JobScheduler {
   std::optional<Job> TakeDue(tracking::MclTracker& tracker, WallStore& store,
                              const std::shared_ptr<GlobalSearchCache>& global,
                              size_t window_max_points, int64_t now_ns);
-  // The running job ended.
-  void Finished() { running_ = false; }
+  // The running job ended; a search's CPU comes off the budget at its stamp.
+  void Finished(const Done& done) {
+    running_ = false;
+    if (done.job.global) budget_.Spend(done.search_cpu_s, done.job.stamp_ns);
+  }
   bool running() const { return running_; }
 
   // The latest update's polish, whether the tracker took it, and why not.
@@ -82,6 +117,7 @@ class JobScheduler {
 
  private:
   SearchMemory searches_;  // the path and walls of the plan's searches
+  SearchBudget budget_;
   std::optional<LastUpdate> last_;
   bool running_ = false;
 };

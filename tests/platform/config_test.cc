@@ -149,6 +149,8 @@ TEST(ConfigTest, ValidateRejectsValuesTheSchemaCannot) {
            Case{"explored { max_ray_m: -1 }", "explored.max_ray_m"},
            Case{"explored { publish_period_s: inf }", "explored.publish_period_s"},
            Case{"status_period_s: 0", "status_period_s"},
+           Case{"limits { search_cpu: -0.1 }", "search_cpu"},
+           Case{"limits { search_cpu: nan }", "search_cpu"},
            Case{"log_level: \"loud\"", "log_level"},
        }) {
     SCOPED_TRACE(k.text);

@@ -29,20 +29,26 @@ class GlobalPlacementTest : public testing::TempDirTest {
         << error;
     return recording;
   }
+  // The recording evaluated as floorposed runs it with `config` on the office plan, without a
+  // pick.
+  EvalReport EvaluateWithoutPick(v1::FloorposedConfig config, const std::string& recording) {
+    config.set_plan_path(kPlanPath);
+    EvalReport report;
+    std::string error;
+    EXPECT_TRUE(Evaluate(config, recording, Baseline::kNone, &report, &error, nullptr, true))
+        << error;
+    return report;
+  }
 };
 
 TEST_F(GlobalPlacementTest, AWalkWithoutAPickIsPlacedAndNeverReliablyWrong) {
   SimulateRecordingResult simulated;
   const std::string recording = SimulateOffice({}, "walk.rec", &simulated);
   ASSERT_FALSE(HasFailure());
-  std::string error;
-  v1::FloorposedConfig config;
-  config.set_plan_path(kPlanPath);
 
   // Placed, tracked to the end, and never RELIABLE while more than 1 m off.
-  EvalReport placed;
-  ASSERT_TRUE(Evaluate(config, recording, Baseline::kNone, &placed, &error, nullptr, true))
-      << error;
+  const EvalReport placed = EvaluateWithoutPick({}, recording);
+  ASSERT_FALSE(HasFailure());
   EXPECT_GT(placed.global_searches, 0u);
   EXPECT_GT(placed.first_search_s, 0.0) << "a search waits for walls";
   EXPECT_LE(placed.first_search_s, placed.time_to_first_reliable_s) << "and places the wearer";
@@ -76,6 +82,24 @@ TEST_F(GlobalPlacementTest, AWalkWithoutAPickIsPlacedAndNeverReliablyWrong) {
       "mean %.2f m, max %.2f m\n",
       placed.unaligned_poses, placed.unaligned_poses + placed.poses, placed.global_searches,
       placed.time_to_first_reliable_s, placed.mean_error_m, placed.max_error_m);
+}
+
+TEST_F(GlobalPlacementTest, TheSearchesKeepToTheirShareOfACore) {
+  SimulateRecordingResult simulated;
+  const std::string recording = SimulateOffice({}, "walk.rec", &simulated);
+  ASSERT_FALSE(HasFailure());
+  v1::FloorposedConfig config;
+  ASSERT_GT(EvaluateWithoutPick(config, recording).global_searches, 1u)
+      << "the office walk searches more than once";
+  // A share that one search of the office overdraws for the rest of the walk.
+  config.mutable_limits()->set_search_cpu(1e-7);
+  EXPECT_EQ(EvaluateWithoutPick(config, recording).global_searches, 1u);
+  // None: without a pick the wearer is never placed.
+  config.mutable_limits()->set_search_cpu(0);
+  const EvalReport none = EvaluateWithoutPick(config, recording);
+  EXPECT_EQ(none.global_searches, 0u);
+  EXPECT_EQ(none.poses, 0u);
+  EXPECT_GT(none.unaligned_poses, 0u);
 }
 
 TEST_F(GlobalPlacementTest, AWrongPickIsFlaggedAndUndone) {
