@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -44,9 +45,11 @@ inline const char* kRoomGeoJson = R"({"type": "FeatureCollection", "features": [
 class DaemonTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::path(::testing::TempDir()) /
-           ("floorposed-" + std::to_string(getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    // A parameterized test's name has a '/' ("Name/0"): one directory, not one in another
+    // that TearDown would leave behind.
+    std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    std::replace(name.begin(), name.end(), '/', '_');
+    dir_ = fs::path(::testing::TempDir()) / ("floorposed-" + std::to_string(getpid()) + "-" + name);
     fs::create_directories(dir_);
     plan_path_ = (dir_ / "room.geojson").string();
     std::ofstream(plan_path_) << kRoomGeoJson;
