@@ -128,16 +128,23 @@ inline std::string ReadText(const std::filesystem::path& path) {
   return ss.str();
 }
 
+// The running test's own directory under ::testing::TempDir(), by suite, name and process.
+// A parameterised test's name has a '/' ("Name/0"): made '_', so that it is one directory,
+// not one inside another that removing it would leave behind.
+inline std::filesystem::path TestDirectory() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = std::string("floorpose_") + info->test_suite_name() + "_" + info->name() +
+                     "_" + std::to_string(getpid());
+  std::replace(name.begin(), name.end(), '/', '_');
+  return std::filesystem::path(::testing::TempDir()) / name;
+}
+
 // A fresh directory per test (and process) under ::testing::TempDir(), removed afterwards,
 // or kept with a line saying where when the test failed (daemon logs, recordings).
 class TempDirTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string("floorpose_") + info->test_suite_name() + "_" + info->name() +
-                       "_" + std::to_string(getpid());
-    std::replace(name.begin(), name.end(), '/', '_');  // parameterised test names
-    dir_ = std::filesystem::path(::testing::TempDir()) / name;
+    dir_ = TestDirectory();
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
   }

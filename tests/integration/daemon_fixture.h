@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -19,6 +18,7 @@
 #include "platform/dds.h"
 #include "platform/floor_plan_io.h"
 #include "tests/daemon_test_util.h"
+#include "tests/test_util.h"
 #include "tools/lib/headset_link.h"
 #include "tools/lib/headset_messages.h"
 #include "tools/lib/process.h"
@@ -45,11 +45,7 @@ inline const char* kRoomGeoJson = R"({"type": "FeatureCollection", "features": [
 class DaemonTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    // A parameterized test's name has a '/' ("Name/0"): one directory, not one in another
-    // that TearDown would leave behind.
-    std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-    std::replace(name.begin(), name.end(), '/', '_');
-    dir_ = fs::path(::testing::TempDir()) / ("floorposed-" + std::to_string(getpid()) + "-" + name);
+    dir_ = testing::TestDirectory();
     fs::create_directories(dir_);
     plan_path_ = (dir_ / "room.geojson").string();
     std::ofstream(plan_path_) << kRoomGeoJson;
