@@ -31,10 +31,12 @@ Done RunJob(Job job, const std::function<int64_t()>& now_ns) {
       WallSampleOptions in_sight;
       in_sight.reach_m = job.refine.alike_reach_m;
       in_sight.end_margin_m = job.refine.path_margin_m;
+      // Stats of their own: no walls in sight under the place, and there is no search.
+      GlobalSearchStats twin_stats;
       const std::vector<GlobalPlace> twins =
           HalfTurnTwins(search, job.index->plan(), done.places.front().T_plan_slam, job.path,
-                        headings, in_sight, &stats);
-      point_bounds += stats.point_bounds();
+                        headings, in_sight, &twin_stats);
+      point_bounds += twin_stats.point_bounds();
       if (!twins.empty()) done.places = RefineAsSearch(job, twins, done.places);
     }
     done.result.points = static_cast<uint32_t>(job.cloud.size());
