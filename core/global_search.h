@@ -177,7 +177,7 @@ struct RefineOptions {
   uint32_t unseen_min_samples = 20;
   // A place under which more than this share of those samples (unseen_min_samples or
   // more) went unseen does not fit, however its points lie: true places rarely miss more
-  // than three quarters of the walls they walk past (docs/evaluation.md).
+  // than three quarters of the walls they walk past.
   double unseen_max_ratio = 0.8;
   // Places of rank 0 after the first are compared with it (PlanAlike) over the plan's
   // walls in sight within this reach of the path. 0: not compared.

@@ -267,7 +267,7 @@ MclUpdate MclTracker::PrepareUpdate(int64_t now_ns) {
   // The first update after a start or a loss weighs the window as a whole one, however few
   // seconds of walls it holds: it settles a relocalized frame in a few seconds. (Weighing
   // only the seconds the frame holds flags a wrong pick sooner, and trusts a relocalized
-  // frame later and more often wrongly: docs/evaluation.md, the settings table.)
+  // frame later and more often wrongly: docs/evaluation.md, "Why these defaults".)
   u.dt_s =
       last_update_ns_ ? static_cast<double>(now_ns - *last_update_ns_) * 1e-9 : options_.window_s;
   u.evidence = std::clamp(u.dt_s / options_.window_s, 0.0, 1.0);
