@@ -77,7 +77,7 @@ std::optional<Job> JobScheduler::TakeDue(tracking::MclTracker& tracker, WallStor
     // look that finds fewer than search_min_points in the window counts as a search: the
     // next comes a search interval later and runs on that interval's walls too. (Looking
     // again as soon as the window holds the least places the wearer sooner, and more often
-    // wrongly: docs/evaluation.md, Recovery.)
+    // wrongly: docs/evaluation.md, "Why these defaults".)
     tracker.MarkSearchStarted(now);
     const int64_t from = since(options.search_window_s);
     Job job;
