@@ -136,14 +136,20 @@ void LogAgainstTruth(const platform::Done& done, const Latest& latest,
     return 100.0 * fit.inliers / std::max<size_t>(1, cloud.size());
   };
   const Se2& in_use = engine.tracker().alignment().T_plan_slam;
+  // The belief's mass at the truth: a minority place that is right, or none at all.
+  const double at_truth =
+      done.mcl ? done.mcl->belief.MassWithin(latest.slam, latest.T_plan_slam * latest.slam,
+                                             engine.tracker().options().publish.within_m)
+               : 0.0;
   spdlog::debug(
       "at {:.1f} s, truth: result {:.2f} m off at the wearer, alignment in use {:.2f} m; "
       "on the plan: {:.0f}% under the result, {:.0f}% in use, {:.0f}% true; the result "
-      "turns {:.1f} deg from the truth, the alignment in use {:.1f}",
+      "turns {:.1f} deg from the truth, the alignment in use {:.1f}; the belief holds "
+      "{:.0f}% within 1 m of the truth",
       at_s, latest.OffAtWearer(done.result.T_plan_slam), latest.OffAtWearer(in_use),
       on_plan(done.result.T_plan_slam), on_plan(in_use), on_plan(latest.T_plan_slam),
       WrapAngle(done.result.T_plan_slam.theta - latest.T_plan_slam.theta) * 180 / M_PI,
-      WrapAngle(in_use.theta - latest.T_plan_slam.theta) * 180 / M_PI);
+      WrapAngle(in_use.theta - latest.T_plan_slam.theta) * 180 / M_PI, 100 * at_truth);
 }
 
 // What a replay learns beside the poses the engine publishes.
