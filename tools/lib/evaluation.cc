@@ -138,7 +138,7 @@ void LogAgainstTruth(const platform::Done& done, const Latest& latest,
   const Se2& in_use = engine.tracker().alignment().T_plan_slam;
   // The belief's mass at the truth: a minority place that is right, or none at all.
   const double at_truth =
-      done.mcl ? done.mcl->belief.MassWithin(latest.slam, latest.T_plan_slam * latest.slam,
+      done.mcl ? done.mcl->belief.MassWithin(latest.slam, latest.plan,
                                              engine.tracker().options().publish.within_m)
                : 0.0;
   spdlog::debug(
