@@ -98,13 +98,16 @@ Mode PublishedMode(const Belief& belief, const MclUpdate& u, const PublishOption
 }
 
 // ICP on the whole window from the published place: its polish is published when it stays
-// within the place and fits better; the samples stay where the belief put them (moving
-// them with it collapses the belief onto whatever ICP settles on, right or not). Beyond
-// the place ICP may reach another, within its correspondence reach, that fits the window
-// like a right place and better than the published one by more than 1/kOfferShare in the
-// window's likelihood. The belief may have lost its samples there (a walk through a door
-// drawn closed is priced, and pulls them to the next opening), so the place is offered to
-// the belief as a search's places are; the next updates weigh it.
+// within the place, fits better, and turns the heading no further than the belief holds
+// the place's heading (99%, one degree of freedom). The published probability is the
+// belief's mass at the wearer, which cannot see a heading's lever arm: a polish turned past
+// the belief's spread would carry poses away at a probability that does not describe them.
+// The samples stay where the belief put them (moving them with it collapses the belief
+// onto whatever ICP settles on, right or not). Beyond the place ICP may reach another,
+// within its correspondence reach, that fits the window like a right place and better than the
+// published one by more than 1/kOfferShare in the window's likelihood. The belief may have lost its
+// samples there (a walk through a door drawn closed is priced, and pulls them to the next opening),
+// so the place is offered to the belief as a search's places are; the next updates weigh it.
 void PolishOrOffer(MclUpdateResult& out, Belief& belief, const MclUpdate& u,
                    const std::vector<Eigen::Vector2d>& cloud,
                    const std::vector<Eigen::Vector2d>& points, const ClosestWallIndex& index,
@@ -120,7 +123,12 @@ void PolishOrOffer(MclUpdateResult& out, Belief& belief, const MclUpdate& u,
       options.measurement.MeanLogLikelihood(points, out.icp.T_plan_slam, index, reach);
   const double mode_fit = options.measurement.MeanLogLikelihood(points, mode, index, reach);
   if (moved_m <= options.publish.within_m && std::abs(shift(0)) <= kPlaceRad) {
-    out.polished = icp_fit >= mode_fit;
+    constexpr double kChiSquare99OneDof = 6.63;
+    const Eigen::Matrix3d spread =
+        belief.CovarianceNear(mode, u.wearer_slam, options.publish.within_m, kPlaceRad);
+    const bool held =  // a place of one sample has no spread to hold it to
+        !(spread(0, 0) > 0) || shift(0) * shift(0) <= kChiSquare99OneDof * spread(0, 0);
+    out.polished = held && icp_fit >= mode_fit;
     if (out.polished) out.published = out.icp.T_plan_slam;
     return;
   }

@@ -664,6 +664,19 @@ TEST(MclUpdateTest, ThePlaceIcpReachesOutsideTheBeliefIsOfferedToIt) {
   EXPECT_GT(near.belief.MassWithin(wearer, room.truth * wearer, 1.0), 0.99);
 }
 
+TEST(MclUpdateTest, APolishIsNotPublishedWhereItTurnsTheHeadingPastTheBeliefsSpread) {
+  RoomWalk room;
+  // The belief sure of a heading 5 degrees off (0.5 degrees spread), turned about the
+  // wearer: the position there is right, so its mass within 1 m cannot tell, but 5 m
+  // along the walk the pose would be 0.4 m off.
+  const MclUpdateResult turned = UpdateOffBy(room, Se2{Deg(5), {0, 0}});
+  ASSERT_TRUE(turned.icp.converged);
+  EXPECT_NEAR(turned.icp.T_plan_slam.theta, room.truth.theta, Deg(0.5)) << "ICP finds it";
+  EXPECT_FALSE(turned.polished) << "the belief does not hold that heading";
+  EXPECT_FALSE(turned.offered) << "within the place";
+  EXPECT_NEAR(turned.published.theta, room.truth.theta + Deg(5), Deg(0.5));
+}
+
 // One update that weighs nothing (no new walls) on a belief split between the published
 // place, the truth, with `kept` of the mass, and a place 5 m off with the rest, at this
 // doubt: which place is published.
