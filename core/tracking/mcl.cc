@@ -146,6 +146,7 @@ BeliefSummary MclTracker::Summary(const Eigen::Vector2d& wearer_slam, const Se2&
   s.fit_ratio = recovery_.FitRatio();
   s.fits = recovery_.Fits();
   s.searched = recovery_.searched();
+  s.crowded = recovery_.Unheld() >= 0.5 * s.elsewhere;
   s.places = places_;
   s.checked = start_.checked;
   return s;

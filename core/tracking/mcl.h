@@ -178,8 +178,11 @@ class MclTracker {
   BeliefSummary Summary(const Eigen::Vector2d& wearer_slam, const Se2& T) const;
   // The alignment in use, assessed where the wearer is now.
   Reliability AssessAtWearer() const;
+  // `unheld`: the share of a seed's mass the places that fit and it could not take would
+  // have (Recovery::Searched).
   std::string MixPlaces(const std::vector<GlobalPlace>& places,
-                        const std::vector<Eigen::Vector2d>& cloud_slam, int64_t stamp_ns);
+                        const std::vector<Eigen::Vector2d>& cloud_slam, int64_t stamp_ns,
+                        double& unheld);
   // The log-likelihood of the search's walls at each place, one window's worth
   // (independent_points): those walls chose the places, so they tell nothing of whether
   // the wearer is at any of them (the best of many random places fits them well too), but

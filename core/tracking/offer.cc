@@ -11,8 +11,9 @@ namespace floorpose::tracking {
 std::string MclTracker::OfferPlaces(const std::vector<GlobalPlace>& places,
                                     const std::vector<Eigen::Vector2d>& cloud_slam,
                                     int64_t stamp_ns) {
-  std::string what = MixPlaces(places, cloud_slam, stamp_ns);
-  recovery_.Searched();
+  double unheld = 0;
+  std::string what = MixPlaces(places, cloud_slam, stamp_ns, unheld);
+  recovery_.Searched(unheld);
   return what;
 }
 
@@ -39,22 +40,31 @@ std::vector<double> MclTracker::PlaceLogWeights(
 }
 
 std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places,
-                                  const std::vector<Eigen::Vector2d>& cloud_slam,
-                                  int64_t stamp_ns) {
-  std::vector<const GlobalPlace*> fit;
+                                  const std::vector<Eigen::Vector2d>& cloud_slam, int64_t stamp_ns,
+                                  double& unheld) {
+  // The places that fit, weighed against one another; the belief takes the first 8.
+  std::vector<const GlobalPlace*> fitting;
   for (const GlobalPlace& p : places)
-    if (p.rank < 2 && fit.size() < 8) fit.push_back(&p);
-  if (fit.empty()) return "no place fits";
+    if (p.rank < 2) fitting.push_back(&p);
+  if (fitting.empty()) return "no place fits";
+  const size_t k = std::min<size_t>(fitting.size(), 8);
   const Eigen::Vector2d wearer = odometry_.position.value_or(Eigen::Vector2d::Zero());
   const Eigen::Matrix3d P = PlaceCovariance(options_.place_sigma_m, options_.place_sigma_rad);
-  const size_t k = fit.size();
-  const std::vector<double> log_weights = PlaceLogWeights(fit, cloud_slam);
   if (belief_.empty()) {
+    // A seed: the places are the whole belief, and those beyond the 8 keep their part as
+    // "elsewhere" (Recovery::Searched).
+    const std::vector<double> log_weights = PlaceLogWeights(fitting, cloud_slam);
     const size_t n = std::max<size_t>(1, options_.samples.max_samples / k);
-    for (size_t i = 0; i < k; ++i)
-      belief_.AddGaussian(fit[i]->T_plan_slam, P, fit[i]->T_plan_slam * wearer, n, log_weights[i],
-                          rng_);
-    StartBelief(fit[0]->T_plan_slam, AlignmentSource::kGlobalSearch, stamp_ns);
+    double all = 0, held = 0;
+    for (size_t i = 0; i < fitting.size(); ++i) {
+      all += std::exp(log_weights[i]);
+      if (i >= k) continue;
+      belief_.AddGaussian(fitting[i]->T_plan_slam, P, fitting[i]->T_plan_slam * wearer, n,
+                          log_weights[i], rng_);
+      held += std::exp(log_weights[i]);
+    }
+    unheld = 1 - held / all;
+    StartBelief(fitting[0]->T_plan_slam, AlignmentSource::kGlobalSearch, stamp_ns);
     // The search's walls weigh its places against one another, not the doubt. Only walls
     // that come after the search weigh the belief against "elsewhere", and until they have
     // there is no place to publish.
@@ -64,22 +74,27 @@ std::string MclTracker::MixPlaces(const std::vector<GlobalPlace>& places,
   }
   // Recovery: the places the belief does not hold get the mass the belief may be missing,
   // less what the place it leads with takes of it where the search found that too: the
-  // search's walls and the walk weigh the places found against one another.
+  // search's walls and the walk weigh the places found against one another. Places beyond
+  // the 8 are left to that doubt, which brings the next search: a share of their own would
+  // bring it sooner, and every search mixes its look-alikes into a right belief at
+  // kOfferShare at least.
+  fitting.resize(k);
+  const std::vector<double> log_weights = PlaceLogWeights(fitting, cloud_slam);
   const Mode lead = belief_.LeadingMode(wearer, options_.publish.within_m, kPlaceRad);
   std::vector<Se2> fresh;
   std::vector<double> fresh_log_weights;
-  double all = 0, of_fresh = 0;
+  double of_taken = 0, of_fresh = 0;
   for (size_t i = 0; i < k; ++i) {
-    all += std::exp(log_weights[i]);
-    if (SamePlace(fit[i]->T_plan_slam, lead.T_plan_slam, wearer, options_.publish.within_m,
+    of_taken += std::exp(log_weights[i]);
+    if (SamePlace(fitting[i]->T_plan_slam, lead.T_plan_slam, wearer, options_.publish.within_m,
                   kPlaceRad))
       continue;
-    fresh.push_back(fit[i]->T_plan_slam);
+    fresh.push_back(fitting[i]->T_plan_slam);
     fresh_log_weights.push_back(log_weights[i]);
     of_fresh += std::exp(log_weights[i]);
   }
   if (fresh.empty()) return "the belief holds every place found";
-  const double share = std::max(kOfferShare, recovery_.Elsewhere()) * of_fresh / all;
+  const double share = std::max(kOfferShare, recovery_.Elsewhere()) * of_fresh / of_taken;
   belief_.Mix(fresh, fresh_log_weights, P, wearer, share, options_.samples.min_samples / 4, rng_);
   ++belief_version_;  // an update running on the belief without them is void
   return "mixed in " + std::to_string(fresh.size()) + " place(s) at " +

@@ -86,7 +86,7 @@ Recovery::Recovery(const RecoveryOptions& options, const MeasurementModel& model
 }
 
 void Recovery::Reset() {
-  log_odds_ = right_log_odds_ = kNone;
+  log_odds_ = right_log_odds_ = unheld_log_odds_ = kNone;
   Doubt(std::clamp(options_.start_doubt, 1e-6, 1 - 1e-6));
   fit_ = expected_;
   fit_sum_ = exponent_sum_ = 0;
@@ -95,28 +95,34 @@ void Recovery::Reset() {
 
 void Recovery::Resume(double elsewhere) {
   log_odds_ = Logit(std::clamp(elsewhere, 1e-9, 1 - 1e-9));
-  right_log_odds_ = kNone;
+  right_log_odds_ = unheld_log_odds_ = kNone;
   fit_ = expected_;
   fit_sum_ = exponent_sum_ = 0;
   searched_ = true;
 }
 
-void Recovery::Searched() {
-  // "Here" takes the mass of "elsewhere at a place that fits": here' = here + right.
-  log_odds_ -= std::log1p(RightOdds());
-  log_odds_ = std::clamp(log_odds_, kNone, -kNone);
+void Recovery::Searched(double unheld) {
+  // All but "elsewhere at a random place" is the places that fit: those the belief holds
+  // ("here") and those it does not (the search's share of them), here' = (1 - unheld) *
+  // (here + right + unheld before).
+  unheld = std::clamp(unheld, 0.0, 1 - 1e-9);
+  const double fits = 1 + RightOdds() + UnheldOdds();  // in units of "here"
+  log_odds_ = std::clamp(log_odds_ - std::log(fits) - std::log1p(-unheld), kNone, -kNone);
   right_log_odds_ = kNone;
+  unheld_log_odds_ = unheld > 0 ? std::clamp(Logit(unheld), kNone, -kNone) : kNone;
   searched_ = true;
 }
 
 void Recovery::Doubt(double p) {
   // Of the mass "here" gives up, one share in exp(log_places_) fits as a right place.
-  const double here = 1 / (1 + std::exp(log_odds_) + RightOdds());
+  const double here = 1 / (1 + std::exp(log_odds_) + RightOdds() + UnheldOdds());
   const double moved = here * p;
   const double right = here * RightOdds() + moved * std::exp(-log_places_);
   const double random = here * std::exp(log_odds_) + moved * (1 - std::exp(-log_places_));
   log_odds_ = std::clamp(std::log(random / (here - moved)), kNone, -kNone);
   right_log_odds_ = std::clamp(std::log(right / (here - moved)), kNone, -kNone);
+  if (unheld_log_odds_ > kNone)  // its odds against the smaller "here"
+    unheld_log_odds_ = std::clamp(unheld_log_odds_ - std::log1p(-p), kNone, -kNone);
 }
 
 void Recovery::Observe(double mean_log_likelihood, double predictive, double exponent,
@@ -140,10 +146,19 @@ double Recovery::RightOdds() const {
   return right_log_odds_ > kNone ? std::exp(right_log_odds_) : 0.0;
 }
 
+double Recovery::UnheldOdds() const {
+  return unheld_log_odds_ > kNone ? std::exp(unheld_log_odds_) : 0.0;
+}
+
 double Recovery::Elsewhere() const {
-  // The log odds of both shares of "elsewhere" together, against "here".
-  const double log_odds = log_odds_ + std::log1p(RightOdds() * std::exp(-log_odds_));
+  // The log odds of the three shares of "elsewhere" together, against "here".
+  const double log_odds =
+      log_odds_ + std::log1p((RightOdds() + UnheldOdds()) * std::exp(-log_odds_));
   return 1 / (1 + std::exp(-log_odds));
+}
+
+double Recovery::Unheld() const {
+  return UnheldOdds() / (1 + std::exp(log_odds_) + RightOdds() + UnheldOdds());
 }
 
 bool Recovery::SearchDue(double since_s) const {

@@ -1,4 +1,4 @@
-// Whether the wearer is at any of the belief's places at all: a filter over three
+// Whether the wearer is at any of the belief's places at all: a filter over four
 // hypotheses. "Here": the wearer is at one of the belief's places, and the walls fit as the
 // belief says. "Elsewhere" (the belief lost the wearer: a wrong start, a SLAM jump): the
 // wearer is at one fixed place the belief does not hold, one of the plan's places (PlanPlaces).
@@ -22,7 +22,11 @@
 // Probabilistic Robotics table 8.3, with samples drawn from the places the search finds,
 // as sensor resetting does, Lenser and Veloso 2000). A search settles the place that fits:
 // the places it finds join the belief, and where it finds none there is none, so that
-// share of "elsewhere" becomes the belief's.
+// share of "elsewhere" becomes the belief's. But the search that seeds a belief may find
+// more places that fit than the belief takes (a mall's row of shop fronts): those it
+// leaves out are a fourth hypothesis, "elsewhere at a look-alike", at their share of the
+// search's weight. The walls fit a look-alike as they fit the belief's place, so they
+// leave its odds as they are; only the next search, on more walls, settles it.
 #pragma once
 
 #include "core/closest_wall_index.h"
@@ -52,8 +56,11 @@ class Recovery {
   // start (a pick off by a room) fits its walls better than a random place does, as a
   // right one does: only the other places that fit tell the two apart, so every start is
   // checked by one search. The places it found join the belief: "elsewhere at a place
-  // that fits" is the belief's now.
-  void Searched();
+  // that fits" is the belief's now, but for `unheld`, the share of it at places a seed's
+  // search found and the belief did not take (a crowd of look-alikes larger than the
+  // belief holds). Walls fit those as they fit the belief's places, so only the next
+  // search tells them apart: until then they stay "elsewhere".
+  void Searched(double unheld = 0);
   // A relocalization starts a new SLAM frame: the belief spreads about where it was, and
   // the start is checked by one search as any other is (a frame that jumped further than
   // the spread fits the walls better than a random place does, too).
@@ -74,8 +81,10 @@ class Recovery {
   // log, and a right place's fit as the belief's, which a spread belief lowers only as
   // much as its places do.
   void Observe(double mean_log_likelihood, double predictive, double exponent, double dt_s);
-  // The probability that the wearer is at none of the belief's places.
+  // The probability that the wearer is at none of the belief's places...
   double Elsewhere() const;
+  // ...and at one a search found that the belief does not hold.
+  double Unheld() const;
   // Whether another search of the plan is due since_s after the last: searches come at a
   // rate in proportion to Elsewhere(), every search_interval_s at search_share and ten
   // times as seldom at a tenth of it. The searches cost CPU; the places they find are
@@ -95,16 +104,19 @@ class Recovery {
   void Doubt(double p);
   // The odds of "elsewhere at a place that fits" against "here"; 0 once ruled out.
   double RightOdds() const;
+  // ...and of "elsewhere at a place a search found and the belief does not hold".
+  double UnheldOdds() const;
 
   RecoveryOptions options_;
-  double expected_ = 0;            // mean log-likelihood per point of a right alignment...
-  double random_ = 0;              // ...and of a random one
-  double log_places_ = 0;          // log of the plan's distinct places
-  double log_odds_ = 0;            // of elsewhere at a random place against here...
-  double right_log_odds_ = kNone;  // ...and of elsewhere at a place that fits as a right one
-  double fit_ = 0;                 // the latest
-  double fit_sum_ = 0;             // of the fits since the start, each times its exponent...
-  double exponent_sum_ = 0;        // ...and of the exponents
+  double expected_ = 0;             // mean log-likelihood per point of a right alignment...
+  double random_ = 0;               // ...and of a random one
+  double log_places_ = 0;           // log of the plan's distinct places
+  double log_odds_ = 0;             // of elsewhere at a random place against here...
+  double right_log_odds_ = kNone;   // ...and of elsewhere at a place that fits as a right one
+  double unheld_log_odds_ = kNone;  // ...and of elsewhere at a look-alike the belief lacks
+  double fit_ = 0;                  // the latest
+  double fit_sum_ = 0;              // of the fits since the start, each times its exponent...
+  double exponent_sum_ = 0;         // ...and of the exponents
   bool searched_ = false;
   bool relocalized_ = false;
 };

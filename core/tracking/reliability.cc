@@ -20,10 +20,11 @@ Reliability Assess(const BeliefSummary& s, const PublishOptions& options) {
       std::snprintf(text, sizeof text, "the walls fit the plan poorly (%.0f%% of the expected fit)",
                     100 * s.fit_ratio);
     else  // the walls fit: the doubt is the start's, or earlier walls'
-      std::snprintf(
-          text, sizeof text, "%s (%.0f%% that the wearer is elsewhere)",
-          s.searched ? "the place is still in doubt" : "no search has confirmed the place",
-          100 * s.elsewhere);
+      std::snprintf(text, sizeof text, "%s (%.0f%% that the wearer is elsewhere)",
+                    !s.searched ? "no search has confirmed the place"
+                    : s.crowded ? "more places fit than the belief holds"
+                                : "the place is still in doubt",
+                    100 * s.elsewhere);
   } else if (s.places > 1)
     std::snprintf(text, sizeof text, "%zu places fit (%.0f%% of the belief here)", s.places,
                   100 * s.mass_within);

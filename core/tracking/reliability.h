@@ -23,6 +23,7 @@ struct BeliefSummary {
   double fit_ratio = 1;    // Recovery::FitRatio
   bool fits = true;        // the latest walls fit nearer a right place than a random one
   bool searched = true;    // a search of the plan has checked the start (Recovery::searched)
+  bool crowded = false;    // ...and most of the doubt is places it found the belief lacks
   size_t places = 1;       // distinct places holding mass (Belief modes)
   bool checked = false;    // an update weighted the belief since it was set
 };

@@ -212,6 +212,26 @@ TEST(RecoveryTest, ANearMissIsDoubtedUntilASearchHandsItsPlaceToTheBelief) {
   EXPECT_LT(stale.Elsewhere(), 0.01);
 }
 
+TEST(RecoveryTest, PlacesASearchFoundAndTheBeliefLacksStayElsewhereUntilTheNextSearch) {
+  MeasurementModel m;
+  const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
+  const double expected = ExpectedLogLikelihood(m, index.max_distance_m());
+  Recovery r({}, m, index, 1.0, kPlaceRad);
+  r.Searched(0.3);  // a crowd of look-alikes, 30% of it beyond what the belief took
+  EXPECT_NEAR(r.Elsewhere(), 0.3 + 0.7 * 0.5, 0.01) << "the start's doubt of a random place stays";
+  // Walls that fit as a right place does clear the doubt of a random place, but fit a
+  // look-alike the belief lacks just as well.
+  for (int i = 0; i < 20; ++i) r.Observe(expected, expected, 0.5, 1.0);
+  EXPECT_NEAR(r.Elsewhere(), 0.3, 0.01);
+  EXPECT_NEAR(r.Unheld(), 0.3, 0.01);
+  // A loss adds to the doubt; the look-alikes keep their share of the rest.
+  r.Observe(expected, expected, 0.0, 60.0);
+  EXPECT_GT(r.Elsewhere(), 0.3);
+  // The next search finds no place the belief does not hold: the loss's doubt is left.
+  r.Searched(0);
+  EXPECT_LT(r.Elsewhere(), 0.1);
+}
+
 TEST(RecoveryTest, SearchesComeAsOftenAsTheWearerMayBeElsewhere) {
   MeasurementModel m;
   const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
@@ -251,6 +271,10 @@ TEST(ReliabilityTest, TheReasonNamesTheTermThatKeepsTheProbabilityDown) {
             "no search has confirmed the place (60% that the wearer is elsewhere)");
   s.searched = true;
   EXPECT_EQ(Assess(s, o).reason, "the place is still in doubt (60% that the wearer is elsewhere)");
+  s.crowded = true;  // most of it at places a search found and the belief could not take
+  EXPECT_EQ(Assess(s, o).reason,
+            "more places fit than the belief holds (60% that the wearer is elsewhere)");
+  s.crowded = false;
   s.fits = false;
   s.fit_ratio = 0.2;
   EXPECT_EQ(Assess(s, o).reason, "the walls fit the plan poorly (20% of the expected fit)");
@@ -453,6 +477,66 @@ TEST(MclTrackerTest, ASearchsPlacesArePublishedOnceOneIsDegraded) {
   // The wearer picks a wall: that place is published at once.
   ASSERT_EQ(mcl.ApplyWallPick(RoomWalk::PickOn(truth, {10, 3}), t), "");
   EXPECT_TRUE(mcl.has_alignment());
+}
+
+// Nine rooms alike to the walls a search ran on, of which the belief takes eight: the
+// ninth keeps its part of the belief's mass as "elsewhere" while later walls, which tell
+// the eight apart, fit it as they fit the truth. A search that finds no place beyond the
+// belief's gives that part back.
+TEST(MclTrackerTest, ACrowdLargerThanTheBeliefKeepsItsPlaceInDoubt) {
+  std::vector<Segment> segments;
+  for (int k = 0; k < 9; ++k) {
+    const Eigen::Vector2d o(12.0 * k, 0);
+    const Eigen::Vector2d c[] = {o, o + Eigen::Vector2d(6, 0), o + Eigen::Vector2d(6, 4),
+                                 o + Eigen::Vector2d(0, 4)};
+    for (int i = 0; i < 4; ++i) segments.push_back({c[i], c[(i + 1) % 4]});
+    // The truth's room (0) and its twin (8) have a wall in the middle; the rest not.
+    if (k == 0 || k == 8)
+      segments.push_back({o + Eigen::Vector2d(2, 1), o + Eigen::Vector2d(2, 3)});
+  }
+  const auto parse = MakeFloorPlan("bays", segments);
+  ASSERT_TRUE(parse.ok()) << parse.error;
+  const auto index = std::make_shared<ClosestWallIndex>(parse.plan);
+  const Se2 truth{Deg(20), {1, -2}};
+  std::vector<Eigen::Vector2d> outer_slam, walls_slam;
+  for (const Eigen::Vector2d& p : floorpose::testing::SampleWalls(parse.plan, 0.05)) {
+    if (p.x() > 6.01) continue;
+    walls_slam.push_back(truth.Inverse() * p);
+    if (!(std::abs(p.x() - 2) < 1e-6 && p.y() > 0.5 && p.y() < 3.5))
+      outer_slam.push_back(truth.Inverse() * p);
+  }
+  MclTracker mcl({});
+  mcl.SetPlan(index);
+  int64_t t = 0;
+  const Pose2 wearer{truth.Inverse() * Eigen::Vector2d(1.5, 3), 0, 1.6};
+  mcl.Correct(wearer, t);
+  std::vector<GlobalPlace> crowd(9);
+  for (int k = 0; k < 9; ++k) crowd[k].T_plan_slam = Se2{0, {12.0 * k, 0}} * truth;
+  ASSERT_THAT(mcl.OfferPlaces(crowd, outer_slam, t), ::testing::HasSubstr("seeded with 8"));
+  const auto update = [&] {
+    t += 1000000000;
+    mcl.Correct(wearer, t);
+    ASSERT_TRUE(mcl.UpdateDue(t, 1000));
+    MclUpdate u = mcl.PrepareUpdate(t);
+    ASSERT_TRUE(mcl.FinishUpdate(RunMclUpdate(std::move(u), walls_slam, *index, mcl.options()), t));
+  };
+  // Each update weighs the seconds of walls since the last: a window's worth in 20 s.
+  for (int k = 0;
+       k < 200 && mcl.belief().MassWithin(wearer.position, truth * wearer.position, 1.0) < 0.97;
+       ++k)
+    update();
+  ASSERT_TRUE(mcl.has_alignment());
+  ASSERT_GE(mcl.belief().MassWithin(wearer.position, truth * wearer.position, 1.0), 0.97)
+      << "the walls found the truth among the eight";
+  const PlanPoseEstimate held = mcl.Correct(wearer, t);
+  EXPECT_LT(held.reliability.probability, 1 - 1.0 / 9 + 0.01) << "its twin is one in nine";
+  EXPECT_EQ(held.reliability.flag, ReliabilityFlag::kDegraded);
+  EXPECT_THAT(held.reliability.reason, ::testing::HasSubstr("more places fit than the belief"));
+  // A search finds no place the belief does not hold: the doubt is the walls' again.
+  ASSERT_THAT(mcl.OfferPlaces({crowd[0]}, walls_slam, t),
+              ::testing::HasSubstr("the belief holds every place found"));
+  for (int k = 0; k < 10; ++k) update();
+  EXPECT_EQ(mcl.CurrentReliability().flag, ReliabilityFlag::kReliable);
 }
 
 // A tracker without a belief, the wearer at plan point `at` at 20 s, seeded by a search
