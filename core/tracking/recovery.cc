@@ -115,7 +115,7 @@ void Recovery::Searched(double unheld) {
 
 void Recovery::Doubt(double p) {
   // Of the mass "here" gives up, one share in exp(log_places_) fits as a right place.
-  const double here = 1 / (1 + std::exp(log_odds_) + RightOdds() + UnheldOdds());
+  const double here = Here();
   const double moved = here * p;
   const double right = here * RightOdds() + moved * std::exp(-log_places_);
   const double random = here * std::exp(log_odds_) + moved * (1 - std::exp(-log_places_));
@@ -157,9 +157,9 @@ double Recovery::Elsewhere() const {
   return 1 / (1 + std::exp(-log_odds));
 }
 
-double Recovery::Unheld() const {
-  return UnheldOdds() / (1 + std::exp(log_odds_) + RightOdds() + UnheldOdds());
-}
+double Recovery::Here() const { return 1 / (1 + std::exp(log_odds_) + RightOdds() + UnheldOdds()); }
+
+double Recovery::Unheld() const { return UnheldOdds() * Here(); }
 
 bool Recovery::SearchDue(double since_s) const {
   return since_s >= options_.search_interval_s &&

@@ -106,6 +106,8 @@ class Recovery {
   double RightOdds() const;
   // ...and of "elsewhere at a place a search found and the belief does not hold".
   double UnheldOdds() const;
+  // The probability of "here".
+  double Here() const;
 
   RecoveryOptions options_;
   double expected_ = 0;             // mean log-likelihood per point of a right alignment...

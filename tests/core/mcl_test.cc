@@ -367,12 +367,11 @@ void PickAndCheck(MclTracker& mcl, const RoomWalk& room, int64_t* t_ns) {
 }
 
 // One update at t_ns on these wall points (slam), run inline.
-void UpdateOn(MclTracker& mcl, const RoomWalk& room, const std::vector<Eigen::Vector2d>& walls,
-              int64_t t_ns) {
+void UpdateOn(MclTracker& mcl, const ClosestWallIndex& index,
+              const std::vector<Eigen::Vector2d>& walls, int64_t t_ns) {
   ASSERT_TRUE(mcl.UpdateDue(t_ns, 1000));
   MclUpdate u = mcl.PrepareUpdate(t_ns);
-  ASSERT_TRUE(
-      mcl.FinishUpdate(RunMclUpdate(std::move(u), walls, *room.index, mcl.options()), t_ns));
+  ASSERT_TRUE(mcl.FinishUpdate(RunMclUpdate(std::move(u), walls, index, mcl.options()), t_ns));
 }
 
 TEST(MclTrackerTest, AWallPickOffByAMetreEndsOnTheTruthAndReliable) {
@@ -460,9 +459,7 @@ TEST(MclTrackerTest, ASearchsPlacesArePublishedOnceOneIsDegraded) {
     if (k > 0) {
       EXPECT_THAT(e.reliability.reason, ::testing::HasSubstr("none yet at 50%"));
     }
-    ASSERT_TRUE(mcl.UpdateDue(t, 1000)) << k;
-    MclUpdate u = mcl.PrepareUpdate(t);
-    ASSERT_TRUE(mcl.FinishUpdate(RunMclUpdate(std::move(u), walls_slam, *index, mcl.options()), t));
+    UpdateOn(mcl, *index, walls_slam, t);
     if (k == 0) {
       // Both places hold about half, and the doubt of a start is still about a half.
       EXPECT_FALSE(mcl.has_alignment()) << "a guess between two places is not published";
@@ -516,9 +513,7 @@ TEST(MclTrackerTest, ACrowdLargerThanTheBeliefKeepsItsPlaceInDoubt) {
   const auto update = [&] {
     t += 1000000000;
     mcl.Correct(wearer, t);
-    ASSERT_TRUE(mcl.UpdateDue(t, 1000));
-    MclUpdate u = mcl.PrepareUpdate(t);
-    ASSERT_TRUE(mcl.FinishUpdate(RunMclUpdate(std::move(u), walls_slam, *index, mcl.options()), t));
+    UpdateOn(mcl, *index, walls_slam, t);
   };
   // Each update weighs the seconds of walls since the last: a window's worth in 20 s.
   for (int k = 0;
@@ -657,7 +652,7 @@ TEST(MclTrackerTest, AFrameThatJumpedBeyondTheSpreadIsFoundByTheSearchThatChecks
   t += 5000000000;
   mcl.Correct({room.truth.Inverse() * wearer, 0, 1.6}, t);
   EXPECT_FALSE(mcl.SearchDue(t, 1000)) << "not before an update has weighed the new frame";
-  UpdateOn(mcl, room, room.SeenFrom(wearer), t);
+  UpdateOn(mcl, *room.index, room.SeenFrom(wearer), t);
   ASSERT_TRUE(mcl.SearchDue(t, 1000)) << "the new frame is checked against the whole plan";
   mcl.MarkSearchStarted(t);
   GlobalPlace right;
@@ -681,7 +676,7 @@ TEST(MclTrackerTest, ARelocalizedFrameIsCheckedOnceTheWallsHaveSettledTheBelief)
   std::vector<Eigen::Vector2d> far;
   for (int i = 0; i < 100; ++i)
     far.push_back(room.truth.Inverse() * Eigen::Vector2d(100 + 0.1 * i, 100));
-  UpdateOn(mcl, room, far, t);
+  UpdateOn(mcl, *room.index, far, t);
   EXPECT_FALSE(mcl.SearchDue(t, 1000)) << "spread by the loss: not yet";
   Walk(mcl, room, &t);
   EXPECT_TRUE(mcl.SearchDue(t, 1000)) << "settled by the walls: checked";
