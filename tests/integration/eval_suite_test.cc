@@ -12,6 +12,7 @@
 #include <fstream>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -239,8 +240,9 @@ std::vector<std::vector<std::string>> RowsStartingWith(const std::string& md,
 }
 
 // A building in WGS84 longitude/latitude at 47 N (two rooms of 10 x 8 m, a 1.2 m door
-// between them) and one walk through the door, as a floor folder of a waypoint suite.
-void WriteWaypointFloor(const fs::path& dir, const std::string& walk) {
+// between them) and walks through the door (the same waypoints under each id), as a floor
+// folder of a waypoint suite.
+void WriteWaypointFloor(const fs::path& dir, const std::vector<std::string>& walks) {
   fs::create_directories(dir);
   // Metres to degrees about (8 E, 47 N): the suite projects them back.
   const double m_per_deg_lat = 111180.0, m_per_deg_lon = 111180.0 * std::cos(47.0 * M_PI / 180);
@@ -263,10 +265,12 @@ void WriteWaypointFloor(const fs::path& dir, const std::string& walk) {
   csv << "walk,t_ms,x_m,y_m\n";
   const double path[][2] = {{2, 4},  {6, 5}, {8, 4}, {12, 4}, {16, 3}, {18, 5}, {15, 7},
                             {12, 5}, {8, 4}, {5, 6}, {2, 6},  {3, 3},  {6, 3}};
-  int64_t t = 1574000000000;
-  for (const auto& p : path) {
-    csv << walk << "," << t << "," << p[0] << "," << p[1] << "\n";
-    t += 4000;
+  for (const std::string& walk : walks) {
+    int64_t t = 1574000000000;
+    for (const auto& p : path) {
+      csv << walk << "," << t << "," << p[0] << "," << p[1] << "\n";
+      t += 4000;
+    }
   }
 }
 
@@ -274,8 +278,8 @@ TEST(EvalSuiteTest, WaypointFloorsAreWalkedWithAndWithoutThePickDevelopmentAndVa
   const fs::path floors =
       fs::path(::testing::TempDir()) / ("waypoint-floors-" + std::to_string(getpid()));
   fs::remove_all(floors);
-  WriteWaypointFloor(floors / "F1", "walk-a");  // a development floor
-  WriteWaypointFloor(floors / "F3", "walk-b");  // a validation floor
+  WriteWaypointFloor(floors / "F1", {"walk-a", "walk-c"});  // a development floor
+  WriteWaypointFloor(floors / "F3", {"walk-b"});            // a validation floor
   const fs::path dir = RunSuite("waypoints", {"--jobs", "2"}, std::chrono::seconds(120),
                                 {"--waypoints", floors.string()});
   ASSERT_FALSE(dir.empty());
@@ -289,7 +293,7 @@ TEST(EvalSuiteTest, WaypointFloorsAreWalkedWithAndWithoutThePickDevelopmentAndVa
   EXPECT_EQ(f3[0][1], "validation");
   EXPECT_EQ(f1[0][2], "pick");
   EXPECT_EQ(f1[1][2], "no pick");
-  EXPECT_EQ(f1[0][3], "1");  // one walk
+  EXPECT_EQ(f1[0][3], "2");  // two walks
   EXPECT_GT(std::stoi(f1[0][4]), 100) << "poses of a 48 s walk";
   EXPECT_LT(md.find("Development floors"), md.find("Validation floors"));
   // With the pick the walk is tracked on the projected plan: the waypoints and the plan
@@ -297,9 +301,17 @@ TEST(EvalSuiteTest, WaypointFloorsAreWalkedWithAndWithoutThePickDevelopmentAndVa
   EXPECT_LT(std::stod(f1[0][5]), 1.0) << md;
   EXPECT_EQ(RowsStartingWith(md, "all").size(), 4u);
   std::ifstream json(dir / "results.json");
-  int lines = 0;
-  for (std::string l; std::getline(json, l);) lines += !l.empty();
-  EXPECT_EQ(lines, 4);  // two walks, each with and without the pick
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(json, l);)
+    if (!l.empty()) lines.push_back(l);
+  ASSERT_EQ(lines.size(), 6u);  // three walks, each with and without the pick
+  // Each walk is its own headset: the same waypoints under another id drift otherwise.
+  std::set<double> errors;
+  for (const std::string& l : lines) {
+    const nlohmann::json r = nlohmann::json::parse(l);
+    if (r["plan"] == "F1" && r["method"] == "pick") errors.insert(r["mean_error_m"].get<double>());
+  }
+  EXPECT_EQ(errors.size(), 2u) << "walk-a and walk-c drew the same drift";
   RemoveSuite(dir);
   fs::remove_all(floors);
 }
