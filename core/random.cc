@@ -4,6 +4,12 @@
 
 namespace floorpose {
 
+uint64_t Fnv1a(const std::string& text) {
+  uint64_t h = 0xcbf29ce484222325ULL;
+  for (const char c : text) h = (h ^ static_cast<uint8_t>(c)) * 0x100000001b3ULL;
+  return h;
+}
+
 double SplitMix64::Gaussian() {
   double u1 = Uniform();
   while (u1 <= 0.0) u1 = Uniform();

@@ -3,8 +3,12 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 namespace floorpose {
+
+// A stable hash of a text (FNV-1a): the same id gives the same seed on any machine.
+uint64_t Fnv1a(const std::string& text);
 
 // SplitMix64 (Steele, Lea, Flood 2014).
 class SplitMix64 {

@@ -18,13 +18,6 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-// A stable hash of a plan id (FNV-1a), to give every plan its own random streams.
-uint64_t Fnv1a(const std::string& text) {
-  uint64_t h = 0xcbf29ce484222325ULL;
-  for (const char c : text) h = (h ^ static_cast<uint8_t>(c)) * 0x100000001b3ULL;
-  return h;
-}
-
 // One random stream per concern (reality, walk, drift, sensor, mesh, pick), so that, e.g.,
 // turning the mesh off leaves the walk and the drift as they were.
 SplitMix64 Stream(uint64_t seed, uint64_t salt) {

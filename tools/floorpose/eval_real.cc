@@ -11,6 +11,7 @@
 #include <mutex>
 #include <sstream>
 
+#include "core/random.h"
 #include "platform/config.h"
 #include "platform/floor_plan_io.h"
 #include "tools/lib/carmen.h"
@@ -247,20 +248,13 @@ std::vector<Floor> FindFloors(const std::string& dir, std::string* error) {
   return floors;
 }
 
-// FNV-1a of the walk's id: the same walk draws the same drift on any machine.
-uint64_t WalkSeed(const std::string& walk) {
-  uint64_t h = 0xcbf29ce484222325ULL;
-  for (const unsigned char c : walk) h = (h ^ c) * 0x100000001b3ULL;
-  return h;
-}
-
 bool EvaluateWalk(const v1::FloorposedConfig& base, const fs::path& recordings, WalkRun* run,
                   std::string* error) {
   const Floor& floor = *run->floor;
   sim::SimulatorOptions sim;
   // Every walk its own headset: a drift (scale error, heading bias, random walks) drawn
   // from the walk's id, so that the floors' walks measure many SLAM runs, not one.
-  sim.seed = WalkSeed(run->walk);
+  sim.seed = Fnv1a(run->walk);
   sim.scenario = sim::Scenario::kCorridor;  // reality is the plan; the walk is the person's
   const std::vector<sim::TimedPose> trajectory =
       sim::WalkWaypoints(floor.walks.walks.at(run->walk), sim);
