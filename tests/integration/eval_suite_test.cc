@@ -312,6 +312,18 @@ TEST(EvalSuiteTest, WaypointFloorsAreWalkedWithAndWithoutThePickDevelopmentAndVa
     if (r["plan"] == "F1" && r["method"] == "pick") errors.insert(r["mean_error_m"].get<double>());
   }
   EXPECT_EQ(errors.size(), 2u) << "walk-a and walk-c drew the same drift";
+  // `floorpose simulate` walks one of them as the suite did, to trace it alone.
+  const fs::path walk = dir / "walk-c.rec", log = dir / "simulate.log";
+  tools::ChildProcess simulate(
+      {FLOORPOSE_PATH, "simulate", "--plan", (floors / "F1" / "plan.geojson").string(),
+       "--waypoints", (floors / "F1" / "waypoints.csv").string(), "--walk", "walk-c", "--out",
+       walk.string()},
+      log.string());
+  ASSERT_TRUE(simulate.started());
+  ASSERT_EQ(simulate.Wait(std::chrono::seconds(60)), 0) << testing::ReadText(log);
+  ASSERT_GT(fs::file_size(walk), 0u);
+  EXPECT_TRUE(testing::ReadText(walk) == testing::ReadText(dir / "recordings" / "F1_walk-c.rec"))
+      << "simulate --walk walk-c differs from the suite's recording of it";
   RemoveSuite(dir);
   fs::remove_all(floors);
 }

@@ -5,8 +5,10 @@
 
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
+#include "core/random.h"
 #include "platform/floor_plan_io.h"
 #include "tools/floorpose/commands.h"
 #include "tools/lib/simulate_recording.h"
@@ -25,11 +27,12 @@ struct SimulateOptions {
   double pace_mps = 0.0;
   sim::SimulatorOptions sim;
   SimulateRecordingOptions recording;
+  bool seed_given = false, scenario_given = false;
 };
 
 int RunSimulate(SimulateOptions o) {
   const auto start = std::chrono::steady_clock::now();
-  const FloorPlanParse plan = platform::LoadFloorPlan(o.plan);
+  FloorPlanParse plan = platform::LoadFloorPlan(o.plan);
   if (!plan.ok()) {
     spdlog::error("{}", plan.error);
     return 1;
@@ -58,6 +61,14 @@ int RunSimulate(SimulateOptions o) {
                                             : "walk '" + o.walk + "' has fewer than two waypoints",
                     walks.ids.size());
       return 1;
+    }
+    // The walk as eval-suite --waypoints walks it: its own drift, drawn from its id, on a
+    // building that is its plan, named as the suite names a floor (its folder).
+    if (!o.seed_given) o.sim.seed = Fnv1a(o.walk);
+    plan.plan.id = std::filesystem::absolute(o.waypoints).parent_path().filename().string();
+    if (!o.scenario_given) {
+      o.scenario = "corridor";
+      o.sim.scenario = sim::Scenario::kCorridor;
     }
     trajectory = sim::WalkWaypoints(it->second, o.sim);
   }
@@ -104,21 +115,27 @@ int RunSimulate(SimulateOptions o) {
 Run AddSimulateCommand(CLI::App& app) {
   auto o = std::make_shared<SimulateOptions>();
   app.add_option("--plan", o->plan, "floor plan (.geojson or .txt)")->required();
-  app.add_option("--seed", o->sim.seed, "simulation seed")->capture_default_str();
-  app.add_option("--scenario", o->scenario,
-                 "corridor, office, glass, hall, mismatch; and reality unlike the plan: doors "
-                 "(drawn closed), stale (walls gone, new, moved), scaled (plan 1-2% off in "
-                 "scale, skewed), relocalize (tracking lost, the SLAM frame jumps). Where the "
-                 "plan as drawn differs (doors, scaled) it is written beside --out")
-      ->check(CLI::IsMember(sim::ScenarioNames()))
-      ->capture_default_str();
+  auto* seed = app.add_option("--seed", o->sim.seed,
+                              "simulation seed (with --waypoints: a hash of the walk id, as "
+                              "eval-suite --waypoints draws it)")
+                   ->capture_default_str();
+  auto* scenario =
+      app.add_option("--scenario", o->scenario,
+                     "corridor, office, glass, hall, mismatch; and reality unlike the plan: doors "
+                     "(drawn closed), stale (walls gone, new, moved), scaled (plan 1-2% off in "
+                     "scale, skewed), relocalize (tracking lost, the SLAM frame jumps). Where the "
+                     "plan as drawn differs (doors, scaled) it is written beside --out (with "
+                     "--waypoints: corridor, as eval-suite --waypoints walks them)")
+          ->check(CLI::IsMember(sim::ScenarioNames()))
+          ->capture_default_str();
   auto* trajectory =
       app.add_option("--trajectory", o->trajectory,
                      "walk this TUM trajectory on the plan ('timestamp x y z qx qy qz qw')");
   auto* waypoints =
       app.add_option("--waypoints", o->waypoints,
                      "walk one walk of this waypoint CSV ('walk,t_ms,x_m,y_m', plan frame) at "
-                     "its own timing, straight from waypoint to waypoint")
+                     "its own timing, straight from waypoint to waypoint, as eval-suite "
+                     "--waypoints walks it (the plan named after the CSV's folder)")
           ->excludes(trajectory);
   app.add_option("--walk", o->walk, "the walk id in --waypoints")->needs(waypoints);
   waypoints->needs("--walk");
@@ -157,7 +174,11 @@ Run AddSimulateCommand(CLI::App& app) {
         o->sim.kidnap_rad = M_PI / 2;
       },
       "write a wrong wall pick: 10 m and 90 degrees off at the wearer");
-  return [o] { return RunSimulate(*o); };
+  return [o, seed, scenario] {
+    o->seed_given = seed->count() > 0;
+    o->scenario_given = scenario->count() > 0;
+    return RunSimulate(*o);
+  };
 }
 
 }  // namespace floorpose::tools
