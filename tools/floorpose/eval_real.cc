@@ -11,7 +11,6 @@
 #include <mutex>
 #include <sstream>
 
-#include "core/random.h"
 #include "platform/config.h"
 #include "platform/floor_plan_io.h"
 #include "tools/lib/carmen.h"
@@ -229,7 +228,7 @@ std::vector<Floor> FindFloors(const std::string& dir, std::string* error) {
   std::vector<Floor> floors;
   for (const fs::path& d : dirs) {
     Floor f;
-    f.name = d.filename().string();
+    f.name = WaypointFloorName((d / "waypoints.csv").string());
     for (const auto& e : fs::directory_iterator(d, ec))
       if (e.path().extension() == ".geojson" && (f.plan_path.empty() || e.path() < f.plan_path))
         f.plan_path = e.path().string();
@@ -251,11 +250,7 @@ std::vector<Floor> FindFloors(const std::string& dir, std::string* error) {
 bool EvaluateWalk(const v1::FloorposedConfig& base, const fs::path& recordings, WalkRun* run,
                   std::string* error) {
   const Floor& floor = *run->floor;
-  sim::SimulatorOptions sim;
-  // Every walk its own headset: a drift (scale error, heading bias, random walks) drawn
-  // from the walk's id, so that the floors' walks measure many SLAM runs, not one.
-  sim.seed = Fnv1a(run->walk);
-  sim.scenario = sim::Scenario::kCorridor;  // reality is the plan; the walk is the person's
+  const sim::SimulatorOptions sim = WaypointWalkSimulator(run->walk);
   const std::vector<sim::TimedPose> trajectory =
       sim::WalkWaypoints(floor.walks.walks.at(run->walk), sim);
   const std::string path = (recordings / (floor.name + "_" + run->walk + ".rec")).string();

@@ -5,10 +5,8 @@
 
 #include <chrono>
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 
-#include "core/random.h"
 #include "platform/floor_plan_io.h"
 #include "tools/floorpose/commands.h"
 #include "tools/lib/simulate_recording.h"
@@ -62,14 +60,14 @@ int RunSimulate(SimulateOptions o) {
                     walks.ids.size());
       return 1;
     }
-    // The walk as eval-suite --waypoints walks it: its own drift, drawn from its id, on a
-    // building that is its plan, named as the suite names a floor (its folder).
-    if (!o.seed_given) o.sim.seed = Fnv1a(o.walk);
-    plan.plan.id = std::filesystem::absolute(o.waypoints).parent_path().filename().string();
+    // The walk as eval-suite --waypoints walks it, unless told otherwise.
+    const sim::SimulatorOptions suite = WaypointWalkSimulator(o.walk);
+    if (!o.seed_given) o.sim.seed = suite.seed;
     if (!o.scenario_given) {
-      o.scenario = "corridor";
-      o.sim.scenario = sim::Scenario::kCorridor;
+      o.sim.scenario = suite.scenario;
+      o.scenario = sim::ToString(suite.scenario);
     }
+    plan.plan.id = WaypointFloorName(o.waypoints);
     trajectory = sim::WalkWaypoints(it->second, o.sim);
   }
   SimulateRecordingResult result;

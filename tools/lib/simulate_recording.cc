@@ -9,6 +9,7 @@
 #include <map>
 #include <sstream>
 
+#include "core/random.h"
 #include "platform/floor_plan_io.h"
 #include "platform/recording.h"
 #include "tools/lib/headset_messages.h"
@@ -258,6 +259,17 @@ bool ReadWaypoints(const std::string& path, WaypointWalks* out, std::string* err
   if (ParseWaypoints(text, out, error)) return true;
   *error = path + ": " + *error;
   return false;
+}
+
+sim::SimulatorOptions WaypointWalkSimulator(const std::string& walk) {
+  sim::SimulatorOptions options;
+  options.seed = Fnv1a(walk);
+  options.scenario = sim::Scenario::kCorridor;
+  return options;
+}
+
+std::string WaypointFloorName(const std::string& csv_path) {
+  return std::filesystem::absolute(csv_path).parent_path().filename().string();
 }
 
 void PaceTrajectory(std::vector<sim::TimedPose>* trajectory, double pace_mps, double turn_rad_s) {

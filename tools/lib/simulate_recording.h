@@ -82,6 +82,14 @@ struct WaypointWalks {
 bool ParseWaypoints(std::string_view text, WaypointWalks* out, std::string* error);
 // The same from a file (at most 256 MB); the error names the file.
 bool ReadWaypoints(const std::string& path, WaypointWalks* out, std::string* error);
+// How a waypoint walk is simulated (eval-suite --waypoints, and simulate --waypoints to
+// trace one alone): every walk its own headset, a drift (scale error, heading bias, random
+// walks) drawn from its id, so that a floor's walks measure many SLAM runs, not one; on a
+// building that is its plan (the corridor scenario), the walk being the person's.
+sim::SimulatorOptions WaypointWalkSimulator(const std::string& walk);
+// The floor a waypoint CSV walks (its folder's name): the plan's id the suite gives it,
+// which keys the simulator's walk.
+std::string WaypointFloorName(const std::string& csv_path);
 
 // Re-times a trajectory whose clock is not seconds (a log's line numbers): each step
 // takes as long as walking it at pace_mps or turning it at turn_rad_s, whichever is
