@@ -172,9 +172,9 @@ TEST(EvalSuiteTest, WritesResultsAndTheTrackingTargets) {
   RemoveSuite(dir);
 }
 
-// The kidnap table (issue 7) counts from the runs in results.json: flagged UNRELIABLE
-// within 5 s, recovered within 60 s, both in the same run, and the RELIABLE poses more
-// than 1 m off before the run recovered and in all.
+// The kidnap table counts from the runs in results.json: flagged UNRELIABLE within 5 s,
+// recovered within 30 s (issue 43's target), both in the same run, and the RELIABLE poses
+// more than 1 m off before the run recovered and in all.
 TEST(EvalSuiteTest, TheKidnapTableCountsTheRunsOfResultsJson) {
   const fs::path dir =
       RunSuite("kidnap", {"--seeds", "1", "--length", "60", "--methods", "mcl", "--kidnap"},
@@ -200,7 +200,7 @@ TEST(EvalSuiteTest, TheKidnapTableCountsTheRunsOfResultsJson) {
     ASSERT_GE(before, 0) << line;
     EXPECT_LE(before, all) << line;
     trusted_wrong += static_cast<int>(before), false_reliable += static_cast<int>(all);
-    const bool f = unreliable >= 0 && unreliable <= 5, r = recovery >= 0 && recovery <= 60;
+    const bool f = unreliable >= 0 && unreliable <= 5, r = recovery >= 0 && recovery <= 30;
     flagged += f, recovered += r, both += f && r;
   }
   ASSERT_EQ(runs, 9);  // 9 scenarios on one plan, one seed, one method

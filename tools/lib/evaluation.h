@@ -49,6 +49,8 @@ const char* IlcSplit(const std::string& floor);
 // The seconds within which a loss of tracking should be RELIABLE within 1 m again (issue
 // 43's target for `relocalize`).
 constexpr double kBackAfterLossS = 20.0;
+// ...and after a wrong pick, from the pick (issue 43's target for `--kidnap`).
+constexpr double kBackAfterKidnapS = 30.0;
 // How far the wearer has moved at the first step, metres: over the truth's jitter while
 // standing (none in the simulator), under one stride.
 constexpr double kFirstStepM = 0.3;
