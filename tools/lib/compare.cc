@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/random.h"
+#include "tools/lib/evaluation.h"
 
 namespace floorpose::tools {
 
@@ -20,7 +21,7 @@ SuiteFigures Figures(const std::vector<const RunFigures*>& runs) {
     reliable += r->reliable_poses;
     f.false_poses += r->false_poses;
     brier += r->brier * r->scored_poses;
-    f.recovered += r->time_to_recovered_s >= 0 && r->time_to_recovered_s <= kRecoveredS;
+    f.recovered += r->time_to_recovered_s >= 0 && r->time_to_recovered_s <= kBackAfterKidnapS;
     f.never_recovered += r->time_to_recovered_s < 0;
   }
   if (!runs.empty()) {

@@ -33,12 +33,11 @@ struct SuiteFigures {
   double precision = 1;     // share of RELIABLE poses within 1 m
   double false_poses = 0;
   double brier = 0;  // over every scored pose of the runs
-  // Share of runs RELIABLE within 1 m within kRecoveredS of the first alignment (issue
-  // 43's kidnap target), and runs never so.
+  // Share of runs RELIABLE within 1 m within kBackAfterKidnapS (evaluation.h) of the first
+  // alignment (issue 43's kidnap target), and runs never so.
   double recovered = 0;
   double never_recovered = 0;
 };
-constexpr double kRecoveredS = 30.0;
 SuiteFigures Figures(const std::vector<const RunFigures*>& runs);
 
 struct Difference {
