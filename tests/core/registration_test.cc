@@ -116,6 +116,25 @@ TEST_F(IcpTest, ClutterIsRejected) {
   }
 }
 
+TEST_F(IcpTest, TheOrderOfThePointsDoesNotMatter) {
+  // ICP reads the points in the plan's order whatever order they come in (the index's
+  // grid is then read nearly in order): a shuffled cloud lands where the walls put it.
+  const Se2 T_slam_plan{Deg(4), {0.5, -0.3}};
+  const Se2 truth = T_slam_plan.Inverse();
+  auto cloud = SlamCloud(plan_, T_slam_plan, 0.01, 4);
+  const RegistrationResult ordered = RegisterIcp(cloud, index_, Se2::Identity(), options_);
+  SplitMix64 rng(5);
+  for (size_t i = cloud.size() - 1; i > 0; --i)
+    std::swap(cloud[i], cloud[static_cast<size_t>(rng.Uniform() * static_cast<double>(i + 1))]);
+  const RegistrationResult shuffled = RegisterIcp(cloud, index_, Se2::Identity(), options_);
+  ASSERT_TRUE(ordered.converged) << ordered.reason;
+  ASSERT_TRUE(shuffled.converged) << shuffled.reason;
+  EXPECT_THAT(ordered.T_plan_slam, IsNearlySe2(truth, 0.005, Deg(0.05)));
+  EXPECT_THAT(shuffled.T_plan_slam, IsNearlySe2(ordered.T_plan_slam, 0.001, Deg(0.01)));
+  EXPECT_EQ(shuffled.points, ordered.points);
+  EXPECT_NEAR(shuffled.inliers, ordered.inliers, 0.01 * ordered.points);
+}
+
 TEST_F(IcpTest, ReportFieldsAreFilled) {
   const Se2 T_slam_plan{Deg(3), {0.3, -0.2}};
   const auto cloud = SlamCloud(plan_, T_slam_plan, 0.005, 3);
