@@ -350,45 +350,14 @@ class FittingPoints {
   std::vector<std::pair<size_t, Eigen::Vector2d>> fitting_;  // point index, wall normal
 };
 
-// The points reordered by the plan's square metres they fall in under T, row by row: the
-// passes then read the index's grid nearly in order, where points in random order miss
-// the cache at every query (a counting sort, O(n)). Every 2^h-th point of this order, a
-// coarse level, spreads evenly over the walls.
-std::vector<Eigen::Vector2d> InPlanOrder(const std::vector<Eigen::Vector2d>& points, const Se2& T,
-                                         const FloorPlan& plan) {
-  constexpr double kMaxBlocks = 1 << 16;
-  const Eigen::Vector2d extent = (plan.max - plan.min).cwiseMax(0.0);
-  double block = 1.0;  // metres; coarser for a plan of more than kMaxBlocks square metres
-  while (block < 1e9 && (extent.x() / block + 1) * (extent.y() / block + 1) > kMaxBlocks)
-    block *= 2;
-  const int nx = static_cast<int>(extent.x() / block) + 1;
-  const int ny = static_cast<int>(extent.y() / block) + 1;
-  const Eigen::Matrix2d R = T.R();
-  std::vector<uint32_t> key(points.size());
-  std::vector<uint32_t> start(static_cast<size_t>(nx) * ny + 1, 0);
-  for (size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector2d q = (R * points[i] + T.t - plan.min) / block;
-    // Outside the plan to its border blocks; NaN to the first (comparisons fail).
-    const int ix = q.x() > 0 ? static_cast<int>(std::min<double>(q.x(), nx - 1)) : 0;
-    const int iy = q.y() > 0 ? static_cast<int>(std::min<double>(q.y(), ny - 1)) : 0;
-    key[i] = static_cast<uint32_t>(iy * nx + ix);
-    ++start[key[i] + 1];
-  }
-  for (size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
-  std::vector<Eigen::Vector2d> sorted(points.size());
-  for (size_t i = 0; i < points.size(); ++i) sorted[start[key[i]]++] = points[i];
-  return sorted;
-}
-
 }  // namespace
 
-RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& points_given,
+RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& points,
                                const ClosestWallIndex& index, const Se2& initial,
                                const IcpOptions& o) {
   RegistrationResult result;
   result.method = "icp";
   result.T_plan_slam = initial;
-  const std::vector<Eigen::Vector2d> points = InPlanOrder(points_given, initial, index.plan());
   Se2 T = initial;
   Pairs pairs;
   pairs.rows.reserve(points.size());

@@ -117,8 +117,8 @@ TEST_F(IcpTest, ClutterIsRejected) {
 }
 
 TEST_F(IcpTest, TheOrderOfThePointsDoesNotMatter) {
-  // ICP reads the points in the plan's order whatever order they come in (the index's
-  // grid is then read nearly in order): a shuffled cloud lands where the walls put it.
+  // The coarse levels take every 2^h-th point, so a shuffled cloud starts from other
+  // subsets; the finest level, every point, lands it where the ordered cloud lands.
   const Se2 T_slam_plan{Deg(4), {0.5, -0.3}};
   const Se2 truth = T_slam_plan.Inverse();
   auto cloud = SlamCloud(plan_, T_slam_plan, 0.01, 4);
