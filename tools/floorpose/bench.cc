@@ -34,6 +34,7 @@
 #include "platform/engine.h"
 #include "platform/floor_plan_io.h"
 #include "platform/state_file.h"
+#include "tools/floorpose/bench_peers.h"
 #include "tools/floorpose/commands.h"
 
 namespace floorpose::tools {
@@ -51,9 +52,10 @@ struct BenchOptions {
 
 constexpr double kNoiseM = 0.02;      // wall points: Gaussian noise per axis
 constexpr double kErrorRad = 0.0175;  // initial guess: the truth turned by 1 degree
-constexpr double kErrorM = 0.3;    // ... and shifted by 0.3 m diagonally, about the cloud's centre
-constexpr double kTileGapM = 5.0;  // between tiled copies of the plan
-constexpr uint64_t kSeed = 20240601;  // the same clouds on every run
+constexpr double kErrorM = 0.3;  // ... and shifted by 0.3 m diagonally, about the cloud's centre
+constexpr double kPeerSampleM = 0.02;  // a peer's target: the walls sampled this often
+constexpr double kTileGapM = 5.0;      // between tiled copies of the plan
+constexpr uint64_t kSeed = 20240601;   // the same clouds on every run
 
 double Ms(Clock::duration d) { return std::chrono::duration<double, std::milli>(d).count(); }
 
@@ -294,7 +296,8 @@ Row ResultRow(std::string method, size_t n, double ms, int runs, int iterations,
 // Every registration method on one cloud, then the plain ICP loop for as many iterations
 // as icp took, on the index and by brute force (the query's share of the time).
 void BenchRegistrations(const Cloud& cloud, const Se2& truth, const FloorPlan& plan,
-                        const ClosestWallIndex& index, const BenchOptions& o, Rows& rows) {
+                        const ClosestWallIndex& index, const BenchOptions& o,
+                        [[maybe_unused]] const PclPointToPlaneIcp* peer, Rows& rows) {
   const size_t n = cloud.points.size();
   const RegistrationOptions defaults;
   // The initial guess: the truth turned and shifted about the cloud's centre.
@@ -302,6 +305,7 @@ void BenchRegistrations(const Cloud& cloud, const Se2& truth, const FloorPlan& p
                                 Eigen::Vector2d(kErrorM, kErrorM) / std::sqrt(2.0)};
   const Se2 initial = turn * truth;
   int icp_iterations = 0;
+  [[maybe_unused]] double icp_ms = 0;
   for (RegistrationMethod m :
        {RegistrationMethod::kIcp, RegistrationMethod::kIk, RegistrationMethod::kHough}) {
     RegistrationOptions options = defaults;
@@ -309,10 +313,32 @@ void BenchRegistrations(const Cloud& cloud, const Se2& truth, const FloorPlan& p
     RegistrationResult r;
     const double ms = MedianMs(
         o.repetitions, [&] { r = Register(cloud.points, cloud.normals, index, initial, options); });
-    if (m == RegistrationMethod::kIcp) icp_iterations = static_cast<int>(r.iterations);
+    if (m == RegistrationMethod::kIcp) {
+      icp_iterations = static_cast<int>(r.iterations);
+      icp_ms = ms;
+    }
     rows.Add(ResultRow(ToString(m), n, ms, o.repetitions, static_cast<int>(r.iterations),
                        r.T_plan_slam, truth, cloud.centre_plan));
   }
+#if FLOORPOSE_BENCH_PEERS
+  if (peer) {
+    // PCL's point-to-plane ICP from the same guess, with our correspondence reach,
+    // iteration limit and translation step for convergence.
+    PeerFit fit;
+    const int runs = n >= 100000 ? std::min(o.repetitions, 3) : o.repetitions;
+    const double ms = MedianMs(runs, [&] { fit = peer->Align(cloud.points, initial); });
+    Row row = ResultRow("pcl_icp_plane", n, ms, runs, fit.iterations, fit.T_plan_slam, truth,
+                        cloud.centre_plan);
+    const double ratio = ms / icp_ms;
+    char text[64];
+    std::snprintf(text, sizeof text, ", %.1fx icp's time%s", ratio,
+                  fit.converged ? "" : ", did not converge");
+    row.extra_text += text;
+    row.extra["ratio_to_icp"] = ratio;
+    row.extra["converged"] = fit.converged;
+    rows.Add(std::move(row));
+  }
+#endif
   // At 100k points brute force takes seconds a run: one run is enough to see it.
   const double max_corr = defaults.icp.max_correspondence_m;
   const double max_distance = index.options().max_distance_m;
@@ -387,7 +413,7 @@ void BenchIndexBuild(const ClosestWallIndex::Options& index_options, const Bench
 
 void PrintRegistrationTable(const std::string& plan_path, const FloorPlan& original,
                             const FloorPlan& plan, int copies, const ClosestWallIndex& index,
-                            const std::vector<Row>& rows) {
+                            const PclPointToPlaneIcp* peer, const std::vector<Row>& rows) {
   const ClosestWallIndex::Options& index_options = index.options();
   std::printf("floorpose bench registration\n");
   std::printf("plan:     %s: %zu segments", plan_path.c_str(), original.segments.size());
@@ -407,6 +433,17 @@ void PrintRegistrationTable(const std::string& plan_path, const FloorPlan& origi
       "          iteration; no levels, kernel or rejection) with BruteForceClosestWall,\n"
       "          run for as many iterations as icp reported; icp_loop_index is the same\n"
       "          loop on the index\n");
+  if (peer)
+    std::printf(
+        "peer:     pcl_icp_plane is PCL's IterativeClosestPointWithNormals, point-to-plane\n"
+        "          Levenberg-Marquardt on x, y and heading, against %zu wall points every\n"
+        "          %.0f cm with their normals (k-d tree built once); icp's reach, iteration\n"
+        "          limit and translation step\n",
+        peer->target_points(), 100 * kPeerSampleM);
+  else
+    std::printf(
+        "peer:     none in this build (cmake -DFLOORPOSE_BENCH_PEERS=ON with libpcl-dev\n"
+        "          runs PCL's point-to-plane ICP beside ours)\n");
   std::printf("machine:  %u cores (hardware_concurrency), %s, load average %.2f\n",
               std::thread::hardware_concurrency(), CpuModel().c_str(), LoadAverage());
   std::printf("timing:   median of the runs shown, one thread\n\n");
@@ -439,20 +476,28 @@ int RunBenchRegistration(const BenchOptions& o) {
   const FloorPlan plan = Tile(parse.plan, o.min_segments, &copies);
   const ClosestWallIndex index(plan, ClosestWallIndex::Options{});
   Rows rows(o.json, plan.segments.size());
+  const PclPointToPlaneIcp* peer = nullptr;
+#if FLOORPOSE_BENCH_PEERS
+  const IcpOptions icp;
+  const PclPointToPlaneIcp pcl(plan, kPeerSampleM, icp.max_correspondence_m,
+                               static_cast<int>(icp.max_iterations), icp.converge_translation_m);
+  peer = &pcl;
+#endif
   SplitMix64 rng(kSeed);
   const Se2 T_slam_plan{0.7, {-12.0, 31.0}};  // any transform: slam and plan differ
   const Se2 truth = T_slam_plan.Inverse();
   Cloud largest;
   for (size_t n : {size_t{1000}, size_t{10000}, size_t{100000}}) {
     Cloud cloud = SampleWalls(plan, n, T_slam_plan, rng);
-    BenchRegistrations(cloud, truth, plan, index, o, rows);
+    BenchRegistrations(cloud, truth, plan, index, o, peer, rows);
     if (n == 100000) largest = std::move(cloud);
   }
   std::vector<Eigen::Vector2d> queries;
   for (const Eigen::Vector2d& p : largest.points) queries.push_back(truth * p);
   BenchQueries(queries, plan, index, o, rows);
   BenchIndexBuild(index.options(), o, rows);
-  if (!o.json) PrintRegistrationTable(plan_path, parse.plan, plan, copies, index, rows.rows());
+  if (!o.json)
+    PrintRegistrationTable(plan_path, parse.plan, plan, copies, index, peer, rows.rows());
   return 0;
 }
 
