@@ -194,14 +194,11 @@ bool ClosestWallIndex::StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Ve
     const Eigen::Vector2d a = p + step * (static_cast<double>(k) / pieces);
     const Eigen::Vector2d b = p + step * (static_cast<double>(k + 1) / pieces);
     const Eigen::Vector2d m = 0.5 * (a + b);
-    const double fx = (m.x() - origin_.x()) / options_.cell_m;
-    const double fy = (m.y() - origin_.y()) / options_.cell_m;
-    if (!(fx >= 0 && fy >= 0 && fx < nx_ && fy < ny_)) continue;
-    const Cell& cell =
-        cells_[static_cast<size_t>(static_cast<int>(fy)) * nx_ + static_cast<int>(fx)];
+    const Cell* cell = CellAt(m);
+    if (!cell) continue;
     // The piece finds the candidates; each is tried against the whole step, so that a
     // wall crossed where two pieces meet counts.
-    const auto [list, count] = Candidates(cell);
+    const auto [list, count] = Candidates(*cell);
     for (uint32_t j = 0; j < count; ++j) {
       const SegmentData& s = data_[list[j]];
       const double d1 = cross(step, s.a - p), d2 = cross(step, s.a + s.d - p);
