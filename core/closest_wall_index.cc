@@ -30,9 +30,8 @@ ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
     data_.push_back({s.a, d, s.Normal(), d.squaredNorm() > 0 ? 1.0 / d.squaredNorm() : 0.0});
   }
   SizeCells();
-  CandidateLists lists = FillCandidates();
-  SortCandidates(&lists);
-  StoreCells(lists);
+  FillCandidates();
+  SortCandidates();
   if (options_.grid_cell_m > 0)
     grid_ = DistanceGrid(plan_.segments, plan_.min, plan_.max, options_.grid_cell_m,
                          std::min(kGridNearM, options_.max_distance_m), kMaxCells);
@@ -59,7 +58,7 @@ void ClosestWallIndex::SizeCells() {
   ny_ = static_cast<int>(std::min(kMaxCells, std::max(1.0, std::ceil(extent.y() / cell))));
 }
 
-ClosestWallIndex::CandidateLists ClosestWallIndex::FillCandidates() const {
+void ClosestWallIndex::FillCandidates() {
   const double cell = options_.cell_m;
   const size_t n = static_cast<size_t>(nx_) * static_cast<size_t>(ny_);
   const double r = 0.5 * cell * std::sqrt(2.0);
@@ -94,61 +93,38 @@ ClosestWallIndex::CandidateLists ClosestWallIndex::FillCandidates() const {
     for_cells_near(k, [&](size_t i, double d) {
       if (is_candidate(i, d)) ++count[i + 1];
     });
-  CandidateLists lists;
-  lists.begin.assign(n + 1, 0);
-  for (size_t i = 0; i < n; ++i) lists.begin[i + 1] = lists.begin[i] + count[i + 1];
-  lists.list.resize(lists.begin[n]);
-  std::vector<uint32_t> fill(lists.begin.begin(), lists.begin.end() - 1);
+  cell_begin_.assign(n + 1, 0);
+  for (size_t i = 0; i < n; ++i) cell_begin_[i + 1] = cell_begin_[i] + count[i + 1];
+  candidates_.resize(cell_begin_[n]);
+  std::vector<uint32_t> fill(cell_begin_.begin(), cell_begin_.end() - 1);
   for (uint32_t k = 0; k < segments; ++k)
     for_cells_near(k, [&](size_t i, double d) {
-      if (is_candidate(i, d)) lists.list[fill[i]++] = k;
+      if (is_candidate(i, d)) candidates_[fill[i]++] = k;
     });
-  return lists;
 }
 
-void ClosestWallIndex::SortCandidates(CandidateLists* lists) const {
-  // Each list nearest its cell's centre first (see QueryList), ties in segment order.
+void ClosestWallIndex::SortCandidates() {
+  // Each list nearest its cell's centre first (see Query), ties in segment order.
   std::vector<std::pair<double, uint32_t>> sorted;
   for (int iy = 0; iy < ny_; ++iy) {
     for (int ix = 0; ix < nx_; ++ix) {
       const size_t i = static_cast<size_t>(iy) * nx_ + ix;
-      const uint32_t begin = lists->begin[i], end = lists->begin[i + 1];
-      if (end - begin < 2) continue;
       const Eigen::Vector2d c = CellCentre(ix, iy);
       sorted.clear();
-      for (uint32_t j = begin; j < end; ++j)
-        sorted.emplace_back(data_[lists->list[j]].Distance2(c), lists->list[j]);
+      for (uint32_t j = cell_begin_[i]; j < cell_begin_[i + 1]; ++j)
+        sorted.emplace_back(data_[candidates_[j]].Distance2(c), candidates_[j]);
       std::sort(sorted.begin(), sorted.end());
-      for (size_t j = 0; j < sorted.size(); ++j) lists->list[begin + j] = sorted[j].second;
+      for (size_t j = 0; j < sorted.size(); ++j) candidates_[cell_begin_[i] + j] = sorted[j].second;
     }
   }
 }
 
-void ClosestWallIndex::StoreCells(const CandidateLists& lists) {
-  cells_.assign(lists.begin.size() - 1, Cell{});
-  candidates_.clear();
-  for (size_t i = 0; i < cells_.size(); ++i) {
-    const uint32_t begin = lists.begin[i], count = lists.begin[i + 1] - begin;
-    uint32_t* segment = cells_[i].segment;
-    if (count == 1 || count == 2) {
-      segment[0] = lists.list[begin];
-      segment[1] = lists.list[begin + count - 1];
-    } else if (count > 2) {
-      segment[0] = kList;
-      segment[1] = static_cast<uint32_t>(candidates_.size());
-      candidates_.push_back(count);
-      candidates_.insert(candidates_.end(), lists.list.begin() + begin,
-                         lists.list.begin() + begin + count);
-    }
-  }
-  candidates_.shrink_to_fit();
-}
-
-std::optional<ClosestWall> ClosestWallIndex::QueryList(const Cell& cell,
-                                                       const Eigen::Vector2d& p) const {
+std::optional<ClosestWall> ClosestWallIndex::Query(const Eigen::Vector2d& p) const {
   const double fx = (p.x() - origin_.x()) / options_.cell_m;
   const double fy = (p.y() - origin_.y()) / options_.cell_m;
+  if (!(fx >= 0 && fy >= 0 && fx < nx_ && fy < ny_)) return std::nullopt;  // also NaN
   const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
+  const size_t i = static_cast<size_t>(iy) * nx_ + ix;
   double best = options_.max_distance_m * options_.max_distance_m;
   int64_t best_k = -1;
   double best_u = 0;
@@ -158,14 +134,14 @@ std::optional<ClosestWall> ClosestWallIndex::QueryList(const Cell& cell,
   constexpr uint32_t kChunk = 8;
   const Eigen::Vector2d c = CellCentre(ix, iy);
   const double r = 0.5 * options_.cell_m * std::sqrt(2.0) + 1e-6;
-  const auto [list, count] = Candidates(cell);
-  for (uint32_t chunk = 0; chunk < count; chunk += kChunk) {
-    if (chunk != 0) {
-      const double beyond = std::sqrt(data_[list[chunk]].Distance2(c)) - r;
+  const uint32_t begin = cell_begin_[i], end = cell_begin_[i + 1];
+  for (uint32_t chunk = begin; chunk < end; chunk += kChunk) {
+    if (chunk != begin) {
+      const double beyond = std::sqrt(data_[candidates_[chunk]].Distance2(c)) - r;
       if (beyond > 0 && beyond * beyond > best) break;
     }
-    for (uint32_t j = chunk; j < std::min(count, chunk + kChunk); ++j) {
-      const int64_t k = list[j];
+    for (uint32_t j = chunk; j < std::min(end, chunk + kChunk); ++j) {
+      const int64_t k = candidates_[j];
       double u = 0;
       const double d2 = data_[k].Distance2(p, &u);
       // Ties go to the higher segment index, whatever the list's order.
@@ -177,7 +153,13 @@ std::optional<ClosestWall> ClosestWallIndex::QueryList(const Cell& cell,
     }
   }
   if (best_k < 0) return std::nullopt;
-  return Hit(static_cast<uint32_t>(best_k), best, best_u);
+  const SegmentData& s = data_[best_k];
+  ClosestWall hit;
+  hit.segment = static_cast<uint32_t>(best_k);
+  hit.point = s.a + best_u * s.d;
+  hit.normal = s.normal;
+  hit.distance = std::sqrt(best);
+  return hit;
 }
 
 bool ClosestWallIndex::StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Vector2d& q) const {
@@ -194,13 +176,14 @@ bool ClosestWallIndex::StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Ve
     const Eigen::Vector2d a = p + step * (static_cast<double>(k) / pieces);
     const Eigen::Vector2d b = p + step * (static_cast<double>(k + 1) / pieces);
     const Eigen::Vector2d m = 0.5 * (a + b);
-    const Cell* cell = CellAt(m);
-    if (!cell) continue;
+    const double fx = (m.x() - origin_.x()) / options_.cell_m;
+    const double fy = (m.y() - origin_.y()) / options_.cell_m;
+    if (!(fx >= 0 && fy >= 0 && fx < nx_ && fy < ny_)) continue;
+    const size_t i = static_cast<size_t>(static_cast<int>(fy)) * nx_ + static_cast<int>(fx);
     // The piece finds the candidates; each is tried against the whole step, so that a
     // wall crossed where two pieces meet counts.
-    const auto [list, count] = Candidates(*cell);
-    for (uint32_t j = 0; j < count; ++j) {
-      const SegmentData& s = data_[list[j]];
+    for (uint32_t j = cell_begin_[i]; j < cell_begin_[i + 1]; ++j) {
+      const SegmentData& s = data_[candidates_[j]];
       const double d1 = cross(step, s.a - p), d2 = cross(step, s.a + s.d - p);
       const double d3 = cross(s.d, p - s.a), d4 = cross(s.d, q - s.a);
       if (d1 * d2 < 0 && d3 * d4 < 0) return true;
@@ -210,7 +193,7 @@ bool ClosestWallIndex::StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Ve
 }
 
 size_t ClosestWallIndex::MemoryBytes() const {
-  return cells_.size() * sizeof(Cell) + candidates_.size() * sizeof(uint32_t) +
+  return cell_begin_.size() * sizeof(uint32_t) + candidates_.size() * sizeof(uint32_t) +
          plan_.segments.size() * (sizeof(Segment) + sizeof(SegmentData)) + grid_.MemoryBytes();
 }
 

@@ -10,11 +10,9 @@
 
 #include <Eigen/Core>
 #include <algorithm>
-#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <optional>
-#include <utility>
 #include <vector>
 
 #include "core/distance_grid.h"
@@ -48,17 +46,7 @@ class ClosestWallIndex {
   explicit ClosestWallIndex(const FloorPlan& plan) : ClosestWallIndex(plan, Options{}) {}
 
   // The closest wall within max_distance_m, or nothing.
-  std::optional<ClosestWall> Query(const Eigen::Vector2d& p) const {
-    const Cell* cell = CellAt(p);
-    if (!cell || cell->segment[0] == kNone) return std::nullopt;
-    if (cell->segment[0] == kList) return QueryList(*cell, p);
-    // One or two candidates, held in the cell: the nearer, ties to the higher index.
-    const uint32_t k0 = cell->segment[0], k1 = cell->segment[1];
-    double u0 = 0, u1 = 0;
-    const double d0 = data_[k0].Distance2(p, &u0), d1 = data_[k1].Distance2(p, &u1);
-    const bool second = d1 < d0 || (d1 == d0 && k1 > k0);
-    return Hit(second ? k1 : k0, second ? d1 : d0, second ? u1 : u0);
-  }
+  std::optional<ClosestWall> Query(const Eigen::Vector2d& p) const;
 
   // The distance from p to the closest wall: from the distance grid within kGridNearM of a
   // wall (within a few millimetres, see core/distance_grid.h), otherwise as Query
@@ -79,7 +67,7 @@ class ClosestWallIndex {
   double max_distance_m() const { return options_.max_distance_m; }
   const Options& options() const { return options_; }
   size_t MemoryBytes() const;
-  size_t cells() const { return cells_.size(); }
+  size_t cells() const { return cell_begin_.size() - 1; }
 
  private:
   // What a query needs of a segment, precomputed: a, b - a, 1 / |b - a|^2, unit normal.
@@ -95,48 +83,12 @@ class ClosestWallIndex {
     }
   };
 
-  // A cell's candidate segments. One or two are held in the cell itself (segment[1] ==
-  // segment[0] for one): a query there, nine in ten near walls, reads 8 bytes of the grid
-  // and two segments, with no branch on the count. A longer list, nearest the cell's
-  // centre first: segment[0] is kList and candidates_[segment[1]] its length, the
-  // segments after it. kNone: no wall within max_distance_m.
-  static constexpr uint32_t kNone = 0xffffffff, kList = 0xfffffffe;
-  struct Cell {
-    uint32_t segment[2] = {kNone, kNone};
-  };
-  // A cell's candidates and their count.
-  std::pair<const uint32_t*, uint32_t> Candidates(const Cell& cell) const {
-    if (cell.segment[0] == kNone) return {nullptr, 0};
-    if (cell.segment[0] == kList)
-      return {candidates_.data() + cell.segment[1] + 1, candidates_[cell.segment[1]]};
-    return {cell.segment, cell.segment[0] == cell.segment[1] ? 1u : 2u};
-  }
-  // The cell holding p, or nullptr outside the grid (or for NaN).
-  const Cell* CellAt(const Eigen::Vector2d& p) const {
-    const double fx = (p.x() - origin_.x()) / options_.cell_m;
-    const double fy = (p.y() - origin_.y()) / options_.cell_m;
-    if (!(fx >= 0 && fy >= 0 && fx < nx_ && fy < ny_)) return nullptr;
-    return &cells_[static_cast<size_t>(static_cast<int>(fy)) * nx_ + static_cast<int>(fx)];
-  }
-  // Segment k as the closest wall, d2 away at u along it, if within max_distance_m.
-  std::optional<ClosestWall> Hit(uint32_t k, double d2, double u) const {
-    if (!(d2 < options_.max_distance_m * options_.max_distance_m)) return std::nullopt;
-    const SegmentData& s = data_[k];
-    return ClosestWall{k, s.a + u * s.d, s.normal, std::sqrt(d2)};
-  }
-  // Query in a cell with more than two candidates.
-  std::optional<ClosestWall> QueryList(const Cell& cell, const Eigen::Vector2d& p) const;
-
   // Building the index: the cells (coarser where the plan is too large for options' size,
-  // within kMaxCells); each cell's candidate segments (CSR: list[begin[i] .. begin[i+1]));
-  // each list sorted nearest first; then the cells as Query reads them.
-  struct CandidateLists {
-    std::vector<uint32_t> begin, list;
-  };
+  // within kMaxCells); each cell's candidate segments (CSR); each list sorted nearest
+  // first.
   void SizeCells();
-  CandidateLists FillCandidates() const;
-  void SortCandidates(CandidateLists* lists) const;
-  void StoreCells(const CandidateLists& lists);
+  void FillCandidates();
+  void SortCandidates();
 
   // The centre of cell (ix, iy): what the lists are sorted by and Query bounds from, so
   // one formula for both.
@@ -149,8 +101,9 @@ class ClosestWallIndex {
   std::vector<SegmentData> data_;
   Eigen::Vector2d origin_;
   int nx_ = 0, ny_ = 0;
-  std::vector<Cell> cells_;           // row-major, nx_ by ny_
-  std::vector<uint32_t> candidates_;  // the lists of cells with more than two
+  std::vector<uint32_t> cell_begin_;  // CSR layout: candidates of cell i are
+  std::vector<uint32_t> candidates_;  // candidates_[cell_begin_[i] .. cell_begin_[i+1]),
+                                      // nearest the cell's centre first
   DistanceGrid grid_;
 };
 

@@ -74,22 +74,13 @@ struct Row {
 
 constexpr double kFreeEndM = 0.1;  // see MakeRows
 
-// An iteration's pairs, and the scratch its step needs, kept across iterations.
-struct Pairs {
-  std::vector<Row> rows;
-  double sum_d2 = 0;          // over the rows
-  std::vector<double> abs_r;  // the kept rows' absolute residuals, for their median
-};
-
 // Closest-wall pairs of the transformed points (every stride-th), within max_corr. With
 // point_to_point_at_ends, a closest point at a segment's end gives two rows (x and y), as
 // the squared distance to a point is isotropic there (Pottmann et al. 2004, section 3).
 void MakeRows(const std::vector<Eigen::Vector2d>& points, size_t stride, const Se2& T,
               const ClosestWallIndex& index, double max_corr, bool point_to_point_at_ends,
-              Pairs* pairs) {
-  std::vector<Row>* rows = &pairs->rows;
+              std::vector<Row>* rows) {
   rows->clear();
-  double sum_d2 = 0;
   const Eigen::Matrix2d R = T.R();
   const auto& segments = index.plan().segments;
   for (size_t i = 0; i < points.size(); i += stride) {
@@ -106,18 +97,14 @@ void MakeRows(const std::vector<Eigen::Vector2d>& points, size_t stride, const S
       const double along = (p - s.a).dot(d) / len;  // metres from a towards b
       at_end = along < -kFreeEndM || along > len + kFreeEndM;
     }
-    const double d2 = hit->distance * hit->distance;
     if (at_end) {
       const Eigen::Vector2d e = p - hit->point;
       rows->push_back({p, Eigen::Vector2d::UnitX(), e.x(), hit->distance});
       rows->push_back({p, Eigen::Vector2d::UnitY(), e.y(), hit->distance});
-      sum_d2 += 2 * d2;
     } else {
       rows->push_back({p, hit->normal, hit->normal.dot(p - hit->point), hit->distance});
-      sum_d2 += d2;
     }
   }
-  pairs->sum_d2 = sum_d2;
 }
 
 struct Step {
@@ -126,7 +113,6 @@ struct Step {
   Eigen::Vector3d delta = Eigen::Vector3d::Zero();  // (theta, x, y) about the centroid
   Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
   Eigen::Matrix3d H = Eigen::Matrix3d::Zero();  // unscaled normal matrix
-  double variance = 0;                          // weighted mean squared residual of the pairs, m^2
   Eigen::Vector3d eigenvalues = Eigen::Vector3d::Zero();
   Eigen::Matrix3d eigenvectors = Eigen::Matrix3d::Identity();
   std::vector<Eigen::Vector3d> degenerate;
@@ -143,49 +129,41 @@ struct KeptPairs {
   size_t count = 0;
 };
 
-KeptPairs KeepPairs(Pairs& pairs, const IcpOptions& o) {
-  const std::vector<Row>& rows = pairs.rows;
+KeptPairs KeepPairs(const std::vector<Row>& rows, const IcpOptions& o) {
   KeptPairs k;
-  k.reject = std::max(o.reject_sigma * std::sqrt(pairs.sum_d2 / rows.size()), 0.01);
-  const bool cauchy = o.cauchy_scale_factor > 0;
-  pairs.abs_r.clear();
-  // One pass: the kept points' sums about the first point (precise far from the origin).
-  const Eigen::Vector2d ref = rows.front().p;
-  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
-  double sum_sq = 0;
+  double sum2 = 0;
+  for (const Row& q : rows) sum2 += q.d * q.d;
+  k.reject = std::max(o.reject_sigma * std::sqrt(sum2 / rows.size()), 0.01);
+  std::vector<double> abs_r;
+  abs_r.reserve(rows.size());
   for (const Row& q : rows) {
     if (q.d > k.reject) continue;
-    const Eigen::Vector2d p = q.p - ref;
-    sum += p;
-    sum_sq += p.squaredNorm();
-    ++k.count;
-    if (cauchy) pairs.abs_r.push_back(std::abs(q.r));
+    abs_r.push_back(std::abs(q.r));
+    k.centroid += q.p;
   }
+  k.count = abs_r.size();
   if (k.count < 3) return k;
-  const Eigen::Vector2d mean = sum / static_cast<double>(k.count);
-  k.centroid = ref + mean;
-  k.radius = std::max(
-      std::sqrt(std::max(sum_sq / static_cast<double>(k.count) - mean.squaredNorm(), 0.0)), 0.1);
-  if (cauchy) {
-    // The Cauchy scale tied to the data: the median absolute residual of the kept pairs.
-    std::vector<double>& abs_r = pairs.abs_r;
-    std::nth_element(abs_r.begin(), abs_r.begin() + abs_r.size() / 2, abs_r.end());
-    k.cauchy = std::max(o.cauchy_scale_factor * abs_r[abs_r.size() / 2], 0.01);
-  }
+  k.centroid /= static_cast<double>(k.count);
+  // Cauchy scale tied to the data: the median absolute residual of the kept pairs.
+  std::nth_element(abs_r.begin(), abs_r.begin() + abs_r.size() / 2, abs_r.end());
+  k.cauchy = std::max(o.cauchy_scale_factor * abs_r[abs_r.size() / 2], 0.01);
+  double radius2 = 0;
+  for (const Row& q : rows)
+    if (q.d <= k.reject) radius2 += (q.p - k.centroid).squaredNorm();
+  k.radius = std::max(std::sqrt(radius2 / abs_r.size()), 0.1);
   return k;
 }
 
 // Picky rejection, Cauchy weights, and the weighted least-squares step with solution
 // remapping. Unknowns are (theta, x, y) about the centroid of the rows; theta is scaled
 // by the RMS radius so that its eigenvalue compares with the translations'.
-Step SolveStep(Pairs& pairs, const IcpOptions& o, bool translation_only) {
+Step SolveStep(const std::vector<Row>& rows, const IcpOptions& o, bool translation_only) {
   Step st;
-  const std::vector<Row>& rows = pairs.rows;
   if (rows.size() < 3) {
     st.reason = "fewer than 3 correspondences";
     return st;
   }
-  const KeptPairs kept = KeepPairs(pairs, o);
+  const KeptPairs kept = KeepPairs(rows, o);
   if (kept.count < 3) {
     st.reason = "fewer than 3 pairs after rejection";
     return st;
@@ -196,20 +174,16 @@ Step SolveStep(Pairs& pairs, const IcpOptions& o, bool translation_only) {
   // Equation 4.4 in 2D: A_i = [p x n / radius, n], b_i = n . (p - y).
   Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
   Eigen::Vector3d g = Eigen::Vector3d::Zero();
-  double weight_sum = 0, weighted_r2 = 0;
-  const double inv_radius = 1.0 / radius;
-  const double inv_c2 = o.cauchy_scale_factor > 0 ? 1.0 / (c * c) : 0.0;  // 0: plain
+  double weight_sum = 0;
   for (const Row& q : rows) {
     if (q.d > reject) continue;
     const Eigen::Vector2d p = q.p - centroid;
-    const Eigen::Vector3d a((p.x() * q.n.y() - p.y() * q.n.x()) * inv_radius, q.n.x(), q.n.y());
-    const double w = 1.0 / (1.0 + q.r * q.r * inv_c2);
+    const Eigen::Vector3d a((p.x() * q.n.y() - p.y() * q.n.x()) / radius, q.n.x(), q.n.y());
+    const double w = o.cauchy_scale_factor > 0 ? 1.0 / (1.0 + (q.r / c) * (q.r / c)) : 1.0;
     H.noalias() += w * a * a.transpose();
     g.noalias() += w * a * q.r;
     weight_sum += w;
-    weighted_r2 += w * q.r * q.r;
   }
-  st.variance = weighted_r2 / weight_sum;
   if (translation_only) {
     H.row(0).setZero();
     H.col(0).setZero();
@@ -311,15 +285,6 @@ bool SmallStep(const Eigen::Vector3d& delta, const IcpOptions& o) {
          delta.tail<2>().norm() < o.converge_translation_m;
 }
 
-// Whether a step lies within its level's own noise: inside the 95% region of the level's
-// estimate (Mahalanobis under variance * H^-1 below the chi-square quantile for 3 degrees
-// of freedom). Iterating a coarse level further would only chase the noise of its subset,
-// which the finer levels average away.
-bool WithinNoise(const Step& st) {
-  constexpr double kChiSquare95ThreeDof = 7.81;
-  return st.variance > 0 && st.delta.dot(st.H * st.delta) < kChiSquare95ThreeDof * st.variance;
-}
-
 // The points that fit a wall under a reference transform (within a threshold), with
 // their walls' normals, found once: WallNormalShift of other transforms against it.
 class FittingPoints {
@@ -359,8 +324,8 @@ RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& points,
   result.method = "icp";
   result.T_plan_slam = initial;
   Se2 T = initial;
-  Pairs pairs;
-  pairs.rows.reserve(points.size());
+  std::vector<Row> rows;
+  rows.reserve(points.size());
   Step last;
   bool converged_at_finest = false;
   // Algorithm 4.2: coarse to fine; level h uses every 2^h-th point and maxIter / 2^h.
@@ -372,25 +337,21 @@ RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& points,
     bool converged = false;
     for (uint32_t it = 0; it < max_iter; ++it) {
       ++result.iterations;
-      MakeRows(points, stride, T, index, o.max_correspondence_m, false, &pairs);
+      MakeRows(points, stride, T, index, o.max_correspondence_m, false, &rows);
       // Plain least squares on the coarse levels: a kernel whose scale follows the median
       // residual collapses on clean data once half the points fit, and then ignores the
       // points that would pull the cloud out of a wrong minimum.
       IcpOptions level_o = o;
       if (h > 0) level_o.cauchy_scale_factor = 0;
-      Step st = SolveStep(pairs, level_o, false);
+      Step st = SolveStep(rows, level_o, false);
       if (!st.ok) {
         result.reason = st.reason;
         break;
       }
       T = AboutCentre(st.delta(0), st.centroid, st.delta.tail<2>()) * T;
       last = std::move(st);
-      if (SmallStep(last.delta, o) || (h > 0 && WithinNoise(last))) {
+      if (SmallStep(last.delta, o)) {
         converged = true;
-        // Within its noise at its first step: the coarser level had already found it, and
-        // the levels between would only polish noise, as the finest does. Straight there
-        // (the loop's --h takes h = 1 to the finest).
-        if (it == 0 && h > 0) h = 1;
         break;
       }
     }
@@ -402,7 +363,7 @@ RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& points,
   if (result.converged) {
     // The last pass paired every point (level 0) and the step after it was below the
     // convergence threshold: its distances are the fit's, without another full pass.
-    Finish(points, index, o, last, &result, &pairs.rows);
+    Finish(points, index, o, last, &result, &rows);
   } else {
     Finish(points, index, o, last, &result);
   }
@@ -415,8 +376,8 @@ RegistrationResult RegisterIk(const std::vector<Eigen::Vector2d>& points,
   RegistrationResult result;
   result.method = "ik";
   Se2 T = initial;
-  Pairs pairs;
-  pairs.rows.reserve(points.size());
+  std::vector<Row> rows;
+  rows.reserve(points.size());
   Step last;
   bool converged_at_finest = false;
   // The same coarse-to-fine levels as ICP (Algorithm 4.2), each with Algorithm 4.3.
@@ -429,10 +390,10 @@ RegistrationResult RegisterIk(const std::vector<Eigen::Vector2d>& points,
     bool converged = false;
     for (uint32_t it = 0; it < max_iter; ++it) {
       ++result.iterations;
-      MakeRows(points, stride, T, index, o.max_correspondence_m, true, &pairs);
+      MakeRows(points, stride, T, index, o.max_correspondence_m, true, &rows);
       IcpOptions level_o = o;  // as in ICP: plain least squares on the coarse levels
       if (h > 0) level_o.cauchy_scale_factor = 0;
-      Step st = SolveStep(pairs, level_o, false);  // Algorithm 4.4
+      Step st = SolveStep(rows, level_o, false);  // Algorithm 4.4
       if (!st.ok) {
         result.reason = st.reason;
         break;
@@ -567,12 +528,12 @@ RegistrationResult RegisterHough(const std::vector<Eigen::Vector2d>& points,
   Se2 T = AboutCentre(omega, centroid, Eigen::Vector2d::Zero()) * initial;
 
   // Algorithm 4.7, point-to-line: translation-only steps until they vanish.
-  Pairs pairs;
+  std::vector<Row> rows;
   Step last;
   for (uint32_t it = 0; it < o.max_iterations; ++it) {
     ++result.iterations;
-    MakeRows(points, 1, T, index, o.max_correspondence_m, false, &pairs);
-    Step st = SolveStep(pairs, o, true);
+    MakeRows(points, 1, T, index, o.max_correspondence_m, false, &rows);
+    Step st = SolveStep(rows, o, true);
     if (!st.ok) {
       result.reason = st.reason;
       break;

@@ -115,9 +115,7 @@ struct RegistrationOptions {
 // Point-to-line ICP after thesis Algorithm 4.2: multi-resolution (level h uses every
 // 2^h-th point), picky rejection (pairs beyond reject_sigma standard deviations), Low's
 // linearisation (eq. 4.4) solved about the centroid, and a Cauchy kernel whose scale
-// follows the median residual. A coarse level stops once its step is within its own
-// noise, and goes straight to the finest when its first step is.
-// The index's max distance bounds the correspondences too.
+// follows the median residual. The index's max distance bounds the correspondences too.
 RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& points_slam,
                                const ClosestWallIndex& index, const Se2& T_plan_slam_initial,
                                const IcpOptions& options);
