@@ -14,6 +14,22 @@ namespace floorpose {
 using Point = pcl::PointNormal;
 using Cloud = pcl::PointCloud<Point>;
 
+namespace {
+
+// A plan point with its normal (zero for none), at height 0.
+Point ToPoint(const Eigen::Vector2d& p, const Eigen::Vector2d& n) {
+  Point q;
+  q.x = static_cast<float>(p.x());
+  q.y = static_cast<float>(p.y());
+  q.z = 0;
+  q.normal_x = static_cast<float>(n.x());
+  q.normal_y = static_cast<float>(n.y());
+  q.normal_z = 0;
+  return q;
+}
+
+}  // namespace
+
 struct PclPointToPlaneIcp::Impl {
   Cloud::Ptr target{new Cloud};
   pcl::search::KdTree<Point>::Ptr tree{new pcl::search::KdTree<Point>};
@@ -32,17 +48,8 @@ PclPointToPlaneIcp::PclPointToPlaneIcp(const FloorPlan& plan, double sample_m,
   for (const Segment& s : plan.segments) {
     const Eigen::Vector2d n = s.Normal();
     const int steps = std::max(1, static_cast<int>(std::ceil(s.Length() / sample_m)));
-    for (int k = 0; k <= steps; ++k) {
-      const Eigen::Vector2d p = s.a + (s.b - s.a) * (static_cast<double>(k) / steps);
-      Point q;
-      q.x = static_cast<float>(p.x());
-      q.y = static_cast<float>(p.y());
-      q.z = 0;
-      q.normal_x = static_cast<float>(n.x());
-      q.normal_y = static_cast<float>(n.y());
-      q.normal_z = 0;
-      impl_->target->push_back(q);
-    }
+    for (int k = 0; k <= steps; ++k)
+      impl_->target->push_back(ToPoint(s.a + (s.b - s.a) * (static_cast<double>(k) / steps), n));
   }
   impl_->tree->setInputCloud(impl_->target);
 }
@@ -55,14 +62,8 @@ PeerFit PclPointToPlaneIcp::Align(const std::vector<Eigen::Vector2d>& points_sla
                                   const Se2& initial) const {
   Cloud::Ptr source(new Cloud);
   source->reserve(points_slam.size());
-  for (const Eigen::Vector2d& p : points_slam) {
-    Point q;
-    q.x = static_cast<float>(p.x());
-    q.y = static_cast<float>(p.y());
-    q.z = 0;
-    q.normal_x = q.normal_y = q.normal_z = 0;
-    source->push_back(q);
-  }
+  for (const Eigen::Vector2d& p : points_slam)
+    source->push_back(ToPoint(p, Eigen::Vector2d::Zero()));
   // PCL's iteration count is protected.
   struct Icp : pcl::IterativeClosestPointWithNormals<Point, Point, float> {
     int iterations() const { return nr_iterations_; }

@@ -5,7 +5,6 @@
 
 #include <Eigen/Core>
 #include <memory>
-#include <string>
 #include <vector>
 
 #include "core/floor_plan.h"
