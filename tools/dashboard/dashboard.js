@@ -324,29 +324,41 @@ function drawAlerts() {
   tone(!banner.hidden);
   if (signature === alertsShown) return;
   alertsShown = signature;
-  banner.replaceChildren();
-  const add = (id, kind, text, acknowledge) => {
-    const row = document.createElement('div');
-    row.className = 'alert ' + kind;
-    row.dataset.device = id;
-    const span = document.createElement('span');
-    span.textContent = text;
-    const ack = document.createElement('button');
-    ack.textContent = 'Acknowledge';
-    ack.onclick = acknowledge;
-    row.append(span, ack);
-    banner.appendChild(row);
-  };
+  // Rows are kept and only their text changes: a banner rebuilt every second (a silent
+  // wearer's age ticks) would swallow a lead's tap landing between press and release.
+  const wanted = [];
   for (const [id, d] of devices) {
     const a = d.info.alert;
     if (a && a.kind === 'no_motion' && !a.acknowledged)
-      add(id, 'no-motion', `${d.info.name}: ${alertText(d)}`,
-          () => post('/api/alerts/ack', {device: id}));
+      wanted.push({id, kind: 'no-motion', text: `${d.info.name}: ${alertText(d)}`,
+                   acknowledge: () => post('/api/alerts/ack', {device: id})});
     if (d.stale && !noDataSeen.has(id))
-      add(id, 'no-data', `${d.info.name}: NO DATA for ${d.age.toFixed(0)} s`, () => {
-        noDataSeen.add(id);
-        queueDraw();
-      });
+      wanted.push({id, kind: 'no-data', text: `${d.info.name}: NO DATA for ${d.age.toFixed(0)} s`,
+                   acknowledge: () => {
+                     noDataSeen.add(id);
+                     queueDraw();
+                   }});
+  }
+  const key = (id, kind) => id + '\n' + kind;
+  const rows = new Map([...banner.children].map(r => [key(r.dataset.device, r.dataset.kind), r]));
+  const keep = new Set(wanted.map(w => key(w.id, w.kind)));
+  for (const [k, r] of rows)
+    if (!keep.has(k)) r.remove();
+  let before = banner.firstChild;
+  for (const w of wanted) {
+    let row = rows.get(key(w.id, w.kind));
+    if (!row) {
+      row = document.createElement('div');
+      row.className = 'alert ' + w.kind;
+      row.dataset.device = w.id;
+      row.dataset.kind = w.kind;
+      row.append(document.createElement('span'), document.createElement('button'));
+      row.lastChild.textContent = 'Acknowledge';
+    }
+    if (row.firstChild.textContent !== w.text) row.firstChild.textContent = w.text;
+    row.lastChild.onclick = w.acknowledge;
+    if (row !== before) banner.insertBefore(row, before);
+    else before = before.nextSibling;
   }
   banner.hidden = !banner.childElementCount;
   tone(!banner.hidden);
