@@ -1,12 +1,17 @@
 // floorposed end to end: a real daemon process on a private loopback DDS domain, driven
 // by a real Cyclone participant in the test, as the HoloLens app would.
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <thread>
 
 #include "core/sim/demo_walk.h"
 #include "core/wall_extractor.h"
@@ -73,6 +78,40 @@ TEST_F(DaemonTest, EveryPoseGivesAPlanPoseAndThePickSetsTheTransform) {
     EXPECT_NEAR(WrapAngle(p.heading() - step.true_plan.heading), 0.0, 1e-6) << "pose " << k;
     EXPECT_GE(p.alignment_version(), 1u);
   }
+}
+
+// The scheduling policy (field 41 of /proc/PID/task/TID/stat) of each of floorposed's
+// named threads: 0 SCHED_OTHER, 5 SCHED_IDLE.
+std::map<std::string, int> ThreadPolicies(pid_t pid) {
+  std::map<std::string, int> policies;
+  const fs::path tasks = fs::path("/proc") / std::to_string(pid) / "task";
+  for (const auto& task : fs::directory_iterator(tasks)) {
+    std::string comm, stat;
+    std::getline(std::ifstream(task.path() / "comm"), comm);
+    std::getline(std::ifstream(task.path() / "stat"), stat);
+    std::istringstream fields(stat.substr(stat.rfind(')') + 2));  // from field 3 on
+    std::string field;
+    for (int i = 3; i <= 41 && fields >> field; ++i) {
+    }
+    policies[comm] = std::stoi(field);
+  }
+  return policies;
+}
+
+TEST_F(DaemonTest, TheRegistrationWorkerYieldsToThePoses) {
+  // A pose must not wait out a registration's time slice: the worker runs at SCHED_IDLE,
+  // the io thread at the normal policy.
+  StartDaemon();
+  std::map<std::string, int> policies;  // the threads name themselves as they start
+  for (int i = 0; i < 100 && !(policies.count("fp-worker") && policies.count("fp-io")); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    policies = ThreadPolicies(daemon_->pid());
+  }
+  ASSERT_TRUE(policies.count("fp-worker")) << "threads: " << ::testing::PrintToString(policies);
+  ASSERT_TRUE(policies.count("fp-io")) << "threads: " << ::testing::PrintToString(policies);
+  EXPECT_EQ(policies.at("fp-worker"), SCHED_IDLE);
+  EXPECT_EQ(policies.at("fp-io"), SCHED_OTHER);
+  EXPECT_EQ(Log().find("keeps its priority"), std::string::npos) << Log();
 }
 
 TEST_F(DaemonTest, AddedUpdatedAndRemovedDeltasChangeTheStore) {
