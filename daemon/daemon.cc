@@ -1,8 +1,8 @@
 #include "daemon/daemon.h"
 
 #include <pthread.h>
-#include <sched.h>
 #include <spdlog/spdlog.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -251,14 +251,13 @@ void Daemon::ApplyFinished(bool wait) {
 void Daemon::WorkerLoop() {
   // The worker touches nothing of the io thread's but the job, which carries its own
   // copies (the index as a shared_ptr), so a plan change never pulls data from under it.
-  // It yields the core to the io thread: SCHED_IDLE, so a pose that arrives while a
-  // registration runs preempts it at once instead of waiting out its time slice (nice 10
-  // still left the io thread waiting up to a slice: pose latency p99 2.1-2.4 ms at ten
-  // times the headset's rates, 1.4-1.7 ms idle). On a puck kept busy by other software
-  // the registrations wait; the poses do not.
+  // It yields the core to the io thread: a pose is answered before a registration goes
+  // on (on a two-core puck shared with other software, the scheduler decides; nice 10
+  // gives this thread a tenth of the io thread's weight). Not SCHED_IDLE: under load from
+  // other processes an idle-class thread holding a lock the io thread needs stalls the
+  // poses for seconds (11 of 40 answered in 10 s while CI built beside the tests).
   pthread_setname_np(pthread_self(), "fp-worker");
-  sched_param idle{};
-  if (sched_setscheduler(0, SCHED_IDLE, &idle) != 0)
+  if (setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), 10) != 0)
     spdlog::warn("registration worker keeps its priority (poses may wait on it): {}",
                  std::strerror(errno));
   while (std::optional<platform::Job> job = jobs_.Take()) {
