@@ -254,8 +254,8 @@ void Daemon::WorkerLoop() {
   // It yields the core to the io thread: a pose is answered before a registration goes
   // on (on a two-core puck shared with other software, the scheduler decides; nice 10
   // gives this thread a tenth of the io thread's weight). Not SCHED_IDLE: under load from
-  // other processes an idle-class thread holding a lock the io thread needs stalls the
-  // poses for seconds (11 of 40 answered in 10 s while CI built beside the tests).
+  // other processes an idle-class worker starves, and the poses stalled behind it (11 of
+  // 40 answered in 10 s while CI built beside the tests), most likely on a lock it held.
   pthread_setname_np(pthread_self(), "fp-worker");
   if (setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), 10) != 0)
     spdlog::warn("registration worker keeps its priority (poses may wait on it): {}",
