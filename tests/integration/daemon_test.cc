@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <sstream>
 #include <string>
 #include <thread>
 
@@ -79,20 +78,14 @@ TEST_F(DaemonTest, EveryPoseGivesAPlanPoseAndThePickSetsTheTransform) {
   }
 }
 
-// The nice value (field 19 of /proc/PID/task/TID/stat) of each of floorposed's named
-// threads.
+// The nice value (field 19 of /proc/PID/task/TID/stat) of each of floorposed's threads,
+// by name.
 std::map<std::string, int> ThreadNiceValues(pid_t pid) {
   std::map<std::string, int> nice;
   const fs::path tasks = fs::path("/proc") / std::to_string(pid) / "task";
   for (const auto& task : fs::directory_iterator(tasks)) {
-    std::string comm, stat;
-    std::getline(std::ifstream(task.path() / "comm"), comm);
-    std::getline(std::ifstream(task.path() / "stat"), stat);
-    std::istringstream fields(stat.substr(stat.rfind(')') + 2));  // from field 3 on
-    std::string field;
-    for (int i = 3; i <= 19 && fields >> field; ++i) {
-    }
-    nice[comm] = std::stoi(field);
+    const std::vector<std::string> stat = tools::ProcStatFields((task.path() / "stat").string());
+    if (stat.size() >= 19) nice[stat[1]] = std::stoi(stat[18]);
   }
   return nice;
 }

@@ -103,22 +103,23 @@ ProcSample SampleProcess(pid_t pid) {
     if (key == "VmRSS:") s.rss_mb = kb / 1024.0;
     if (key == "VmHWM:") s.hwm_mb = kb / 1024.0;
   }
-  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
-  std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
-  const size_t paren = text.rfind(')');  // the command name may hold spaces
-  if (paren == std::string::npos) return s;
-  std::istringstream fields(text.substr(paren + 2));
-  std::string field;
-  double utime = 0, stime = 0;
-  for (int i = 3; fields >> field; ++i) {  // field 3 is the state
-    if (i == 14) utime = std::stod(field);
-    if (i == 15) {
-      stime = std::stod(field);
-      break;
-    }
-  }
+  const std::vector<std::string> stat = ProcStatFields("/proc/" + std::to_string(pid) + "/stat");
+  if (stat.size() < 15) return s;
+  const double utime = std::stod(stat[13]), stime = std::stod(stat[14]);
   s.cpu_s = (utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
   return s;
+}
+
+std::vector<std::string> ProcStatFields(const std::string& path) {
+  std::ifstream stat(path);
+  std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+  const size_t open = text.find('('), close = text.rfind(')');
+  if (open == std::string::npos || close == std::string::npos || close < open) return {};
+  std::vector<std::string> fields{text.substr(0, open - 1),
+                                  text.substr(open + 1, close - open - 1)};
+  std::istringstream rest(text.substr(close + 1));
+  for (std::string field; rest >> field;) fields.push_back(field);
+  return fields;
 }
 
 std::string FindFloorposed() {

@@ -47,6 +47,10 @@ struct ProcSample {
   double cpu_s = 0;               // utime + stime
 };
 ProcSample SampleProcess(pid_t pid);
+// The fields of a /proc/PID/stat or /proc/PID/task/TID/stat file, field n (numbered from 1
+// as in proc(5)) at [n - 1]; the command name, which may hold spaces, is one field. Empty
+// when the file cannot be read.
+std::vector<std::string> ProcStatFields(const std::string& path);
 
 // floorposed beside this executable (build tree: ../daemon/floorposed) or $FLOORPOSED.
 std::string FindFloorposed();
