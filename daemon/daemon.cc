@@ -2,17 +2,14 @@
 
 #include <pthread.h>
 #include <spdlog/spdlog.h>
-#include <sys/resource.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <chrono>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <vector>
 
+#include "daemon/scheduling.h"
 #include "platform/clock.h"
 #include "platform/config.h"
 #include "platform/state_file.h"
@@ -38,6 +35,9 @@ bool Daemon::Start(std::string* error) {
     state_lock_ = platform::StateDirLock::Take(state_dir, error);
     if (!state_lock_) return false;
   }
+  // Before DDS starts its receive threads, which inherit it, as the io thread does.
+  if (std::string why; !UseShortSlices(&why))
+    spdlog::warn("poses keep the kernel's default turns (they may wait on other work): {}", why);
   if (!JoinDds(error)) return false;
   spdlog::info("joined DDS domain {} as device '{}'{}{}", config_.dds().domain_id(),
                config_.dds().device_id(), deterministic_ ? " (deterministic)" : "",
@@ -253,13 +253,13 @@ void Daemon::WorkerLoop() {
   // copies (the index as a shared_ptr), so a plan change never pulls data from under it.
   // It yields the core to the io thread: a pose is answered before a registration goes
   // on (on a two-core puck shared with other software, the scheduler decides; nice 10
-  // gives this thread a tenth of the io thread's weight). Not SCHED_IDLE: under load from
-  // other processes an idle-class worker starves, and the poses stalled behind it (11 of
-  // 40 answered in 10 s while CI built beside the tests), most likely on a lock it held.
+  // gives this thread a tenth of the io thread's weight, and the io thread's short
+  // slices let a pose preempt it at once). Not SCHED_IDLE: under load from other
+  // processes an idle-class worker starves, and the poses stalled behind it (11 of 40
+  // answered in 10 s while CI built beside the tests), most likely on a lock it held.
   pthread_setname_np(pthread_self(), "fp-worker");
-  if (setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), 10) != 0)
-    spdlog::warn("registration worker keeps its priority (poses may wait on it): {}",
-                 std::strerror(errno));
+  if (std::string why; !UseBackgroundPriority(&why))
+    spdlog::warn("registration worker keeps its priority (poses may wait on it): {}", why);
   while (std::optional<platform::Job> job = jobs_.Take()) {
     jobs_.Finish(platform::RunJob(std::move(*job), platform::MonotonicNs));
     dds_.waiter->Wake();

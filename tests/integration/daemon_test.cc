@@ -8,11 +8,13 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <string>
 #include <thread>
 
 #include "core/sim/demo_walk.h"
 #include "core/wall_extractor.h"
+#include "daemon/scheduling.h"
 #include "floorpose/v1/config.pb.h"
 #include "platform/config.h"
 #include "platform/dds.h"
@@ -78,31 +80,53 @@ TEST_F(DaemonTest, EveryPoseGivesAPlanPoseAndThePickSetsTheTransform) {
   }
 }
 
-// The nice value (field 19 of /proc/PID/task/TID/stat) of each of floorposed's threads,
-// by name.
-std::map<std::string, int> ThreadNiceValues(pid_t pid) {
-  std::map<std::string, int> nice;
+// How the kernel schedules each of floorposed's threads, by name: the nice value (field
+// 19 of /proc/PID/task/TID/stat) and, where the kernel shows it (EEVDF, Linux 6.6 and
+// later), the slice it grants (se.slice in /proc/PID/task/TID/sched, nanoseconds).
+struct ThreadSchedule {
+  int nice = 0;
+  std::optional<long> slice_ns;
+};
+
+std::map<std::string, ThreadSchedule> ThreadSchedules(pid_t pid) {
+  std::map<std::string, ThreadSchedule> threads;
   const fs::path tasks = fs::path("/proc") / std::to_string(pid) / "task";
   for (const auto& task : fs::directory_iterator(tasks)) {
     const std::vector<std::string> stat = tools::ProcStatFields((task.path() / "stat").string());
-    if (stat.size() >= 19) nice[stat[1]] = std::stoi(stat[18]);
+    if (stat.size() < 19) continue;
+    ThreadSchedule& t = threads[stat[1]];
+    t.nice = std::stoi(stat[18]);
+    std::ifstream sched(task.path() / "sched");
+    for (std::string line; std::getline(sched, line);)
+      if (line.rfind("se.slice", 0) == 0) t.slice_ns = std::stol(line.substr(line.find(':') + 1));
   }
-  return nice;
+  return threads;
 }
 
 TEST_F(DaemonTest, TheRegistrationWorkerYieldsToThePoses) {
-  // The worker runs at nice 10, the io thread at the daemon's own (higher) priority.
+  // The worker runs at nice 10 with the kernel's default slice; every other thread (the io
+  // thread, DDS's) at the daemon's own priority, asking for the shortest slice.
   StartDaemon();
-  std::map<std::string, int> nice;  // the threads name themselves as they start
-  for (int i = 0; i < 100 && !(nice.count("fp-worker") && nice.count("fp-io")); ++i) {
+  std::map<std::string, ThreadSchedule> threads;  // the threads name themselves as they start
+  for (int i = 0; i < 100 && !(threads.count("fp-worker") && threads.count("fp-io")); ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    nice = ThreadNiceValues(daemon_->pid());
+    threads = ThreadSchedules(daemon_->pid());
   }
-  ASSERT_TRUE(nice.count("fp-worker")) << "threads: " << ::testing::PrintToString(nice);
-  ASSERT_TRUE(nice.count("fp-io")) << "threads: " << ::testing::PrintToString(nice);
-  EXPECT_EQ(nice.at("fp-worker"), 10);
-  EXPECT_LT(nice.at("fp-io"), 10);
+  std::string names;
+  for (const auto& [name, t] : threads) names += name + " ";
+  ASSERT_TRUE(threads.count("fp-worker")) << "threads: " << names;
+  ASSERT_TRUE(threads.count("fp-io")) << "threads: " << names;
+  const ThreadSchedule worker = threads.at("fp-worker");
+  EXPECT_EQ(worker.nice, kBackgroundNice);
+  EXPECT_LT(threads.at("fp-io").nice, kBackgroundNice);
   EXPECT_EQ(Log().find("keeps its priority"), std::string::npos) << Log();
+  EXPECT_EQ(Log().find("default turns"), std::string::npos) << Log();
+  if (!worker.slice_ns) GTEST_SKIP() << "this kernel shows no se.slice (EEVDF is Linux 6.6+)";
+  for (const auto& [name, t] : threads) {
+    if (name == "fp-worker") continue;
+    EXPECT_EQ(t.slice_ns, kShortSliceNs) << name;
+  }
+  EXPECT_GT(*worker.slice_ns, kShortSliceNs);
 }
 
 TEST_F(DaemonTest, AddedUpdatedAndRemovedDeltasChangeTheStore) {
