@@ -8,6 +8,8 @@
 #include <limits>
 #include <optional>
 
+#include "core/thin_cloud.h"
+
 namespace floorpose {
 
 const char* ToString(RegistrationMethod method) {
@@ -70,16 +72,18 @@ struct Row {
   Eigen::Vector2d n;  // direction of the residual (a wall normal, or an axis)
   double r;           // signed residual n . (p - y)
   double d;           // distance to the closest point on the segment
+  double w = 1;       // how many of the cloud's points it stands for (a voxel's)
 };
 
 constexpr double kFreeEndM = 0.1;  // see MakeRows
 
-// Closest-wall pairs of the transformed points (every stride-th), within max_corr. With
+// Closest-wall pairs of the transformed points (every stride-th), within max_corr, each
+// weighing its count of the cloud's points (1 without counts). With
 // point_to_point_at_ends, a closest point at a segment's end gives two rows (x and y), as
 // the squared distance to a point is isotropic there (Pottmann et al. 2004, section 3).
-void MakeRows(const std::vector<Eigen::Vector2d>& points, size_t stride, const Se2& T,
-              const ClosestWallIndex& index, double max_corr, bool point_to_point_at_ends,
-              std::vector<Row>* rows) {
+void MakeRows(const std::vector<Eigen::Vector2d>& points, const std::vector<uint32_t>* counts,
+              size_t stride, const Se2& T, const ClosestWallIndex& index, double max_corr,
+              bool point_to_point_at_ends, std::vector<Row>* rows) {
   rows->clear();
   const Eigen::Matrix2d R = T.R();
   const auto& segments = index.plan().segments;
@@ -97,12 +101,13 @@ void MakeRows(const std::vector<Eigen::Vector2d>& points, size_t stride, const S
       const double along = (p - s.a).dot(d) / len;  // metres from a towards b
       at_end = along < -kFreeEndM || along > len + kFreeEndM;
     }
+    const double w = counts ? (*counts)[i] : 1.0;
     if (at_end) {
       const Eigen::Vector2d e = p - hit->point;
-      rows->push_back({p, Eigen::Vector2d::UnitX(), e.x(), hit->distance});
-      rows->push_back({p, Eigen::Vector2d::UnitY(), e.y(), hit->distance});
+      rows->push_back({p, Eigen::Vector2d::UnitX(), e.x(), hit->distance, w});
+      rows->push_back({p, Eigen::Vector2d::UnitY(), e.y(), hit->distance, w});
     } else {
-      rows->push_back({p, hit->normal, hit->normal.dot(p - hit->point), hit->distance});
+      rows->push_back({p, hit->normal, hit->normal.dot(p - hit->point), hit->distance, w});
     }
   }
 }
@@ -131,26 +136,29 @@ struct KeptPairs {
 
 KeptPairs KeepPairs(const std::vector<Row>& rows, const IcpOptions& o) {
   KeptPairs k;
-  double sum2 = 0;
-  for (const Row& q : rows) sum2 += q.d * q.d;
-  k.reject = std::max(o.reject_sigma * std::sqrt(sum2 / rows.size()), 0.01);
+  double sum2 = 0, weight = 0;
+  for (const Row& q : rows) sum2 += q.w * q.d * q.d, weight += q.w;
+  k.reject = std::max(o.reject_sigma * std::sqrt(sum2 / weight), 0.01);
   std::vector<double> abs_r;
   abs_r.reserve(rows.size());
+  double kept_weight = 0;
   for (const Row& q : rows) {
     if (q.d > k.reject) continue;
     abs_r.push_back(std::abs(q.r));
-    k.centroid += q.p;
+    k.centroid += q.w * q.p;
+    kept_weight += q.w;
   }
   k.count = abs_r.size();
   if (k.count < 3) return k;
-  k.centroid /= static_cast<double>(k.count);
-  // Cauchy scale tied to the data: the median absolute residual of the kept pairs.
+  k.centroid /= kept_weight;
+  // Cauchy scale tied to the data: the median absolute residual of the kept pairs (of the
+  // rows, not weighed by their counts).
   std::nth_element(abs_r.begin(), abs_r.begin() + abs_r.size() / 2, abs_r.end());
   k.cauchy = std::max(o.cauchy_scale_factor * abs_r[abs_r.size() / 2], 0.01);
   double radius2 = 0;
   for (const Row& q : rows)
-    if (q.d <= k.reject) radius2 += (q.p - k.centroid).squaredNorm();
-  k.radius = std::max(std::sqrt(radius2 / abs_r.size()), 0.1);
+    if (q.d <= k.reject) radius2 += q.w * (q.p - k.centroid).squaredNorm();
+  k.radius = std::max(std::sqrt(radius2 / kept_weight), 0.1);
   return k;
 }
 
@@ -179,7 +187,7 @@ Step SolveStep(const std::vector<Row>& rows, const IcpOptions& o, bool translati
     if (q.d > reject) continue;
     const Eigen::Vector2d p = q.p - centroid;
     const Eigen::Vector3d a((p.x() * q.n.y() - p.y() * q.n.x()) / radius, q.n.x(), q.n.y());
-    const double w = o.cauchy_scale_factor > 0 ? 1.0 / (1.0 + (q.r / c) * (q.r / c)) : 1.0;
+    const double w = q.w * (o.cauchy_scale_factor > 0 ? 1.0 / (1.0 + (q.r / c) * (q.r / c)) : 1.0);
     H.noalias() += w * a * a.transpose();
     g.noalias() += w * a * q.r;
     weight_sum += w;
@@ -242,21 +250,22 @@ void Finish(const std::vector<Eigen::Vector2d>& points, const ClosestWallIndex& 
                 result, nullptr);
     return;
   }
-  double sum_matched = 0, sum_inlier = 0;
-  uint32_t inliers = 0;
+  double sum_matched = 0, sum_inlier = 0, matched_weight = 0, inlier_weight = 0;
   for (const Row& q : *final_rows) {
-    sum_matched += q.d * q.d;
+    sum_matched += q.w * q.d * q.d;
+    matched_weight += q.w;
     if (q.d <= o.inlier_threshold_m) {
-      sum_inlier += q.d * q.d;
-      ++inliers;
+      sum_inlier += q.w * q.d * q.d;
+      inlier_weight += q.w;
     }
   }
-  const auto matched = static_cast<uint32_t>(final_rows->size());
+  const auto matched = static_cast<uint32_t>(matched_weight);
+  const auto inliers = static_cast<uint32_t>(inlier_weight);
   result->points = static_cast<uint32_t>(points.size());
   result->matched = matched;
   result->inliers = inliers;
-  result->rmse = matched ? std::sqrt(sum_matched / matched) : 0.0;
-  result->inlier_rmse = inliers ? std::sqrt(sum_inlier / inliers) : 0.0;
+  result->rmse = matched ? std::sqrt(sum_matched / matched_weight) : 0.0;
+  result->inlier_rmse = inliers ? std::sqrt(sum_inlier / inlier_weight) : 0.0;
 }
 
 // Algorithm 4.2's h_max, raised until the coarsest level has at most coarsest_points.
@@ -317,9 +326,15 @@ class FittingPoints {
 
 }  // namespace
 
-RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& points,
+RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& cloud,
                                const ClosestWallIndex& index, const Se2& initial,
                                const IcpOptions& o) {
+  // A voxel's mean weighs as all of the voxel's points: the fit is the whole cloud's, at
+  // the cost of one point per voxel.
+  VoxelCloud thinned;
+  if (o.voxel_m > 0) thinned = VoxelMeans(cloud, o.voxel_m);
+  const std::vector<Eigen::Vector2d>& points = o.voxel_m > 0 ? thinned.points : cloud;
+  const std::vector<uint32_t>* counts = o.voxel_m > 0 ? &thinned.counts : nullptr;
   RegistrationResult result;
   result.method = "icp";
   result.T_plan_slam = initial;
@@ -337,7 +352,7 @@ RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& points,
     bool converged = false;
     for (uint32_t it = 0; it < max_iter; ++it) {
       ++result.iterations;
-      MakeRows(points, stride, T, index, o.max_correspondence_m, false, &rows);
+      MakeRows(points, counts, stride, T, index, o.max_correspondence_m, false, &rows);
       // Plain least squares on the coarse levels: a kernel whose scale follows the median
       // residual collapses on clean data once half the points fit, and then ignores the
       // points that would pull the cloud out of a wrong minimum.
@@ -363,9 +378,9 @@ RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& points,
   if (result.converged) {
     // The last pass paired every point (level 0) and the step after it was below the
     // convergence threshold: its distances are the fit's, without another full pass.
-    Finish(points, index, o, last, &result, &rows);
+    Finish(cloud, index, o, last, &result, &rows);
   } else {
-    Finish(points, index, o, last, &result);
+    Finish(cloud, index, o, last, &result);
   }
   return result;
 }
@@ -390,7 +405,7 @@ RegistrationResult RegisterIk(const std::vector<Eigen::Vector2d>& points,
     bool converged = false;
     for (uint32_t it = 0; it < max_iter; ++it) {
       ++result.iterations;
-      MakeRows(points, stride, T, index, o.max_correspondence_m, true, &rows);
+      MakeRows(points, nullptr, stride, T, index, o.max_correspondence_m, true, &rows);
       IcpOptions level_o = o;  // as in ICP: plain least squares on the coarse levels
       if (h > 0) level_o.cauchy_scale_factor = 0;
       Step st = SolveStep(rows, level_o, false);  // Algorithm 4.4
@@ -532,7 +547,7 @@ RegistrationResult RegisterHough(const std::vector<Eigen::Vector2d>& points,
   Step last;
   for (uint32_t it = 0; it < o.max_iterations; ++it) {
     ++result.iterations;
-    MakeRows(points, 1, T, index, o.max_correspondence_m, false, &rows);
+    MakeRows(points, nullptr, 1, T, index, o.max_correspondence_m, false, &rows);
     Step st = SolveStep(rows, o, true);
     if (!st.ok) {
       result.reason = st.reason;

@@ -64,6 +64,10 @@ struct IcpOptions {
   // weight of the pairs (theta measured as arc length at the cloud's RMS radius, so
   // rotation and translation compare). 0 disables solution remapping.
   double degeneracy_ratio = 0.01;
+  // The cloud is registered on the mean of each square voxel of this size, weighing as all
+  // the voxel's points (0: every point): the cost grows with the walls seen rather than
+  // with how densely they were sampled. The config's default (icp.voxel_m).
+  double voxel_m = 0;
 };
 
 enum class RegistrationMethod { kIcp, kIk, kHough };
@@ -116,6 +120,8 @@ struct RegistrationOptions {
 // 2^h-th point), picky rejection (pairs beyond reject_sigma standard deviations), Low's
 // linearisation (eq. 4.4) solved about the centroid, and a Cauchy kernel whose scale
 // follows the median residual. The index's max distance bounds the correspondences too.
+// With IcpOptions::voxel_m the cloud is first thinned to its voxels' means, each weighing
+// as its voxel's points; the counts in the result are the cloud's.
 RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& points_slam,
                                const ClosestWallIndex& index, const Se2& T_plan_slam_initial,
                                const IcpOptions& options);

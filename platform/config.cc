@@ -146,6 +146,7 @@ std::string ValidateWallsAndIcp(const v1::WallExtractionConfig& w, const v1::Icp
   if (icp.levels() > 8) return "icp.levels must be at most 8";
   if (!(icp.degeneracy_ratio() >= 0 && icp.degeneracy_ratio() < 1))
     return "icp.degeneracy_ratio must be in [0, 1)";
+  if (!(icp.voxel_m() >= 0 && icp.voxel_m() <= 1)) return "icp.voxel_m must be in [0, 1]";
   return {};
 }
 
@@ -237,6 +238,7 @@ tracking::MclOptions ToMclOptions(const v1::FloorposedConfig& c) {
   o.icp.inlier_threshold_m = i.inlier_threshold_m();
   o.icp.degeneracy_ratio = i.degeneracy_ratio();
   o.icp.coarsest_points = i.coarsest_points();
+  o.icp.voxel_m = i.voxel_m();
   return o;
 }
 

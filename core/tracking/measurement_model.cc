@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <unordered_set>
 
 namespace floorpose::tracking {
 
@@ -55,26 +54,6 @@ SightFit SightLogLikelihood(const MeasurementModel& model,
     ++fit.asked;
   }
   return fit;
-}
-
-std::vector<Eigen::Vector2d> ThinCloud(const std::vector<Eigen::Vector2d>& points, double voxel_m,
-                                       size_t max_points) {
-  std::vector<Eigen::Vector2d> kept;
-  std::unordered_set<uint64_t> seen;
-  for (const Eigen::Vector2d& p : points) {
-    if (!p.allFinite()) continue;
-    const auto ix = static_cast<int64_t>(std::floor(p.x() / voxel_m));
-    const auto iy = static_cast<int64_t>(std::floor(p.y() / voxel_m));
-    const uint64_t key = (static_cast<uint64_t>(ix) << 32) ^ static_cast<uint32_t>(iy);
-    if (seen.insert(key).second) kept.push_back(p);
-  }
-  if (kept.size() <= max_points || max_points == 0) return kept;
-  std::vector<Eigen::Vector2d> strided;
-  strided.reserve(max_points);
-  const double step = static_cast<double>(kept.size()) / static_cast<double>(max_points);
-  for (size_t i = 0; i < max_points; ++i)
-    strided.push_back(kept[static_cast<size_t>(static_cast<double>(i) * step)]);
-  return strided;
 }
 
 }  // namespace floorpose::tracking

@@ -70,9 +70,4 @@ SightFit SightLogLikelihood(const MeasurementModel& model,
                             const std::vector<double>& nearest_point, const Se2& T_plan_slam,
                             const ClosestWallIndex& index);
 
-// At most `max_points` of the cloud, spread over it (voxels of `voxel_m`, then a stride):
-// the window's evidence at a fixed cost.
-std::vector<Eigen::Vector2d> ThinCloud(const std::vector<Eigen::Vector2d>& points, double voxel_m,
-                                       size_t max_points);
-
 }  // namespace floorpose::tracking

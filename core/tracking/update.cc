@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/thin_cloud.h"
 #include "core/tracking/mcl.h"
 
 namespace floorpose::tracking {

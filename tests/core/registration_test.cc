@@ -8,8 +8,10 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <limits>
 
 #include "core/random.h"
+#include "core/thin_cloud.h"
 #include "tests/test_util.h"
 
 namespace floorpose {
@@ -161,6 +163,58 @@ TEST_F(IcpTest, ReportFieldsAreFilled) {
   EXPECT_TRUE((r.eigenvectors.transpose() * r.eigenvectors).isIdentity(1e-9));
   EXPECT_TRUE(r.degenerate_directions.empty());
   EXPECT_EQ(r.time_ms, 0.0);  // the caller owns the clock
+}
+
+TEST_F(IcpTest, ThinningToVoxelsKeepsTheAnswer) {
+  // A cloud sampled every 2 cm lands within a millimetre of where every point takes it.
+  const Se2 T_slam_plan{Deg(-6), {0.4, 0.7}};
+  const Se2 truth = T_slam_plan.Inverse();
+  const auto cloud = SlamCloud(plan_, T_slam_plan, 0.01, 8);
+  IcpOptions voxels = options_;
+  voxels.voxel_m = 0.1;
+  const RegistrationResult all = RegisterIcp(cloud, index_, Se2::Identity(), options_);
+  const RegistrationResult thinned = RegisterIcp(cloud, index_, Se2::Identity(), voxels);
+  ASSERT_TRUE(all.converged) << all.reason;
+  ASSERT_TRUE(thinned.converged) << thinned.reason;
+  // The counts are the cloud's: a voxel's point stands for all of the voxel's.
+  EXPECT_EQ(thinned.points, cloud.size());
+  EXPECT_NEAR(thinned.inliers, all.inliers, 0.01 * cloud.size());
+  EXPECT_LT(VoxelMeans(cloud, voxels.voxel_m).points.size(), cloud.size() / 3);
+  EXPECT_THAT(all.T_plan_slam, IsNearlySe2(truth, 0.003, Deg(0.05)));
+  EXPECT_THAT(thinned.T_plan_slam, IsNearlySe2(all.T_plan_slam, 0.001, Deg(0.02)));
+}
+
+TEST(ThinCloudTest, KeepsTheFirstPointOfEachVoxelInOrder) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<Eigen::Vector2d> cloud = {{0.01, 0.01}, {0.09, 0.05},  {nan, 0.0},
+                                              {0.15, 0.02}, {-0.01, 0.02}, {0.02, 0.08},
+                                              {0.11, 0.19}, {-0.05, -0.05}};
+  const std::vector<Eigen::Vector2d> kept = ThinCloud(cloud, 0.1, 0);
+  const std::vector<Eigen::Vector2d> expected = {
+      {0.01, 0.01}, {0.15, 0.02}, {-0.01, 0.02}, {0.11, 0.19}, {-0.05, -0.05}};
+  EXPECT_EQ(kept, expected);
+  // The means of the same voxels, in the same order, with their counts.
+  const VoxelCloud voxels = VoxelMeans(cloud, 0.1);
+  ASSERT_EQ(voxels.points.size(), expected.size());
+  EXPECT_TRUE(voxels.points[0].isApprox(Eigen::Vector2d(0.04, 0.14 / 3)));
+  for (size_t i = 1; i < expected.size(); ++i) EXPECT_EQ(voxels.points[i], expected[i]);
+  EXPECT_EQ(voxels.counts, (std::vector<uint32_t>{3, 1, 1, 1, 1}));
+  // A limit takes every k-th of the voxels' points.
+  EXPECT_EQ(ThinCloud(cloud, 0.1, 2), (std::vector<Eigen::Vector2d>{{0.01, 0.01}, {-0.01, 0.02}}));
+}
+
+TEST(ThinCloudTest, AFarPointThinsAsANearOne) {
+  // A box too large for a voxel bitmap takes the hash set: the same voxels.
+  std::vector<Eigen::Vector2d> cloud;
+  for (double far : {0.0, 3e8, -1e300})
+    for (int i = 0; i < 5; ++i) cloud.emplace_back(far + 0.01 * i, 0.35 + 0.01 * i);
+  cloud.emplace_back(std::numeric_limits<double>::infinity(), 0.0);
+  const std::vector<Eigen::Vector2d> kept = ThinCloud(cloud, 0.1, 0);
+  ASSERT_EQ(kept.size(), 3u);
+  EXPECT_EQ(kept[0], cloud[0]);
+  EXPECT_EQ(kept[1], cloud[5]);
+  EXPECT_EQ(kept[2], cloud[10]);
+  EXPECT_TRUE(ThinCloud({}, 0.1, 0).empty());
 }
 
 class RegistrationMethodTest : public ::testing::TestWithParam<RegistrationMethod> {

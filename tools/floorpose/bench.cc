@@ -54,6 +54,7 @@ constexpr double kNoiseM = 0.02;      // wall points: Gaussian noise per axis
 constexpr double kErrorRad = 0.0175;  // initial guess: the truth turned by 1 degree
 constexpr double kErrorM = 0.3;  // ... and shifted by 0.3 m diagonally, about the cloud's centre
 constexpr double kPeerSampleM = 0.02;  // a peer's target: the walls sampled this often
+constexpr double kVoxelM = 0.1;        // icp_voxel_means: icp.voxel_m
 constexpr double kTileGapM = 5.0;      // between tiled copies of the plan
 constexpr uint64_t kSeed = 20240601;   // the same clouds on every run
 
@@ -320,6 +321,16 @@ void BenchRegistrations(const Cloud& cloud, const Se2& truth, const FloorPlan& p
     rows.Add(ResultRow(ToString(m), n, ms, o.repetitions, static_cast<int>(r.iterations),
                        r.T_plan_slam, truth, cloud.centre_plan));
   }
+  {
+    // ICP on the cloud's voxel means (icp.voxel_m), as for a laser's dense windows.
+    RegistrationOptions options = defaults;
+    options.icp.voxel_m = kVoxelM;
+    RegistrationResult r;
+    const double ms = MedianMs(
+        o.repetitions, [&] { r = Register(cloud.points, cloud.normals, index, initial, options); });
+    rows.Add(ResultRow("icp_voxel_means", n, ms, o.repetitions, static_cast<int>(r.iterations),
+                       r.T_plan_slam, truth, cloud.centre_plan));
+  }
 #if FLOORPOSE_BENCH_PEERS
   if (peer) {
     // PCL's point-to-plane ICP from the same guess, with our correspondence reach,
@@ -432,7 +443,8 @@ void PrintRegistrationTable(const std::string& plan_path, const FloorPlan& origi
       "baseline: icp_loop_bruteforce is a plain point-to-line ICP loop (every point every\n"
       "          iteration; no levels, kernel or rejection) with BruteForceClosestWall,\n"
       "          run for as many iterations as icp reported; icp_loop_index is the same\n"
-      "          loop on the index\n");
+      "          loop on the index; icp_voxel_means is icp on the cloud's 10 cm voxel\n"
+      "          means, each weighing as its voxel's points (icp.voxel_m 0.1)\n");
   if (peer)
     std::printf(
         "peer:     pcl_icp_plane is PCL's IterativeClosestPointWithNormals, point-to-plane\n"
