@@ -24,9 +24,9 @@ struct SchedAttr {
   uint64_t period_ns = 0;
 };
 
-bool SetAttr(const SchedAttr& attr, const char* what, std::string* error) {
+bool SetAttr(const SchedAttr& attr, std::string* error) {
   if (syscall(SYS_sched_setattr, 0, &attr, 0) == 0) return true;
-  *error = std::string(what) + ": " + std::strerror(errno);
+  *error = std::string("sched_setattr: ") + std::strerror(errno);
   return false;
 }
 
@@ -42,13 +42,13 @@ bool UseShortSlices(std::string* error) {
   }
   attr.nice = nice;  // keep it: sched_setattr sets both
   attr.runtime_ns = kShortSliceNs;
-  return SetAttr(attr, "sched_setattr", error);
+  return SetAttr(attr, error);
 }
 
 bool UseBackgroundPriority(std::string* error) {
   SchedAttr attr;
   attr.nice = kBackgroundNice;
-  if (SetAttr(attr, "sched_setattr", error)) return true;
+  if (SetAttr(attr, error)) return true;
   // Where sched_setattr is refused, the nice value alone is most of it.
   if (setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), kBackgroundNice) == 0) return true;
   *error += std::string("; setpriority: ") + std::strerror(errno);
