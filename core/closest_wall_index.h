@@ -50,9 +50,13 @@ class ClosestWallIndex {
 
   // The distance from p to the closest wall: from the distance grid within kGridNearM of a
   // wall (within a few millimetres, see core/distance_grid.h), otherwise as Query
-  // answers it; infinity beyond max_distance_m.
-  double Distance(const Eigen::Vector2d& p) const {
-    if (const std::optional<double> d = grid_.Near(p)) return *d;
+  // answers it; infinity beyond max_distance_m, and beyond far_m where the distance grid
+  // shows it without a search (for a caller to whom all such distances are alike).
+  double Distance(const Eigen::Vector2d& p,
+                  double far_m = std::numeric_limits<double>::infinity()) const {
+    double at_least = 0;
+    if (const std::optional<double> d = grid_.Near(p, &at_least)) return *d;
+    if (at_least >= far_m) return std::numeric_limits<double>::infinity();
     const std::optional<ClosestWall> hit = Query(p);
     return hit ? hit->distance : std::numeric_limits<double>::infinity();
   }

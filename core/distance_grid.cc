@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace floorpose {
 
@@ -11,6 +12,12 @@ DistanceGrid::DistanceGrid(const std::vector<Segment>& walls, const Eigen::Vecto
     : grid_(GridGeometry::Cover(min, max, cell_m, near_m + cell_m, max_cells)),
       near_m_(near_m),
       d2_(grid_.size(), kFar) {
+  walls_min_ = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  walls_max_ = -walls_min_;
+  for (const Segment& s : walls) {
+    walls_min_ = walls_min_.cwiseMin(s.a.cwiseMin(s.b));
+    walls_max_ = walls_max_.cwiseMax(s.a.cwiseMax(s.b));
+  }
   const double c = grid_.cell_m, near2 = near_m * near_m;
   const double scale = (kFar - 1) / near2;
   // Every segment stamps the centres within near_m of it with the smaller squared distance,
@@ -55,18 +62,46 @@ DistanceGrid::DistanceGrid(const std::vector<Segment>& walls, const Eigen::Vecto
   }
 }
 
-std::optional<double> DistanceGrid::Near(const Eigen::Vector2d& p) const {
+std::optional<double> DistanceGrid::Near(const Eigen::Vector2d& p, double* at_least) const {
+  if (at_least) *at_least = 0;
   if (d2_.empty()) return std::nullopt;
   const double fx = (p.x() - grid_.origin.x()) / grid_.cell_m - 0.5;
   const double fy = (p.y() - grid_.origin.y()) / grid_.cell_m - 0.5;
-  if (!(fx >= 0 && fy >= 0 && fx < grid_.nx - 1 && fy < grid_.ny - 1)) return std::nullopt;
+  if (!(fx >= 0 && fy >= 0 && fx < grid_.nx - 1 && fy < grid_.ny - 1)) {
+    if (at_least) *at_least = AtLeast(p, nullptr, 0, 0);
+    return std::nullopt;
+  }
   const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
   const size_t i = static_cast<size_t>(iy) * grid_.nx + ix;
   const uint16_t a = d2_[i], b = d2_[i + 1], c = d2_[i + grid_.nx], d = d2_[i + grid_.nx + 1];
-  if (a == kFar || b == kFar || c == kFar || d == kFar) return std::nullopt;
   const double tx = fx - ix, ty = fy - iy;
+  if (a == kFar || b == kFar || c == kFar || d == kFar) {
+    if (at_least) {
+      const uint16_t corners[4] = {a, b, c, d};
+      *at_least = AtLeast(p, corners, tx, ty);
+    }
+    return std::nullopt;
+  }
   const double q = (1 - ty) * ((1 - tx) * a + tx * b) + ty * ((1 - tx) * c + tx * d);
   return near_m_ * std::sqrt(q / (kFar - 1));
+}
+
+double DistanceGrid::AtLeast(const Eigen::Vector2d& p, const uint16_t corners[4], double tx,
+                             double ty) const {
+  // Covers the rounding of the centres' distances, far below any distance that matters.
+  constexpr double kSlackM = 1e-9;
+  if (!corners) {  // beyond the grid's centres: no wall lies outside the walls' box
+    if (!p.allFinite()) return 0;
+    const Eigen::Vector2d out = (walls_min_ - p).cwiseMax(p - walls_max_).cwiseMax(0.0);
+    return std::max(0.0, out.norm() - kSlackM);
+  }
+  // A centre marked far is more than near_m from every wall, and p is its offset from it
+  // nearer at most.
+  const double offsets[4][2] = {{tx, ty}, {1 - tx, ty}, {tx, 1 - ty}, {1 - tx, 1 - ty}};
+  double nearest = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 4; ++k)
+    if (corners[k] == kFar) nearest = std::min(nearest, std::hypot(offsets[k][0], offsets[k][1]));
+  return std::max(0.0, near_m_ - nearest * grid_.cell_m - kSlackM);
 }
 
 }  // namespace floorpose

@@ -30,16 +30,22 @@ class DistanceGrid {
                const Eigen::Vector2d& max, double cell_m, double near_m, double max_cells);
 
   // The distance from p to the closest wall, interpolated between the four cell centres
-  // about p, when all four are within near_m of a wall; otherwise nothing.
-  std::optional<double> Near(const Eigen::Vector2d& p) const;
+  // about p, when all four are within near_m of a wall; otherwise nothing, and in
+  // *at_least (when given) a distance no wall is nearer p than: from the nearest centre
+  // beyond near_m, or beyond the grid from the walls' bounding box (0 where neither tells).
+  std::optional<double> Near(const Eigen::Vector2d& p, double* at_least = nullptr) const;
 
   size_t MemoryBytes() const { return d2_.size() * sizeof(uint16_t); }
 
  private:
   static constexpr uint16_t kFar = 0xffff;
 
+  // The lower bound *at_least for a point Near does not answer.
+  double AtLeast(const Eigen::Vector2d& p, const uint16_t corners[4], double tx, double ty) const;
+
   GridGeometry grid_;
   double near_m_ = 0;
+  Eigen::Vector2d walls_min_ = Eigen::Vector2d::Zero(), walls_max_ = Eigen::Vector2d::Zero();
   std::vector<uint16_t> d2_;  // d^2 / near_m^2 in 1/65534ths; kFar beyond near_m
 };
 

@@ -16,15 +16,25 @@ double MeasurementModel::PointLogLikelihood(double d, double reach_m) const {
   return std::log((1.0 - clutter) * HitDensity(d) * in_reach + clutter / reach_m);
 }
 
+double MeasurementModel::ClutterOnlyFromM(double reach_m) const {
+  if (!(clutter > 0)) return std::numeric_limits<double>::infinity();
+  // (1 - clutter) HitDensity(d) < 2^-55 clutter / reach_m, solved for d.
+  const double peak = (1.0 - clutter) * HitDensity(0.0);
+  const double ratio = std::log(peak * reach_m / clutter) + 55 * std::log(2.0);
+  if (std::isnan(ratio)) return std::numeric_limits<double>::infinity();  // a degenerate model
+  return ratio > 0 ? sigma_m * std::sqrt(2.0 * ratio) : 0.0;
+}
+
 double MeasurementModel::MeanLogLikelihood(const std::vector<Eigen::Vector2d>& points_slam,
                                            const Se2& T, const ClosestWallIndex& index,
                                            double reach_m) const {
   if (points_slam.empty()) return 0.0;
   const Eigen::Matrix2d R = T.R();
   const double far = PointLogLikelihood(2 * reach_m, reach_m);
+  const double clutter_only_m = ClutterOnlyFromM(reach_m);
   double sum = 0;
   for (const Eigen::Vector2d& p : points_slam) {
-    const double d = index.Distance(R * p + T.t);
+    const double d = index.Distance(R * p + T.t, clutter_only_m);
     sum += d <= reach_m ? PointLogLikelihood(d, reach_m) : far;
   }
   return sum / static_cast<double>(points_slam.size());

@@ -38,6 +38,11 @@ struct MeasurementModel {
   // The log-likelihood of one point at distance d from the nearest plan wall (beyond
   // reach_m: clutter alone).
   double PointLogLikelihood(double d, double reach_m) const;
+  // The distance from which PointLogLikelihood is clutter's alone to the last bit: the
+  // hit density falls below 2^-55 of the clutter density (half a unit in the last place
+  // is at least 2^-54 of it), so adding it rounds to nothing. MeanLogLikelihood needs no
+  // closest wall for a point it knows is at least this far.
+  double ClutterOnlyFromM(double reach_m) const;
 };
 
 // What the wearer had in sight (Probabilistic Robotics 6.3: the beam model's view, which

@@ -186,6 +186,36 @@ TEST(ClosestWallIndexTest, DistanceAgreesWithBruteForce) {
   }
 }
 
+// Distance(p, far_m) skips the search only where the distance grid shows every wall at
+// least far_m away, and otherwise answers as Distance(p).
+TEST(ClosestWallIndexTest, DistanceSkipsOnlyWallsCertainlyFar) {
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    const FloorPlan plan = RandomPlan(seed, 10 + 25 * static_cast<int>(seed));
+    const ClosestWallIndex index(plan);
+    SplitMix64 rng(700 + seed);
+    const Eigen::Vector2d lo = plan.min.array() - 4.0, hi = plan.max.array() + 4.0;
+    for (const double far_m : {0.5, 0.93, 2.0}) {
+      int skipped = 0, beyond_far = 0;
+      for (int i = 0; i < 20000; ++i) {
+        const Eigen::Vector2d q = RandomVector2(rng, lo, hi);
+        const double got = index.Distance(q, far_m);
+        const auto want = BruteForceClosestWall(plan, q, 1e9);
+        ASSERT_TRUE(want.has_value());
+        beyond_far += want->distance >= far_m + 0.1;
+        if (got == std::numeric_limits<double>::infinity()) {
+          EXPECT_GE(want->distance, far_m) << "(" << q.transpose() << ")";
+          skipped += want->distance <= index.max_distance_m();
+        } else {
+          EXPECT_EQ(got, index.Distance(q)) << "(" << q.transpose() << ")";
+        }
+      }
+      // Within reach, nearly every point that far is answered without a search.
+      EXPECT_GT(skipped, 0) << "seed " << seed << " far " << far_m;
+      EXPECT_GT(beyond_far, skipped / 2) << "seed " << seed << " far " << far_m;
+    }
+  }
+}
+
 TEST(ClosestWallIndexTest, SingleHorizontalSegment) {
   // Flat bounds (min.y == max.y) must still give a usable grid.
   const auto parse = MakeFloorPlan("one", {{{0, 0}, {5, 0}}});

@@ -97,6 +97,46 @@ TEST(MeasurementModelTest, NearWallsIsLikelierAndFarIsClutter) {
   EXPECT_GT(expected, m.PointLogLikelihood(1.0, 3.0));
 }
 
+// From ClutterOnlyFromM on, a point's log-likelihood is clutter's to the last bit, and
+// not much sooner: MeanLogLikelihood may skip the closest wall of such points.
+TEST(MeasurementModelTest, ClutterOnlyFromIsExactAndTight) {
+  for (const double sigma : {0.03, 0.1, 0.3})
+    for (const double clutter : {0.01, 0.2, 0.7})
+      for (const double reach : {1.0, 3.0}) {
+        MeasurementModel m;
+        m.sigma_m = sigma;
+        m.clutter = clutter;
+        const double from = m.ClutterOnlyFromM(reach);
+        const double far = m.PointLogLikelihood(2 * reach, reach);
+        for (double d = from; d <= reach; d += 0.001)
+          ASSERT_EQ(m.PointLogLikelihood(d, reach), far) << sigma << " " << clutter << " " << d;
+        if (from < reach) {
+          EXPECT_NE(m.PointLogLikelihood(0.9 * from, reach), far);
+        }
+      }
+}
+
+// MeanLogLikelihood gives the mean of PointLogLikelihood at every point's distance, bit
+// for bit, though it looks up no closest wall for points it knows are clutter.
+TEST(MeasurementModelTest, MeanLogLikelihoodIsThePointsMeanExactly) {
+  const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
+  const double reach = index.max_distance_m();
+  SplitMix64 rng(17);
+  const MeasurementModel m;
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<Eigen::Vector2d> points;
+    for (int i = 0; i < 500; ++i)
+      points.push_back(floorpose::testing::RandomVector2(rng, {-5, -5}, {15, 12}));
+    const Se2 T = floorpose::testing::RandomSe2(rng, M_PI, 3.0);
+    double sum = 0;
+    for (const Eigen::Vector2d& p : points) {
+      const double d = index.Distance(T * p);
+      sum += m.PointLogLikelihood(d <= reach ? d : 2 * reach, reach);
+    }
+    EXPECT_EQ(m.MeanLogLikelihood(points, T, index, reach), sum / points.size());
+  }
+}
+
 TEST(MeasurementModelTest, WhatWasInSightPricesPlanWallsTheMeshLacksAndTheReverse) {
   const ClosestWallIndex index(floorpose::testing::AsymmetricRoom());
   MeasurementModel m;
