@@ -98,10 +98,11 @@ double DistanceGrid::AtLeast(const Eigen::Vector2d& p, const uint16_t corners[4]
   // A centre marked far is more than near_m from every wall, and p is its offset from it
   // nearer at most.
   const double offsets[4][2] = {{tx, ty}, {1 - tx, ty}, {tx, 1 - ty}, {1 - tx, 1 - ty}};
-  double nearest = std::numeric_limits<double>::infinity();
+  double nearest2 = std::numeric_limits<double>::infinity();
   for (int k = 0; k < 4; ++k)
-    if (corners[k] == kFar) nearest = std::min(nearest, std::hypot(offsets[k][0], offsets[k][1]));
-  return std::max(0.0, near_m_ - nearest * grid_.cell_m - kSlackM);
+    if (corners[k] == kFar)
+      nearest2 = std::min(nearest2, offsets[k][0] * offsets[k][0] + offsets[k][1] * offsets[k][1]);
+  return std::max(0.0, near_m_ - std::sqrt(nearest2) * grid_.cell_m - kSlackM);
 }
 
 }  // namespace floorpose
