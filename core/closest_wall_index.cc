@@ -65,32 +65,45 @@ void ClosestWallIndex::FillCandidates() {
   // Only segments within this distance of a centre can matter (see the header).
   const double reach = options_.max_distance_m + 2 * r;
   // Visits the cells whose centres may lie within `reach` of segment k, with the
-  // segment's distance from each centre.
-  auto for_cells_near = [&](uint32_t k, auto&& fn) {
+  // segment's distance from each centre, but skips the cells whose centre is farther than
+  // `beyond(i)` from the segment's bounding box (no nearer the segment itself), without
+  // computing the distance: a raster plan's short segments are each within reach of
+  // thousands of centres, nearly all of them nearer another segment.
+  auto for_cells_near = [&](uint32_t k, auto&& beyond, auto&& fn) {
     const Segment& s = plan_.segments[k];
-    const Eigen::Vector2d lo = s.a.cwiseMin(s.b) - Eigen::Vector2d::Constant(reach);
-    const Eigen::Vector2d hi = s.a.cwiseMax(s.b) + Eigen::Vector2d::Constant(reach);
+    const Eigen::Vector2d box_lo = s.a.cwiseMin(s.b), box_hi = s.a.cwiseMax(s.b);
+    const Eigen::Vector2d lo = box_lo - Eigen::Vector2d::Constant(reach);
+    const Eigen::Vector2d hi = box_hi + Eigen::Vector2d::Constant(reach);
     const int x0 = std::max(0, static_cast<int>(std::floor((lo.x() - origin_.x()) / cell)));
     const int y0 = std::max(0, static_cast<int>(std::floor((lo.y() - origin_.y()) / cell)));
     const int x1 = std::min(nx_ - 1, static_cast<int>(std::floor((hi.x() - origin_.x()) / cell)));
     const int y1 = std::min(ny_ - 1, static_cast<int>(std::floor((hi.y() - origin_.y()) / cell)));
-    for (int iy = y0; iy <= y1; ++iy)
-      for (int ix = x0; ix <= x1; ++ix)
-        fn(static_cast<size_t>(iy) * nx_ + ix, std::sqrt(data_[k].Distance2(CellCentre(ix, iy))));
+    for (int iy = y0; iy <= y1; ++iy) {
+      for (int ix = x0; ix <= x1; ++ix) {
+        const size_t i = static_cast<size_t>(iy) * nx_ + ix;
+        const Eigen::Vector2d c = CellCentre(ix, iy);
+        const Eigen::Vector2d out = (box_lo - c).cwiseMax(c - box_hi).cwiseMax(0.0);
+        const double far = beyond(i) + 1e-9;  // the slack covers the rounding of out
+        if (out.squaredNorm() > far * far) continue;
+        fn(i, std::sqrt(data_[k].Distance2(c)));
+      }
+    }
   };
   // Pass 1: d* per cell, clipped at reach.
   const auto segments = static_cast<uint32_t>(plan_.segments.size());
   std::vector<float> best(n, std::numeric_limits<float>::infinity());
+  const auto beyond_best = [&](size_t i) { return static_cast<double>(best[i]); };
   for (uint32_t k = 0; k < segments; ++k)
-    for_cells_near(k,
+    for_cells_near(k, beyond_best,
                    [&](size_t i, double d) { best[i] = std::min(best[i], static_cast<float>(d)); });
   // Pass 2: count, then fill the candidate lists (CSR).
   std::vector<uint32_t> count(n + 1, 0);
   auto is_candidate = [&](size_t i, double d) {
     return best[i] - r <= options_.max_distance_m && d <= best[i] + 2 * r + 1e-9;
   };
+  const auto beyond_candidates = [&](size_t i) { return best[i] + 2 * r + 1e-9; };
   for (uint32_t k = 0; k < segments; ++k)
-    for_cells_near(k, [&](size_t i, double d) {
+    for_cells_near(k, beyond_candidates, [&](size_t i, double d) {
       if (is_candidate(i, d)) ++count[i + 1];
     });
   cell_begin_.assign(n + 1, 0);
@@ -98,7 +111,7 @@ void ClosestWallIndex::FillCandidates() {
   candidates_.resize(cell_begin_[n]);
   std::vector<uint32_t> fill(cell_begin_.begin(), cell_begin_.end() - 1);
   for (uint32_t k = 0; k < segments; ++k)
-    for_cells_near(k, [&](size_t i, double d) {
+    for_cells_near(k, beyond_candidates, [&](size_t i, double d) {
       if (is_candidate(i, d)) candidates_[fill[i]++] = k;
     });
 }
