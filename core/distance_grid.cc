@@ -68,7 +68,7 @@ std::optional<double> DistanceGrid::Near(const Eigen::Vector2d& p, double* at_le
   const double fx = (p.x() - grid_.origin.x()) / grid_.cell_m - 0.5;
   const double fy = (p.y() - grid_.origin.y()) / grid_.cell_m - 0.5;
   if (!(fx >= 0 && fy >= 0 && fx < grid_.nx - 1 && fy < grid_.ny - 1)) {
-    if (at_least) *at_least = AtLeast(p, nullptr, 0, 0);
+    if (at_least) *at_least = BoxBound(p);
     return std::nullopt;
   }
   const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
@@ -78,7 +78,7 @@ std::optional<double> DistanceGrid::Near(const Eigen::Vector2d& p, double* at_le
   if (a == kFar || b == kFar || c == kFar || d == kFar) {
     if (at_least) {
       const uint16_t corners[4] = {a, b, c, d};
-      *at_least = AtLeast(p, corners, tx, ty);
+      *at_least = FarCentreBound(corners, tx, ty);
     }
     return std::nullopt;
   }
@@ -86,15 +86,17 @@ std::optional<double> DistanceGrid::Near(const Eigen::Vector2d& p, double* at_le
   return near_m_ * std::sqrt(q / (kFar - 1));
 }
 
-double DistanceGrid::AtLeast(const Eigen::Vector2d& p, const uint16_t corners[4], double tx,
-                             double ty) const {
-  // Covers the rounding of the centres' distances, far below any distance that matters.
-  constexpr double kSlackM = 1e-9;
-  if (!corners) {  // beyond the grid's centres: no wall lies outside the walls' box
-    if (!p.allFinite()) return 0;
-    const Eigen::Vector2d out = (walls_min_ - p).cwiseMax(p - walls_max_).cwiseMax(0.0);
-    return std::max(0.0, out.norm() - kSlackM);
-  }
+// Covers the rounding of the bounds, far below any distance that matters.
+constexpr double kSlackM = 1e-9;
+
+double DistanceGrid::BoxBound(const Eigen::Vector2d& p) const {
+  if (!p.allFinite()) return 0;
+  // No wall lies outside the walls' box.
+  const Eigen::Vector2d out = (walls_min_ - p).cwiseMax(p - walls_max_).cwiseMax(0.0);
+  return std::max(0.0, out.norm() - kSlackM);
+}
+
+double DistanceGrid::FarCentreBound(const uint16_t corners[4], double tx, double ty) const {
   // A centre marked far is more than near_m from every wall, and p is its offset from it
   // nearer at most.
   const double offsets[4][2] = {{tx, ty}, {1 - tx, ty}, {tx, 1 - ty}, {1 - tx, 1 - ty}};

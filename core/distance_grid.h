@@ -40,8 +40,11 @@ class DistanceGrid {
  private:
   static constexpr uint16_t kFar = 0xffff;
 
-  // The lower bound *at_least for a point Near does not answer.
-  double AtLeast(const Eigen::Vector2d& p, const uint16_t corners[4], double tx, double ty) const;
+  // The lower bounds *at_least for a point Near does not answer: beyond the cell centres,
+  // from the walls' box; among them, from the nearest of the four centres marked far (p at
+  // (tx, ty) cells from the first).
+  double BoxBound(const Eigen::Vector2d& p) const;
+  double FarCentreBound(const uint16_t corners[4], double tx, double ty) const;
 
   GridGeometry grid_;
   double near_m_ = 0;
