@@ -200,7 +200,9 @@ Step SolveStep(const std::vector<Row>& rows, const IcpOptions& o, bool translati
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(H);
   st.eigenvalues = eig.eigenvalues();
   st.eigenvectors = eig.eigenvectors();
-  const Eigen::DiagonalMatrix<double, 3> unscale(1.0 / radius, 1.0, 1.0);
+  // A row's theta entry is its (p - centroid) x n over the radius: times the radius, it is
+  // the row for theta itself.
+  const Eigen::DiagonalMatrix<double, 3> unscale(radius, 1.0, 1.0);
   st.H = unscale * H * unscale;  // back to (theta, x, y)
   st.centroid = centroid;
   // Solve in the eigenbasis, dropping the directions the data does not constrain

@@ -165,6 +165,36 @@ TEST_F(IcpTest, ReportFieldsAreFilled) {
   EXPECT_EQ(r.time_ms, 0.0);  // the caller owns the clock
 }
 
+TEST_F(IcpTest, NormalMatrixIsTheSumOverThePairsInThetaXY) {
+  // Plain least squares keeping every pair: the normal matrix is the sum of a a^T with
+  // a = ((p - c) x n, n) over the pairs at the answer, c their centroid.
+  const Se2 T_slam_plan{Deg(4), {0.2, -0.3}};
+  const auto cloud = SlamCloud(plan_, T_slam_plan, 0.005, 5);
+  IcpOptions plain = options_;
+  plain.cauchy_scale_factor = 0;
+  plain.reject_sigma = 1e9;
+  const RegistrationResult r = RegisterIcp(cloud, index_, Se2::Identity(), plain);
+  ASSERT_TRUE(r.converged) << r.reason;
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> pairs;  // point, wall normal
+  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+  for (const Eigen::Vector2d& q : cloud) {
+    const Eigen::Vector2d p = r.T_plan_slam * q;
+    const auto hit = index_.Query(p);
+    if (!hit || hit->distance > plain.max_correspondence_m) continue;
+    pairs.emplace_back(p, hit->normal);
+    centroid += p;
+  }
+  ASSERT_GT(pairs.size(), 100u);
+  centroid /= static_cast<double>(pairs.size());
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  for (const auto& [p, n] : pairs) {
+    const Eigen::Vector2d d = p - centroid;
+    const Eigen::Vector3d a(d.x() * n.y() - d.y() * n.x(), n.x(), n.y());
+    H += a * a.transpose();
+  }
+  EXPECT_TRUE(r.normal_matrix.isApprox(H, 1e-3)) << r.normal_matrix << "\n\n" << H;
+}
+
 TEST_F(IcpTest, ThinningToVoxelsKeepsTheAnswer) {
   // A cloud sampled every 2 cm lands within a millimetre of where every point takes it.
   const Se2 T_slam_plan{Deg(-6), {0.4, 0.7}};
