@@ -54,6 +54,7 @@ void ClosestWallIndex::SizeCells() {
   origin_ = plan_.min - Eigen::Vector2d::Constant(margin);
   const Eigen::Vector2d extent = size + Eigen::Vector2d::Constant(2 * margin);
   // std::max(1.0, NaN) is 1.0: no undefined conversion even for absurd bounds.
+  per_cell_ = 1.0 / cell;
   nx_ = static_cast<int>(std::min(kMaxCells, std::max(1.0, std::ceil(extent.x() / cell))));
   ny_ = static_cast<int>(std::min(kMaxCells, std::max(1.0, std::ceil(extent.y() / cell))));
 }
@@ -133,8 +134,10 @@ void ClosestWallIndex::SortCandidates() {
 }
 
 std::optional<ClosestWall> ClosestWallIndex::Query(const Eigen::Vector2d& p) const {
-  const double fx = (p.x() - origin_.x()) / options_.cell_m;
-  const double fy = (p.y() - origin_.y()) / options_.cell_m;
+  // A point a rounding away from its cell may take the next: a list holds for its cell
+  // grown by far more than that (see FillCandidates' slack).
+  const double fx = (p.x() - origin_.x()) * per_cell_;
+  const double fy = (p.y() - origin_.y()) * per_cell_;
   if (!(fx >= 0 && fy >= 0 && fx < nx_ && fy < ny_)) return std::nullopt;  // also NaN
   const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
   const size_t i = static_cast<size_t>(iy) * nx_ + ix;

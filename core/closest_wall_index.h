@@ -104,6 +104,7 @@ class ClosestWallIndex {
   Options options_;
   std::vector<SegmentData> data_;
   Eigen::Vector2d origin_;
+  double per_cell_ = 0;  // 1 / options_.cell_m: a query multiplies rather than divides
   int nx_ = 0, ny_ = 0;
   std::vector<uint32_t> cell_begin_;  // CSR layout: candidates of cell i are
   std::vector<uint32_t> candidates_;  // candidates_[cell_begin_[i] .. cell_begin_[i+1]),

@@ -8,6 +8,7 @@
 #include <limits>
 #include <optional>
 
+#include "core/select.h"
 #include "core/thin_cloud.h"
 
 namespace floorpose {
@@ -153,8 +154,7 @@ KeptPairs KeepPairs(const std::vector<Row>& rows, const IcpOptions& o) {
   k.centroid /= kept_weight;
   // Cauchy scale tied to the data: the median absolute residual of the kept pairs (of the
   // rows, not weighed by their counts).
-  std::nth_element(abs_r.begin(), abs_r.begin() + abs_r.size() / 2, abs_r.end());
-  k.cauchy = std::max(o.cauchy_scale_factor * abs_r[abs_r.size() / 2], 0.01);
+  k.cauchy = std::max(o.cauchy_scale_factor * NthSmallest(abs_r, abs_r.size() / 2), 0.01);
   double radius2 = 0;
   for (const Row& q : rows)
     if (q.d <= k.reject) radius2 += q.w * (q.p - k.centroid).squaredNorm();
