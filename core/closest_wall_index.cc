@@ -53,8 +53,8 @@ void ClosestWallIndex::SizeCells() {
   const double margin = options_.max_distance_m + cell;
   origin_ = plan_.min - Eigen::Vector2d::Constant(margin);
   const Eigen::Vector2d extent = size + Eigen::Vector2d::Constant(2 * margin);
-  // std::max(1.0, NaN) is 1.0: no undefined conversion even for absurd bounds.
   per_cell_ = 1.0 / cell;
+  // std::max(1.0, NaN) is 1.0: no undefined conversion even for absurd bounds.
   nx_ = static_cast<int>(std::min(kMaxCells, std::max(1.0, std::ceil(extent.x() / cell))));
   ny_ = static_cast<int>(std::min(kMaxCells, std::max(1.0, std::ceil(extent.y() / cell))));
 }
