@@ -99,10 +99,10 @@ void ClosestWallIndex::FillCandidates() {
                    [&](size_t i, double d) { best[i] = std::min(best[i], static_cast<float>(d)); });
   // Pass 2: count, then fill the candidate lists (CSR).
   std::vector<uint32_t> count(n + 1, 0);
-  auto is_candidate = [&](size_t i, double d) {
-    return best[i] - r <= options_.max_distance_m && d <= best[i] + 2 * r + 1e-9;
-  };
   const auto beyond_candidates = [&](size_t i) { return best[i] + 2 * r + 1e-9; };
+  auto is_candidate = [&](size_t i, double d) {
+    return best[i] - r <= options_.max_distance_m && d <= beyond_candidates(i);
+  };
   for (uint32_t k = 0; k < segments; ++k)
     for_cells_near(k, beyond_candidates, [&](size_t i, double d) {
       if (is_candidate(i, d)) ++count[i + 1];
