@@ -83,9 +83,8 @@ void ClosestWallIndex::FillCandidates() {
       for (int ix = x0; ix <= x1; ++ix) {
         const size_t i = static_cast<size_t>(iy) * nx_ + ix;
         const Eigen::Vector2d c = CellCentre(ix, iy);
-        const Eigen::Vector2d out = (box_lo - c).cwiseMax(c - box_hi).cwiseMax(0.0);
-        const double far = beyond(i) + 1e-9;  // the slack covers the rounding of out
-        if (out.squaredNorm() > far * far) continue;
+        const double far = beyond(i) + 1e-9;  // the slack covers the box distance's rounding
+        if (SquaredDistanceToBox(c, box_lo, box_hi) > far * far) continue;
         fn(i, std::sqrt(data_[k].Distance2(c)));
       }
     }
@@ -134,12 +133,8 @@ void ClosestWallIndex::SortCandidates() {
 }
 
 std::optional<ClosestWall> ClosestWallIndex::Query(const Eigen::Vector2d& p) const {
-  // A point a rounding away from its cell may take the next: a list holds for its cell
-  // grown by far more than that (see FillCandidates' slack).
-  const double fx = (p.x() - origin_.x()) * per_cell_;
-  const double fy = (p.y() - origin_.y()) * per_cell_;
-  if (!(fx >= 0 && fy >= 0 && fx < nx_ && fy < ny_)) return std::nullopt;  // also NaN
-  const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
+  int ix = 0, iy = 0;
+  if (!CellOf(p, &ix, &iy)) return std::nullopt;
   const size_t i = static_cast<size_t>(iy) * nx_ + ix;
   double best = options_.max_distance_m * options_.max_distance_m;
   int64_t best_k = -1;
@@ -192,10 +187,9 @@ bool ClosestWallIndex::StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Ve
     const Eigen::Vector2d a = p + step * (static_cast<double>(k) / pieces);
     const Eigen::Vector2d b = p + step * (static_cast<double>(k + 1) / pieces);
     const Eigen::Vector2d m = 0.5 * (a + b);
-    const double fx = (m.x() - origin_.x()) / options_.cell_m;
-    const double fy = (m.y() - origin_.y()) / options_.cell_m;
-    if (!(fx >= 0 && fy >= 0 && fx < nx_ && fy < ny_)) continue;
-    const size_t i = static_cast<size_t>(static_cast<int>(fy)) * nx_ + static_cast<int>(fx);
+    int ix = 0, iy = 0;
+    if (!CellOf(m, &ix, &iy)) continue;
+    const size_t i = static_cast<size_t>(iy) * nx_ + ix;
     // The piece finds the candidates; each is tried against the whole step, so that a
     // wall crossed where two pieces meet counts.
     for (uint32_t j = cell_begin_[i]; j < cell_begin_[i + 1]; ++j) {

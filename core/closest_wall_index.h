@@ -94,6 +94,18 @@ class ClosestWallIndex {
   void FillCandidates();
   void SortCandidates();
 
+  // The cell holding p, false outside the grid (or for NaN). A point a rounding away from
+  // its cell may take the next: a list holds for its cell grown by far more than that
+  // (FillCandidates' slack), and StepCrossesWall's walls are within 0.2 cells of that.
+  bool CellOf(const Eigen::Vector2d& p, int* ix, int* iy) const {
+    const double fx = (p.x() - origin_.x()) * per_cell_;
+    const double fy = (p.y() - origin_.y()) * per_cell_;
+    if (!(fx >= 0 && fy >= 0 && fx < nx_ && fy < ny_)) return false;
+    *ix = static_cast<int>(fx);
+    *iy = static_cast<int>(fy);
+    return true;
+  }
+
   // The centre of cell (ix, iy): what the lists are sorted by and Query bounds from, so
   // one formula for both.
   Eigen::Vector2d CellCentre(int ix, int iy) const {

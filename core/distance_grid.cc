@@ -92,8 +92,7 @@ constexpr double kSlackM = 1e-9;
 double DistanceGrid::BoxBound(const Eigen::Vector2d& p) const {
   if (!p.allFinite()) return 0;
   // No wall lies outside the walls' box.
-  const Eigen::Vector2d out = (walls_min_ - p).cwiseMax(p - walls_max_).cwiseMax(0.0);
-  return std::max(0.0, out.norm() - kSlackM);
+  return std::max(0.0, std::sqrt(SquaredDistanceToBox(p, walls_min_, walls_max_)) - kSlackM);
 }
 
 double DistanceGrid::FarCentreBound(const uint16_t corners[4], double tx, double ty) const {

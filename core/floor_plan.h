@@ -25,6 +25,13 @@ struct Segment {
 // Closest point on a segment to p.
 Eigen::Vector2d ClosestPointOnSegment(const Segment& s, const Eigen::Vector2d& p);
 
+// The squared distance from p to the axis-aligned box [lo, hi], 0 inside it: no point of
+// anything within the box is nearer p.
+inline double SquaredDistanceToBox(const Eigen::Vector2d& p, const Eigen::Vector2d& lo,
+                                   const Eigen::Vector2d& hi) {
+  return (lo - p).cwiseMax(p - hi).cwiseMax(0.0).squaredNorm();
+}
+
 // What a line of a plan is. Walls, windows, glass and the outlines of stairs and elevators
 // are barriers: nobody walks through them, and the headset may mesh them (glass and
 // windows seldom). Doors and exits are openings: where people walk through.

@@ -23,7 +23,8 @@ inline double NthSmallest(std::vector<double>& v, size_t k) {
     std::memcpy(&bits, &x, sizeof bits);
     return static_cast<uint32_t>(bits >> 48);
   };
-  std::vector<uint32_t> histogram(size_t{1} << 16, 0);
+  thread_local std::vector<uint32_t> histogram;  // 256 KB, kept for the thread's next call
+  histogram.assign(size_t{1} << 16, 0);
   for (double x : v) ++histogram[top(x)];
   size_t below = 0;
   uint32_t bucket = 0;
