@@ -1,7 +1,8 @@
 // Raster floor plans (a scanned evacuation plan, an occupancy map) as wall segments, so
-// that they go into the same closest-wall index as vector plans: every occupied cell
-// becomes a short segment through its centre along the local wall direction (the main
-// axis of the occupied cells around it), so registration gets the wall's normal too.
+// that they go into the same closest-wall index as vector plans: every occupied cell has
+// a local wall direction (the main axis of the occupied cells around it), and connected
+// cells along one line become one segment, so registration gets the wall's normal and the
+// index a few candidates where a segment a cell would give dozens.
 #pragma once
 
 #include <Eigen/Core>
@@ -28,6 +29,9 @@ struct RasterPlanOptions {
   // Cells with fewer occupied neighbours within that radius are noise (a speck the
   // scanner or the scan left) and are dropped.
   int min_neighbours = 2;
+  // Connected wall cells within this many cells of a line along their direction become one
+  // segment (the raster's own resolution: a wall two cells thick is one line between them).
+  double line_tolerance_cells = 1.0;
   size_t max_cells = size_t{1} << 26;  // larger rasters are refused (64 M cells)
 };
 

@@ -1,5 +1,9 @@
 #include "core/raster_plan.h"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
 #include "core/closest_wall_index.h"
 #include "tests/test_util.h"
 
@@ -24,14 +28,42 @@ OccupancyRaster LRaster() {
   return r;
 }
 
-TEST(RasterPlanTest, CellsBecomeSegmentsAlongTheWall) {
+// Whether the plan has a segment from a to b (either way round), to 1e-6 m.
+bool HasSegment(const FloorPlan& plan, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  for (const Segment& s : plan.segments)
+    if (((s.a - a).norm() < 1e-6 && (s.b - b).norm() < 1e-6) ||
+        ((s.a - b).norm() < 1e-6 && (s.b - a).norm() < 1e-6))
+      return true;
+  return false;
+}
+
+// The largest distance from an occupied cell's centre to the plan's walls.
+double FarthestCell(const OccupancyRaster& r, const FloorPlan& plan) {
+  const ClosestWallIndex index(plan);
+  double worst = 0;
+  for (int row = 0; row < r.height; ++row) {
+    for (int col = 0; col < r.width; ++col) {
+      if (!r.occupied[row * r.width + col]) continue;
+      const Eigen::Vector2d centre =
+          r.origin + r.resolution_m * Eigen::Vector2d(col + 0.5, r.height - 1 - row + 0.5);
+      const auto hit = index.Query(centre);
+      worst = std::max(worst, hit ? hit->distance : std::numeric_limits<double>::infinity());
+    }
+  }
+  return worst;
+}
+
+TEST(RasterPlanTest, AWallsCellsBecomeOneLineAlongIt) {
   RasterPlanReport report;
   const FloorPlanParse parsed = FloorPlanFromRaster(LRaster(), "l", {}, &report);
   ASSERT_TRUE(parsed.ok()) << parsed.error;
   EXPECT_EQ(report.occupied, 29u + 20u + 1u);
   EXPECT_EQ(report.isolated, 1u);
-  EXPECT_EQ(parsed.plan.segments.size(), 49u);
   EXPECT_EQ(parsed.dropped_segments, 1u);
+  // Each wall is one segment from its first cell's outer edge; the corner's cells, which
+  // run along neither, are a piece of their own.
+  EXPECT_TRUE(HasSegment(parsed.plan, {0.2, 0.55}, {3.0, 0.55}));
+  EXPECT_LE(parsed.plan.segments.size(), 3u);
 
   // Points on either wall, away from the corner, find it at the right distance with the
   // wall's normal; the speck is gone.
@@ -70,6 +102,35 @@ TEST(RasterPlanTest, DiagonalWallKeepsItsDirection) {
     ASSERT_TRUE(hit.has_value());
     EXPECT_NEAR(hit->distance, 0.1, 0.01) << "at " << t;
   }
+}
+
+TEST(RasterPlanTest, AWallTwoCellsThickIsOneLineBetweenThem) {
+  OccupancyRaster r;
+  r.width = 60;
+  r.height = 20;
+  r.resolution_m = 0.05;
+  r.occupied.assign(r.width * r.height, 0);
+  for (int c = 5; c < 55; ++c) r.occupied[9 * r.width + c] = r.occupied[10 * r.width + c] = 1;
+  const FloorPlanParse parsed = FloorPlanFromRaster(r, "thick");
+  ASSERT_TRUE(parsed.ok()) << parsed.error;
+  ASSERT_EQ(parsed.plan.segments.size(), 1u);
+  // Rows 9 and 10 from the top have their centres at y = 0.525 and 0.475.
+  EXPECT_TRUE(HasSegment(parsed.plan, {0.25, 0.5}, {2.75, 0.5}));
+}
+
+TEST(RasterPlanTest, ATiltedWallIsAFewLinesWithinACellOfItsCells) {
+  // A wall rising 0.07 m a metre: a staircase of runs of 14-15 cells, 200 cells in all.
+  OccupancyRaster r;
+  r.width = 240;
+  r.height = 40;
+  r.resolution_m = 0.05;
+  r.occupied.assign(r.width * r.height, 0);
+  for (int c = 20; c < 220; ++c)
+    r.occupied[(30 - static_cast<int>(std::floor(0.07 * (c - 20)))) * r.width + c] = 1;
+  const FloorPlanParse parsed = FloorPlanFromRaster(r, "tilted");
+  ASSERT_TRUE(parsed.ok()) << parsed.error;
+  EXPECT_LE(parsed.plan.segments.size(), 200u / 20);
+  EXPECT_LE(FarthestCell(r, parsed.plan), r.resolution_m);
 }
 
 TEST(RasterPlanTest, MalformedRastersFailClearly) {

@@ -43,7 +43,9 @@ TEST_F(RasterPlanIoTest, LoadsTheWallsInTheYamlsFrame) {
   const FloorPlanParse parsed = LoadFloorPlan(yaml);  // chosen by the extension
   ASSERT_TRUE(parsed.ok()) << parsed.error;
   EXPECT_EQ(parsed.plan.id, "plan");
-  EXPECT_EQ(parsed.plan.segments.size(), 2u * 60 + 2u * 38);  // the frame, not the blot
+  // The frame's four sides (and their corners' cells), not the blot.
+  EXPECT_GE(parsed.plan.segments.size(), 4u);
+  EXPECT_LE(parsed.plan.segments.size(), 8u);
   // Pixel centres of the frame: x from -1 + 0.025 to -1 + 2.975, y from 2.025 to 3.975.
   EXPECT_NEAR(parsed.plan.min.x(), -1.0, 0.03);
   EXPECT_NEAR(parsed.plan.max.x(), 2.0, 0.03);
@@ -57,9 +59,10 @@ TEST_F(RasterPlanIoTest, NegateMakesWhiteTheWalls) {
   WritePng("plan.png");
   const std::string yaml =
       Write("neg.yaml", "image: plan.png\nresolution: 0.05\norigin: [0, 0, 0]\nnegate: 1\n");
-  const FloorPlanParse parsed = LoadFloorPlan(yaml);
+  RasterPlanReport report;
+  const FloorPlanParse parsed = LoadRasterFloorPlan(yaml, &report);
   ASSERT_TRUE(parsed.ok()) << parsed.error;
-  EXPECT_GT(parsed.plan.segments.size(), 1000u);  // the white inside is now occupied
+  EXPECT_GT(report.occupied, 1000u);  // the white inside is now occupied
 }
 
 TEST_F(RasterPlanIoTest, BrokenFilesFailClearly) {
@@ -122,7 +125,8 @@ TEST(RasterPlanDataTest, CarmenPlansLoad) {
     // The data set's README: 16305, 20074, 10539 and 8765 occupied pixels.
     EXPECT_GT(report.occupied, 8000u) << name;
     EXPECT_LT(report.isolated, report.occupied / 8) << name;  // orebro: 10% specks
-    EXPECT_EQ(parsed.plan.segments.size() + report.isolated, report.occupied) << name;
+    // Connected cells along one line are one wall: a few cells a segment at least.
+    EXPECT_LT(parsed.plan.segments.size(), (report.occupied - report.isolated) / 2) << name;
   }
 }
 
