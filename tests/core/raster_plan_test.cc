@@ -10,15 +10,20 @@
 namespace floorpose {
 namespace {
 
+// A raster of free cells, its origin at (0, 0).
+OccupancyRaster FreeRaster(int width, int height, double resolution_m) {
+  OccupancyRaster r;
+  r.width = width;
+  r.height = height;
+  r.resolution_m = resolution_m;
+  r.occupied.assign(static_cast<size_t>(width) * height, 0);
+  return r;
+}
+
 // A 40 x 30 cell raster (0.1 m) with an L of walls: a row at y = 0.55 m and a column at
 // x = 3.05 m, plus one speck far from both.
 OccupancyRaster LRaster() {
-  OccupancyRaster r;
-  r.width = 40;
-  r.height = 30;
-  r.resolution_m = 0.1;
-  r.origin = {0.0, 0.0};
-  r.occupied.assign(r.width * r.height, 0);
+  OccupancyRaster r = FreeRaster(40, 30, 0.1);
   auto set = [&](int col, int row_from_bottom) {
     r.occupied[(r.height - 1 - row_from_bottom) * r.width + col] = 1;
   };
@@ -82,10 +87,7 @@ TEST(RasterPlanTest, AWallsCellsBecomeOneLineAlongIt) {
 }
 
 TEST(RasterPlanTest, DiagonalWallKeepsItsDirection) {
-  OccupancyRaster r;
-  r.width = r.height = 20;
-  r.resolution_m = 0.05;
-  r.occupied.assign(400, 0);
+  OccupancyRaster r = FreeRaster(20, 20, 0.05);
   for (int i = 0; i < 20; ++i) r.occupied[(19 - i) * 20 + i] = 1;  // y = x
   const FloorPlanParse parsed = FloorPlanFromRaster(r, "diag");
   ASSERT_TRUE(parsed.ok()) << parsed.error;
@@ -105,11 +107,7 @@ TEST(RasterPlanTest, DiagonalWallKeepsItsDirection) {
 }
 
 TEST(RasterPlanTest, AWallTwoCellsThickIsOneLineBetweenThem) {
-  OccupancyRaster r;
-  r.width = 60;
-  r.height = 20;
-  r.resolution_m = 0.05;
-  r.occupied.assign(r.width * r.height, 0);
+  OccupancyRaster r = FreeRaster(60, 20, 0.05);
   for (int c = 5; c < 55; ++c) r.occupied[9 * r.width + c] = r.occupied[10 * r.width + c] = 1;
   const FloorPlanParse parsed = FloorPlanFromRaster(r, "thick");
   ASSERT_TRUE(parsed.ok()) << parsed.error;
@@ -120,11 +118,7 @@ TEST(RasterPlanTest, AWallTwoCellsThickIsOneLineBetweenThem) {
 
 TEST(RasterPlanTest, ATiltedWallIsAFewLinesWithinACellOfItsCells) {
   // A wall rising 0.07 m a metre: a staircase of runs of 14-15 cells, 200 cells in all.
-  OccupancyRaster r;
-  r.width = 240;
-  r.height = 40;
-  r.resolution_m = 0.05;
-  r.occupied.assign(r.width * r.height, 0);
+  OccupancyRaster r = FreeRaster(240, 40, 0.05);
   for (int c = 20; c < 220; ++c)
     r.occupied[(30 - static_cast<int>(std::floor(0.07 * (c - 20)))) * r.width + c] = 1;
   const FloorPlanParse parsed = FloorPlanFromRaster(r, "tilted");
