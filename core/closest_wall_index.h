@@ -31,8 +31,8 @@ class ClosestWallIndex {
  public:
   struct Options {
     // Grid resolution. A cell lists the segments within its diagonal of its nearest, so
-    // smaller cells keep the lists short where a plan has many short segments (a raster
-    // plan's pixel edges), at 8 bytes a cell.
+    // smaller cells keep the lists short where a plan has many short segments (a wall
+    // drawn in many pieces, a raster plan's corners), at 8 bytes a cell.
     double cell_m = 0.1;
     double max_distance_m = 3.0;  // beyond this, queries return nothing
     // The distance grid's cells (Distance; 2 bytes a cell), 0 for none.
