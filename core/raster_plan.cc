@@ -40,11 +40,13 @@ struct WallCell {
   }
 };
 
-// The segment a cell alone stands for: through its centre along dir, long enough that a
-// diagonal wall's staircase of cells stays one line.
-Segment CellSegment(const Eigen::Vector2d& centre, const Eigen::Vector2d& dir, double res) {
+// The segment along dir over [lo, hi] from centre (metres), grown at both ends by half a
+// cell's extent along dir: long enough that a diagonal wall's staircase of cells stays one
+// line. A cell alone is its span over [0, 0].
+Segment SpanAlong(const Eigen::Vector2d& centre, const Eigen::Vector2d& dir, double lo, double hi,
+                  double res) {
   const double half = 0.5 * res * (std::abs(dir.x()) + std::abs(dir.y()));
-  return {centre - half * dir, centre + half * dir};
+  return {centre + (lo - half) * dir, centre + (hi + half) * dir};
 }
 
 // A cell whose own direction turns further than this from a line's (30 degrees) is at a
@@ -96,7 +98,7 @@ std::vector<Segment> FitLines(const std::vector<WallCell>& cells, int width, dou
       }
     }
     if (members.size() == 1) {
-      lines.push_back(CellSegment(c0, d0, res));
+      lines.push_back(SpanAlong(c0, d0, 0, 0, res));
       continue;
     }
     Eigen::Vector2d mean = Eigen::Vector2d::Zero();
@@ -117,8 +119,7 @@ std::vector<Segment> FitLines(const std::vector<WallCell>& cells, int width, dou
       lo = std::min(lo, t);
       hi = std::max(hi, t);
     }
-    const double half = 0.5 * res * (std::abs(dir.x()) + std::abs(dir.y()));
-    lines.push_back({mean + (lo - half) * dir, mean + (hi + half) * dir});
+    lines.push_back(SpanAlong(mean, dir, lo, hi, res));
   }
   return lines;
 }
