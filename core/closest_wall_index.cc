@@ -30,8 +30,10 @@ ClosestWallIndex::ClosestWallIndex(const FloorPlan& plan, Options options)
     data_.push_back({s.a, d, s.Normal(), d.squaredNorm() > 0 ? 1.0 / d.squaredNorm() : 0.0});
   }
   SizeCells();
-  FillCandidates();
-  SortCandidates();
+  std::vector<uint32_t> begin, lists;
+  FillCandidates(&begin, &lists);
+  SortCandidates(begin, &lists);
+  PackCells(begin, lists);
   if (options_.grid_cell_m > 0)
     grid_ = DistanceGrid(plan_.segments, plan_.min, plan_.max, options_.grid_cell_m,
                          std::min(kGridNearM, options_.max_distance_m), kMaxCells);
@@ -59,7 +61,8 @@ void ClosestWallIndex::SizeCells() {
   ny_ = static_cast<int>(std::min(kMaxCells, std::max(1.0, std::ceil(extent.y() / cell))));
 }
 
-void ClosestWallIndex::FillCandidates() {
+void ClosestWallIndex::FillCandidates(std::vector<uint32_t>* begin,
+                                      std::vector<uint32_t>* lists) const {
   const double cell = options_.cell_m;
   const size_t n = static_cast<size_t>(nx_) * static_cast<size_t>(ny_);
   const double r = 0.5 * cell * std::sqrt(2.0);
@@ -106,17 +109,18 @@ void ClosestWallIndex::FillCandidates() {
     for_cells_near(k, beyond_candidates, [&](size_t i, double d) {
       if (is_candidate(i, d)) ++count[i + 1];
     });
-  cell_begin_.assign(n + 1, 0);
-  for (size_t i = 0; i < n; ++i) cell_begin_[i + 1] = cell_begin_[i] + count[i + 1];
-  candidates_.resize(cell_begin_[n]);
-  std::vector<uint32_t> fill(cell_begin_.begin(), cell_begin_.end() - 1);
+  begin->assign(n + 1, 0);
+  for (size_t i = 0; i < n; ++i) (*begin)[i + 1] = (*begin)[i] + count[i + 1];
+  lists->resize((*begin)[n]);
+  std::vector<uint32_t> fill(begin->begin(), begin->end() - 1);
   for (uint32_t k = 0; k < segments; ++k)
     for_cells_near(k, beyond_candidates, [&](size_t i, double d) {
-      if (is_candidate(i, d)) candidates_[fill[i]++] = k;
+      if (is_candidate(i, d)) (*lists)[fill[i]++] = k;
     });
 }
 
-void ClosestWallIndex::SortCandidates() {
+void ClosestWallIndex::SortCandidates(const std::vector<uint32_t>& begin,
+                                      std::vector<uint32_t>* lists) const {
   // Each list nearest its cell's centre first (see Query), ties in segment order.
   std::vector<std::pair<double, uint32_t>> sorted;
   for (int iy = 0; iy < ny_; ++iy) {
@@ -124,12 +128,31 @@ void ClosestWallIndex::SortCandidates() {
       const size_t i = static_cast<size_t>(iy) * nx_ + ix;
       const Eigen::Vector2d c = CellCentre(ix, iy);
       sorted.clear();
-      for (uint32_t j = cell_begin_[i]; j < cell_begin_[i + 1]; ++j)
-        sorted.emplace_back(data_[candidates_[j]].Distance2(c), candidates_[j]);
+      for (uint32_t j = begin[i]; j < begin[i + 1]; ++j)
+        sorted.emplace_back(data_[(*lists)[j]].Distance2(c), (*lists)[j]);
       std::sort(sorted.begin(), sorted.end());
-      for (size_t j = 0; j < sorted.size(); ++j) candidates_[cell_begin_[i] + j] = sorted[j].second;
+      for (size_t j = 0; j < sorted.size(); ++j) (*lists)[begin[i] + j] = sorted[j].second;
     }
   }
+}
+
+void ClosestWallIndex::PackCells(const std::vector<uint32_t>& begin,
+                                 const std::vector<uint32_t>& lists) {
+  const size_t n = begin.size() - 1;
+  cells_.assign(n, Cell{kNone, kNone});
+  lists_.clear();
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t count = begin[i + 1] - begin[i];
+    const uint32_t* list = lists.data() + begin[i];
+    if (count <= 2) {
+      if (count > 0) cells_[i].a = list[0];
+      if (count > 1) cells_[i].b = list[1];
+      continue;
+    }
+    cells_[i] = {static_cast<uint32_t>(lists_.size()), kList | count};
+    lists_.insert(lists_.end(), list, list + count);
+  }
+  lists_.shrink_to_fit();
 }
 
 std::optional<ClosestWall> ClosestWallIndex::Query(const Eigen::Vector2d& p) const {
@@ -142,17 +165,19 @@ std::optional<ClosestWall> ClosestWallIndex::Query(const Eigen::Vector2d& p) con
   // A list runs nearest the cell's centre c first, and no point of the cell is nearer a
   // segment s than d(s, c) - r. So once a chunk's first candidate is that far beyond the
   // best so far, so is every later one (a raster plan lists dozens of cells' segments).
-  constexpr uint32_t kChunk = 8;
-  const Eigen::Vector2d c = CellCentre(ix, iy);
-  const double r = 0.5 * options_.cell_m * std::sqrt(2.0) + 1e-6;
-  const uint32_t begin = cell_begin_[i], end = cell_begin_[i + 1];
-  for (uint32_t chunk = begin; chunk < end; chunk += kChunk) {
+  constexpr ptrdiff_t kChunk = 8;
+  uint32_t held[2];
+  const auto [begin, end] = Candidates(cells_[i], held);
+  for (const uint32_t* chunk = begin; chunk < end; chunk += kChunk) {
     if (chunk != begin) {
-      const double beyond = std::sqrt(data_[candidates_[chunk]].Distance2(c)) - r;
+      const Eigen::Vector2d c = CellCentre(ix, iy);
+      const double r = 0.5 * options_.cell_m * std::sqrt(2.0) + 1e-6;
+      const double beyond = std::sqrt(data_[*chunk].Distance2(c)) - r;
       if (beyond > 0 && beyond * beyond > best) break;
     }
-    for (uint32_t j = chunk; j < std::min(end, chunk + kChunk); ++j) {
-      const int64_t k = candidates_[j];
+    const uint32_t* chunk_end = end - chunk > kChunk ? chunk + kChunk : end;
+    for (const uint32_t* j = chunk; j < chunk_end; ++j) {
+      const int64_t k = *j;
       double u = 0;
       const double d2 = data_[k].Distance2(p, &u);
       // Ties go to the higher segment index, whatever the list's order.
@@ -192,8 +217,10 @@ bool ClosestWallIndex::StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Ve
     const size_t i = static_cast<size_t>(iy) * nx_ + ix;
     // The piece finds the candidates; each is tried against the whole step, so that a
     // wall crossed where two pieces meet counts.
-    for (uint32_t j = cell_begin_[i]; j < cell_begin_[i + 1]; ++j) {
-      const SegmentData& s = data_[candidates_[j]];
+    uint32_t held[2];
+    const auto [begin, end] = Candidates(cells_[i], held);
+    for (const uint32_t* j = begin; j < end; ++j) {
+      const SegmentData& s = data_[*j];
       const double d1 = cross(step, s.a - p), d2 = cross(step, s.a + s.d - p);
       const double d3 = cross(s.d, p - s.a), d4 = cross(s.d, q - s.a);
       if (d1 * d2 < 0 && d3 * d4 < 0) return true;
@@ -203,7 +230,7 @@ bool ClosestWallIndex::StepCrossesWall(const Eigen::Vector2d& p, const Eigen::Ve
 }
 
 size_t ClosestWallIndex::MemoryBytes() const {
-  return cell_begin_.size() * sizeof(uint32_t) + candidates_.size() * sizeof(uint32_t) +
+  return cells_.size() * sizeof(Cell) + lists_.size() * sizeof(uint32_t) +
          plan_.segments.size() * (sizeof(Segment) + sizeof(SegmentData)) + grid_.MemoryBytes();
 }
 

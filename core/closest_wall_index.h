@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "core/distance_grid.h"
@@ -71,7 +72,7 @@ class ClosestWallIndex {
   double max_distance_m() const { return options_.max_distance_m; }
   const Options& options() const { return options_; }
   size_t MemoryBytes() const;
-  size_t cells() const { return cell_begin_.size() - 1; }
+  size_t cells() const { return cells_.size(); }
 
  private:
   // What a query needs of a segment, precomputed: a, b - a, 1 / |b - a|^2, unit normal.
@@ -87,12 +88,35 @@ class ClosestWallIndex {
     }
   };
 
+  // A cell's candidates, nearest its centre first. Nine queries in ten at a plan's walls
+  // find one or two (MLSTRUCT 848), which the cell holds itself: one cache line.
+  //   none:           a = b = kNone
+  //   one:            a = the segment, b = kNone
+  //   two:            a, b = the segments
+  //   three or more:  a = where they start in lists_, b = kList | their count
+  // (segment indices are below kList: a plan of 2^31 segments would not fit in memory).
+  struct Cell {
+    uint32_t a, b;
+  };
+  static constexpr uint32_t kList = 0x80000000u, kNone = 0xFFFFFFFFu;
+  // The candidates of a cell as a range: its own (`held`, filled) or its list's.
+  std::pair<const uint32_t*, const uint32_t*> Candidates(const Cell& cell, uint32_t held[2]) const {
+    if (cell.b != kNone && (cell.b & kList)) {
+      const uint32_t* begin = lists_.data() + cell.a;
+      return {begin, begin + (cell.b & ~kList)};
+    }
+    held[0] = cell.a;
+    held[1] = cell.b;
+    return {held, held + (cell.a == kNone ? 0 : cell.b == kNone ? 1 : 2)};
+  }
+
   // Building the index: the cells (coarser where the plan is too large for options' size,
-  // within kMaxCells); each cell's candidate segments (CSR); each list sorted nearest
-  // first.
+  // within kMaxCells); each cell's candidate segments, sorted nearest first, in `lists`
+  // from `begin[i]` to `begin[i + 1]`; then the cells as they are kept.
   void SizeCells();
-  void FillCandidates();
-  void SortCandidates();
+  void FillCandidates(std::vector<uint32_t>* begin, std::vector<uint32_t>* lists) const;
+  void SortCandidates(const std::vector<uint32_t>& begin, std::vector<uint32_t>* lists) const;
+  void PackCells(const std::vector<uint32_t>& begin, const std::vector<uint32_t>& lists);
 
   // The cell holding p, false outside the grid (or for NaN). A point a rounding away from
   // its cell may take the next: a list holds for its cell grown by far more than that
@@ -118,9 +142,8 @@ class ClosestWallIndex {
   Eigen::Vector2d origin_;
   double per_cell_ = 0;  // 1 / options_.cell_m: a query multiplies rather than divides
   int nx_ = 0, ny_ = 0;
-  std::vector<uint32_t> cell_begin_;  // CSR layout: candidates of cell i are
-  std::vector<uint32_t> candidates_;  // candidates_[cell_begin_[i] .. cell_begin_[i+1]),
-                                      // nearest the cell's centre first
+  std::vector<Cell> cells_;      // row by row, nx_ a row
+  std::vector<uint32_t> lists_;  // the candidates of the cells with three or more
   DistanceGrid grid_;
 };
 

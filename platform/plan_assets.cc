@@ -33,7 +33,8 @@ std::string PlanOutOfLimits(const FloorPlan& plan, const v1::LimitsConfig& limit
 // How many times coarser than configured a plan's grids must be to stay within
 // limits.max_plan_memory_mb. Bytes a cell, as measured on ILC F1 (240 x 176 m: 436 MB of
 // RSS at the default cells): routes 20 (passable, components, a search's distances and
-// parents), rooms and explored maps 8 each, the closest-wall index 8 (cells and lists).
+// parents), rooms and explored maps 8 each, the closest-wall index 10 (its 8-byte cells
+// and the lists of those with three candidates or more: 10.1 on MLSTRUCT 848).
 double PlanGridScale(const FloorPlan& plan, const v1::FloorposedConfig& c) {
   const Eigen::Vector2d extent = (plan.max - plan.min).array() + 2.0;  // the grids' margins
   auto per_m2 = [](double bytes_per_cell, double cell_m) {
@@ -42,7 +43,7 @@ double PlanGridScale(const FloorPlan& plan, const v1::FloorposedConfig& c) {
   const double bytes =
       extent.x() * extent.y() *
       (per_m2(20, c.routes().cell_m()) + per_m2(8, RoomOptions{}.cell_m) +
-       per_m2(8, c.explored().cell_m()) + per_m2(8, ClosestWallIndex::Options{}.cell_m) +
+       per_m2(8, c.explored().cell_m()) + per_m2(10, ClosestWallIndex::Options{}.cell_m) +
        per_m2(2, ClosestWallIndex::Options{}.grid_cell_m));
   const double budget = static_cast<double>(c.limits().max_plan_memory_mb()) * (1 << 20);
   return std::max(1.0, std::sqrt(bytes / budget));
