@@ -78,14 +78,23 @@ struct Row {
 
 constexpr double kFreeEndM = 0.1;  // see MakeRows
 
+// The closest-wall pairs of a pass, with their weighed sums (KeepPairs' rejection).
+struct Pairs {
+  std::vector<Row> rows;
+  double weight = 0;      // sum of w
+  double weighed_d2 = 0;  // sum of w d^2
+};
+
 // Closest-wall pairs of the transformed points (every stride-th), within max_corr, each
 // weighing its count of the cloud's points (1 without counts). With
 // point_to_point_at_ends, a closest point at a segment's end gives two rows (x and y), as
 // the squared distance to a point is isotropic there (Pottmann et al. 2004, section 3).
 void MakeRows(const std::vector<Eigen::Vector2d>& points, const std::vector<uint32_t>* counts,
               size_t stride, const Se2& T, const ClosestWallIndex& index, double max_corr,
-              bool point_to_point_at_ends, std::vector<Row>* rows) {
-  rows->clear();
+              bool point_to_point_at_ends, Pairs* pairs) {
+  std::vector<Row>& rows = pairs->rows;
+  rows.clear();
+  double weight = 0, weighed_d2 = 0;
   const Eigen::Matrix2d R = T.R();
   const auto& segments = index.plan().segments;
   for (size_t i = 0; i < points.size(); i += stride) {
@@ -103,14 +112,20 @@ void MakeRows(const std::vector<Eigen::Vector2d>& points, const std::vector<uint
       at_end = along < -kFreeEndM || along > len + kFreeEndM;
     }
     const double w = counts ? (*counts)[i] : 1.0;
+    const double wd2 = w * hit->distance * hit->distance;
     if (at_end) {
       const Eigen::Vector2d e = p - hit->point;
-      rows->push_back({p, Eigen::Vector2d::UnitX(), e.x(), hit->distance, w});
-      rows->push_back({p, Eigen::Vector2d::UnitY(), e.y(), hit->distance, w});
+      rows.push_back({p, Eigen::Vector2d::UnitX(), e.x(), hit->distance, w});
+      rows.push_back({p, Eigen::Vector2d::UnitY(), e.y(), hit->distance, w});
+      for (int axis = 0; axis < 2; ++axis) weight += w, weighed_d2 += wd2;
     } else {
-      rows->push_back({p, hit->normal, hit->normal.dot(p - hit->point), hit->distance, w});
+      rows.push_back({p, hit->normal, hit->normal.dot(p - hit->point), hit->distance, w});
+      weight += w;
+      weighed_d2 += wd2;
     }
   }
+  pairs->weight = weight;
+  pairs->weighed_d2 = weighed_d2;
 }
 
 struct Step {
@@ -122,6 +137,11 @@ struct Step {
   Eigen::Vector3d eigenvalues = Eigen::Vector3d::Zero();
   Eigen::Matrix3d eigenvectors = Eigen::Matrix3d::Identity();
   std::vector<Eigen::Vector3d> degenerate;
+  // The standard deviations of the fit's translation (both axes together, metres) and
+  // rotation (radians) in its points' noise: Cov = s^2 H^-1, s^2 the weighed squared
+  // residuals per kept pair. Infinite when a direction is unconstrained.
+  double noise_translation_m = std::numeric_limits<double>::infinity();
+  double noise_rotation_rad = std::numeric_limits<double>::infinity();
 };
 
 // The pairs a step weighs: picky ICP (Zinsser et al. 2003) keeps those within
@@ -135,28 +155,28 @@ struct KeptPairs {
   size_t count = 0;
 };
 
-KeptPairs KeepPairs(const std::vector<Row>& rows, const IcpOptions& o) {
+KeptPairs KeepPairs(const Pairs& pairs, const IcpOptions& o) {
   KeptPairs k;
-  double sum2 = 0, weight = 0;
-  for (const Row& q : rows) sum2 += q.w * q.d * q.d, weight += q.w;
-  k.reject = std::max(o.reject_sigma * std::sqrt(sum2 / weight), 0.01);
-  std::vector<double> abs_r;
-  abs_r.reserve(rows.size());
+  k.reject = std::max(o.reject_sigma * std::sqrt(pairs.weighed_d2 / pairs.weight), 0.01);
+  // The Cauchy scale, where the kernel is on, is the median absolute residual of the kept
+  // pairs (of the rows, not weighed by their counts).
+  const bool cauchy = o.cauchy_scale_factor > 0;
+  thread_local std::vector<double> abs_r;
+  abs_r.clear();
   double kept_weight = 0;
-  for (const Row& q : rows) {
+  for (const Row& q : pairs.rows) {
     if (q.d > k.reject) continue;
-    abs_r.push_back(std::abs(q.r));
+    ++k.count;
+    if (cauchy) abs_r.push_back(std::abs(q.r));
     k.centroid += q.w * q.p;
     kept_weight += q.w;
   }
-  k.count = abs_r.size();
   if (k.count < 3) return k;
   k.centroid /= kept_weight;
-  // Cauchy scale tied to the data: the median absolute residual of the kept pairs (of the
-  // rows, not weighed by their counts).
-  k.cauchy = std::max(o.cauchy_scale_factor * NthSmallest(abs_r, abs_r.size() / 2), 0.01);
+  if (cauchy)
+    k.cauchy = std::max(o.cauchy_scale_factor * NthSmallest(abs_r, abs_r.size() / 2), 0.01);
   double radius2 = 0;
-  for (const Row& q : rows)
+  for (const Row& q : pairs.rows)
     if (q.d <= k.reject) radius2 += q.w * (q.p - k.centroid).squaredNorm();
   k.radius = std::max(std::sqrt(radius2 / kept_weight), 0.1);
   return k;
@@ -165,13 +185,14 @@ KeptPairs KeepPairs(const std::vector<Row>& rows, const IcpOptions& o) {
 // Picky rejection, Cauchy weights, and the weighted least-squares step with solution
 // remapping. Unknowns are (theta, x, y) about the centroid of the rows; theta is scaled
 // by the RMS radius so that its eigenvalue compares with the translations'.
-Step SolveStep(const std::vector<Row>& rows, const IcpOptions& o, bool translation_only) {
+Step SolveStep(const Pairs& pairs, const IcpOptions& o, bool translation_only) {
+  const std::vector<Row>& rows = pairs.rows;
   Step st;
   if (rows.size() < 3) {
     st.reason = "fewer than 3 correspondences";
     return st;
   }
-  const KeptPairs kept = KeepPairs(rows, o);
+  const KeptPairs kept = KeepPairs(pairs, o);
   if (kept.count < 3) {
     st.reason = "fewer than 3 pairs after rejection";
     return st;
@@ -182,7 +203,7 @@ Step SolveStep(const std::vector<Row>& rows, const IcpOptions& o, bool translati
   // Equation 4.4 in 2D: A_i = [p x n / radius, n], b_i = n . (p - y).
   Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
   Eigen::Vector3d g = Eigen::Vector3d::Zero();
-  double weight_sum = 0;
+  double weight_sum = 0, weighed_r2 = 0;
   for (const Row& q : rows) {
     if (q.d > reject) continue;
     const Eigen::Vector2d p = q.p - centroid;
@@ -191,7 +212,11 @@ Step SolveStep(const std::vector<Row>& rows, const IcpOptions& o, bool translati
     H.noalias() += w * a * a.transpose();
     g.noalias() += w * a * q.r;
     weight_sum += w;
+    weighed_r2 += w * q.r * q.r;
   }
+  // A pair's residual variance over its weight (a voxel's mean of w points has 1/w of a
+  // point's): the residual noise per unit weight.
+  const double noise2 = weighed_r2 / static_cast<double>(kept.count);
   if (translation_only) {
     H.row(0).setZero();
     H.col(0).setZero();
@@ -209,6 +234,7 @@ Step SolveStep(const std::vector<Row>& rows, const IcpOptions& o, bool translati
   // (solution remapping, Zhang and Singh 2016): the update never moves along them.
   const double floor = std::max(o.degeneracy_ratio * weight_sum, 1e-12 * weight_sum);
   Eigen::Vector3d delta_scaled = Eigen::Vector3d::Zero();
+  Eigen::Vector3d variance_scaled = Eigen::Vector3d::Zero();  // of (radius theta, x, y) / s^2
   for (int i = 0; i < 3; ++i) {
     const Eigen::Vector3d v = st.eigenvectors.col(i);
     const double lambda = st.eigenvalues(i);
@@ -218,6 +244,11 @@ Step SolveStep(const std::vector<Row>& rows, const IcpOptions& o, bool translati
       continue;
     }
     delta_scaled -= v * (v.dot(g) / lambda);
+    variance_scaled += v.cwiseProduct(v) / lambda;  // the step along v varies as s^2 / lambda
+  }
+  if (noise2 > 0 && st.degenerate.empty()) {
+    st.noise_translation_m = std::sqrt(noise2 * (variance_scaled(1) + variance_scaled(2)));
+    st.noise_rotation_rad = std::sqrt(noise2 * variance_scaled(0)) / radius;
   }
   if (st.degenerate.size() == (translation_only ? 2u : 3u)) {
     st.reason = "no direction constrained";
@@ -341,38 +372,40 @@ RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& cloud,
   result.method = "icp";
   result.T_plan_slam = initial;
   Se2 T = initial;
-  std::vector<Row> rows;
-  rows.reserve(points.size());
+  Pairs pairs;
+  pairs.rows.reserve(points.size());
   Step last;
   bool converged_at_finest = false;
-  // Algorithm 4.2: coarse to fine; level h uses every 2^h-th point and maxIter / 2^h.
-  for (int h = TopLevel(points.size(), o); h >= 0 && result.reason.empty(); --h) {
+  // Algorithm 4.2: coarse to fine; level h uses every 2^h-th point. Once a level's fit
+  // is known within the convergence thresholds (its points' noise leaves it no more
+  // uncertain), the finer levels could only confirm it: the levels between are skipped,
+  // and the finest, whose first step is then below the thresholds, polishes once.
+  for (int h = TopLevel(points.size(), o), next = h; h >= 0 && result.reason.empty(); h = next) {
+    next = h - 1;
     const size_t stride = size_t{1} << h;
-    // Every level may iterate to convergence: coarse iterations are cheap, and a level
-    // that stops early only hands its work to a finer, dearer one.
-    const uint32_t max_iter = o.max_iterations;
     bool converged = false;
-    for (uint32_t it = 0; it < max_iter; ++it) {
+    for (uint32_t it = 0; it < o.max_iterations; ++it) {
       ++result.iterations;
-      MakeRows(points, counts, stride, T, index, o.max_correspondence_m, false, &rows);
+      MakeRows(points, counts, stride, T, index, o.max_correspondence_m, false, &pairs);
       // Plain least squares on the coarse levels: a kernel whose scale follows the median
       // residual collapses on clean data once half the points fit, and then ignores the
       // points that would pull the cloud out of a wrong minimum.
       IcpOptions level_o = o;
       if (h > 0) level_o.cauchy_scale_factor = 0;
-      Step st = SolveStep(rows, level_o, false);
+      Step st = SolveStep(pairs, level_o, false);
       if (!st.ok) {
         result.reason = st.reason;
         break;
       }
       T = AboutCentre(st.delta(0), st.centroid, st.delta.tail<2>()) * T;
       last = std::move(st);
-      if (SmallStep(last.delta, o)) {
-        converged = true;
-        break;
-      }
+      converged = SmallStep(last.delta, o);
+      if (converged) break;
     }
     converged_at_finest = converged;
+    if (h > 0 && last.noise_translation_m <= o.converge_translation_m &&
+        last.noise_rotation_rad <= o.converge_rotation_rad)
+      next = 0;
   }
   result.T_plan_slam = T;
   result.converged = result.reason.empty() && converged_at_finest;
@@ -380,7 +413,7 @@ RegistrationResult RegisterIcp(const std::vector<Eigen::Vector2d>& cloud,
   if (result.converged) {
     // The last pass paired every point (level 0) and the step after it was below the
     // convergence threshold: its distances are the fit's, without another full pass.
-    Finish(cloud, index, o, last, &result, &rows);
+    Finish(cloud, index, o, last, &result, &pairs.rows);
   } else {
     Finish(cloud, index, o, last, &result);
   }
@@ -393,8 +426,8 @@ RegistrationResult RegisterIk(const std::vector<Eigen::Vector2d>& points,
   RegistrationResult result;
   result.method = "ik";
   Se2 T = initial;
-  std::vector<Row> rows;
-  rows.reserve(points.size());
+  Pairs pairs;
+  pairs.rows.reserve(points.size());
   Step last;
   bool converged_at_finest = false;
   // The same coarse-to-fine levels as ICP (Algorithm 4.2), each with Algorithm 4.3.
@@ -407,10 +440,10 @@ RegistrationResult RegisterIk(const std::vector<Eigen::Vector2d>& points,
     bool converged = false;
     for (uint32_t it = 0; it < max_iter; ++it) {
       ++result.iterations;
-      MakeRows(points, nullptr, stride, T, index, o.max_correspondence_m, true, &rows);
+      MakeRows(points, nullptr, stride, T, index, o.max_correspondence_m, true, &pairs);
       IcpOptions level_o = o;  // as in ICP: plain least squares on the coarse levels
       if (h > 0) level_o.cauchy_scale_factor = 0;
-      Step st = SolveStep(rows, level_o, false);  // Algorithm 4.4
+      Step st = SolveStep(pairs, level_o, false);  // Algorithm 4.4
       if (!st.ok) {
         result.reason = st.reason;
         break;
@@ -545,12 +578,12 @@ RegistrationResult RegisterHough(const std::vector<Eigen::Vector2d>& points,
   Se2 T = AboutCentre(omega, centroid, Eigen::Vector2d::Zero()) * initial;
 
   // Algorithm 4.7, point-to-line: translation-only steps until they vanish.
-  std::vector<Row> rows;
+  Pairs pairs;
   Step last;
   for (uint32_t it = 0; it < o.max_iterations; ++it) {
     ++result.iterations;
-    MakeRows(points, nullptr, 1, T, index, o.max_correspondence_m, false, &rows);
-    Step st = SolveStep(rows, o, true);
+    MakeRows(points, nullptr, 1, T, index, o.max_correspondence_m, false, &pairs);
+    Step st = SolveStep(pairs, o, true);
     if (!st.ok) {
       result.reason = st.reason;
       break;
