@@ -95,6 +95,12 @@ void MakeRows(const std::vector<Eigen::Vector2d>& points, const std::vector<uint
   std::vector<Row>& rows = pairs->rows;
   rows.clear();
   double weight = 0, weighed_d2 = 0;
+  // Each row adds to the sums as it is written (w d^2 for the rejection's RMS).
+  auto add = [&](const Row& row) {
+    rows.push_back(row);
+    weight += row.w;
+    weighed_d2 += row.w * row.d * row.d;
+  };
   const Eigen::Matrix2d R = T.R();
   const auto& segments = index.plan().segments;
   for (size_t i = 0; i < points.size(); i += stride) {
@@ -112,16 +118,12 @@ void MakeRows(const std::vector<Eigen::Vector2d>& points, const std::vector<uint
       at_end = along < -kFreeEndM || along > len + kFreeEndM;
     }
     const double w = counts ? (*counts)[i] : 1.0;
-    const double wd2 = w * hit->distance * hit->distance;
     if (at_end) {
       const Eigen::Vector2d e = p - hit->point;
-      rows.push_back({p, Eigen::Vector2d::UnitX(), e.x(), hit->distance, w});
-      rows.push_back({p, Eigen::Vector2d::UnitY(), e.y(), hit->distance, w});
-      for (int axis = 0; axis < 2; ++axis) weight += w, weighed_d2 += wd2;
+      add({p, Eigen::Vector2d::UnitX(), e.x(), hit->distance, w});
+      add({p, Eigen::Vector2d::UnitY(), e.y(), hit->distance, w});
     } else {
-      rows.push_back({p, hit->normal, hit->normal.dot(p - hit->point), hit->distance, w});
-      weight += w;
-      weighed_d2 += wd2;
+      add({p, hit->normal, hit->normal.dot(p - hit->point), hit->distance, w});
     }
   }
   pairs->weight = weight;
